@@ -1,0 +1,136 @@
+//! Ray queries against the scene's triangles: one interface, two back-ends.
+//!
+//! `embree.rs` goes through Intel Embree (`embree4-sys`), `bvh.rs` through the pure-Rust
+//! `obvhs` crate. Both answer closest-hit and any-hit queries for single rays and for
+//! packets of up to [`PACKET_SIZE`] rays; a packet query returns exactly what the same rays
+//! would return one at a time.
+
+use glam::Vec3;
+
+#[cfg(feature = "obvhs")]
+mod bvh;
+#[cfg(feature = "embree")]
+mod embree;
+
+#[cfg(feature = "obvhs")]
+pub use bvh::BvhAccel;
+#[cfg(feature = "embree")]
+pub use embree::EmbreeAccel;
+
+/// Rays per packet query (Embree's `rtcIntersect16`).
+pub const PACKET_SIZE: usize = 16;
+
+/// A ray segment `origin + t·dir`, `t ∈ [tmin, tmax]`. `dir` need not be normalised; `t` is
+/// measured in units of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub tmin: f32,
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Self {
+        Self { origin, dir, tmin, tmax }
+    }
+}
+
+/// The closest intersection of a ray with the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Index of the triangle in [`TriangleMesh::triangles`].
+    pub prim: u32,
+    /// Barycentrics in Embree's convention: `p = (1−u−v)·v0 + u·v1 + v·v2`.
+    pub u: f32,
+    pub v: f32,
+    /// Unit geometric normal `normalize(cross(v1 − v0, v2 − v0))`.
+    pub ng: Vec3,
+}
+
+/// Triangles as the accelerators consume them: shared vertices and indices.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Unit geometric normal of each triangle (`cross(v1 − v0, v2 − v0)`, normalised).
+    pub normals: Vec<Vec3>,
+}
+
+impl TriangleMesh {
+    /// Builds a mesh and its face normals. Degenerate triangles get a zero normal; callers
+    /// that must not see them remove them first.
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
+        let normals = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| positions[i as usize]);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+            .collect();
+        Self { positions, triangles, normals }
+    }
+
+    pub fn vertices(&self, prim: u32) -> [Vec3; 3] {
+        self.triangles[prim as usize].map(|i| self.positions[i as usize])
+    }
+}
+
+/// What every back-end answers.
+pub trait Accel: Send + Sync {
+    /// Closest hit along the ray, if any.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// Whether anything blocks the ray within `[tmin, tmax]`.
+    fn occluded(&self, ray: &Ray) -> bool;
+    /// Closest hits of up to [`PACKET_SIZE`] rays; `hits.len() == rays.len()`.
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]);
+    /// Any-hit answers of up to [`PACKET_SIZE`] rays; `blocked.len() == rays.len()`.
+    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]);
+    /// Back-end name for logs and stats.
+    fn name(&self) -> &'static str;
+}
+
+/// Which back-end to build, chosen by `--accel`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AccelKind {
+    /// Intel Embree (feature `embree`).
+    Embree,
+    /// Pure-Rust obvhs (feature `obvhs`).
+    Bvh,
+}
+
+impl AccelKind {
+    /// The back-end used when `--accel` is not given: Embree where it is built.
+    pub fn default_available() -> Self {
+        if cfg!(feature = "embree") {
+            AccelKind::Embree
+        } else {
+            AccelKind::Bvh
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum AccelError {
+    #[error("the {0} back-end is not built into this binary (rebuild with `--features {1}`)")]
+    NotBuilt(&'static str, &'static str),
+    #[error("Embree: {0}")]
+    Embree(String),
+}
+
+/// Builds the chosen back-end over `mesh`.
+pub fn build(kind: AccelKind, mesh: &TriangleMesh) -> Result<Box<dyn Accel>, AccelError> {
+    match kind {
+        #[cfg(feature = "embree")]
+        AccelKind::Embree => Ok(Box::new(EmbreeAccel::new(mesh)?)),
+        #[cfg(not(feature = "embree"))]
+        AccelKind::Embree => Err(AccelError::NotBuilt("embree", "embree")),
+        #[cfg(feature = "obvhs")]
+        AccelKind::Bvh => Ok(Box::new(BvhAccel::new(mesh))),
+        #[cfg(not(feature = "obvhs"))]
+        AccelKind::Bvh => Err(AccelError::NotBuilt("bvh", "obvhs")),
+    }
+}

@@ -1,0 +1,3 @@
+fn main() {
+    println!("genpath {}", env!("CARGO_PKG_VERSION"));
+}

@@ -1,0 +1,1 @@
+//! Raw Embree bindings (generated at build time).
