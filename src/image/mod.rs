@@ -10,7 +10,10 @@ use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+pub mod metrics;
+// The only unsafe code outside the Embree back-end: the FFI calls into the OIIO shim.
 #[cfg(feature = "oiio")]
+#[allow(unsafe_code)]
 pub mod oiio;
 pub mod rust_writers;
 pub mod srgb;
@@ -59,6 +62,11 @@ pub fn write(path: &Path, img: &Image) -> Result<(), ImageError> {
     check_dims(path, img)?;
     let writer = writer_for(path)?;
     write_atomic(path, |tmp| writer(tmp, img))
+}
+
+/// Fails when `path` names a format that [`write`] cannot write, before any work is done.
+pub fn check_format(path: &Path) -> Result<(), ImageError> {
+    writer_for(path).map(|_| ())
 }
 
 type Writer = fn(&Path, &Image) -> Result<(), ImageError>;
