@@ -33,7 +33,12 @@ pub struct Ray {
 
 impl Ray {
     pub fn new(origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Self {
-        Self { origin, dir, tmin, tmax }
+        Self {
+            origin,
+            dir,
+            tmin,
+            tmax,
+        }
     }
 }
 
@@ -71,7 +76,11 @@ impl TriangleMesh {
                 (b - a).cross(c - a).normalize_or_zero()
             })
             .collect();
-        Self { positions, triangles, normals }
+        Self {
+            positions,
+            triangles,
+            normals,
+        }
     }
 
     pub fn vertices(&self, prim: u32) -> [Vec3; 3] {
@@ -94,7 +103,9 @@ pub trait Accel: Send + Sync {
 }
 
 /// Which back-end to build, chosen by `--accel`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum AccelKind {
     /// Intel Embree (feature `embree`).
