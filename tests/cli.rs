@@ -245,7 +245,12 @@ fn impossible_flags() {
     let out = dir.path().join("o.exr");
     assert_fails(&scene, &["--spp", "0"], &out, &["--spp"]);
     assert_fails(&scene, &["--threads", "0"], &out, &["--threads"]);
-    assert_fails(&scene, &["--max-bounces", "100000"], &out, &["--max-bounces"]);
+    assert_fails(
+        &scene,
+        &["--max-bounces", "100000"],
+        &out,
+        &["--max-bounces"],
+    );
     assert_fails(&scene, &["--accel", "optix"], &out, &["--accel"]);
     assert_fails(&scene, &["--width", "999999999"], &out, &["--width"]);
 }

@@ -51,7 +51,11 @@ impl RayCounts {
 
 impl<'a> SceneView<'a> {
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel) -> Self {
-        Self { scene, accel, epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE) }
+        Self {
+            scene,
+            accel,
+            epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE),
+        }
     }
 
     pub fn material(&self, prim: u32) -> &Material {
@@ -59,13 +63,19 @@ impl<'a> SceneView<'a> {
     }
 
     fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
-        SurfacePoint { p: ray.origin + ray.dir * hit.t, ng: hit.ng, prim: hit.prim }
+        SurfacePoint {
+            p: ray.origin + ray.dir * hit.t,
+            ng: hit.ng,
+            prim: hit.prim,
+        }
     }
 
     /// Closest surface along `ray`.
     pub fn trace(&self, ray: &Ray, counts: &mut RayCounts) -> Option<SurfacePoint> {
         counts.closest += 1;
-        self.accel.intersect(ray).map(|hit| self.surface_point(ray, &hit))
+        self.accel
+            .intersect(ray)
+            .map(|hit| self.surface_point(ray, &hit))
     }
 
     /// A ray leaving `x` in unit direction `dir`, its origin pushed off the surface on the

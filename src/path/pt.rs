@@ -28,9 +28,17 @@ fn light_pdf_solid_angle(pdf_area: f64, dist2: f32, cos_light: f32) -> f32 {
 
 /// One path-traced estimate of the radiance arriving along `ray`, with at most `max_bounces`
 /// scattering events.
-pub fn radiance(view: &SceneView, ray: &Ray, max_bounces: u32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3 {
+pub fn radiance(
+    view: &SceneView,
+    ray: &Ray,
+    max_bounces: u32,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+) -> Vec3 {
     let scene = view.scene;
-    let Some(mut x) = view.trace(ray, counts) else { return Vec3::ZERO };
+    let Some(mut x) = view.trace(ray, counts) else {
+        return Vec3::ZERO;
+    };
     let mut wo = -ray.dir;
     let mut radiance = emitted(view.material(x.prim), &x, wo);
     let mut beta = Vec3::ONE;
@@ -43,8 +51,14 @@ pub fn radiance(view: &SceneView, ray: &Ray, max_bounces: u32, rng: &mut Rng, co
         let n = if x.ng.dot(wo) >= 0.0 { x.ng } else { -x.ng };
 
         // Next-event estimation.
-        let ls = scene.emitters.sample(&scene.mesh, [uniform(rng), uniform(rng), uniform(rng)]);
-        let y = SurfacePoint { p: ls.point, ng: scene.mesh.normals[ls.prim as usize], prim: ls.prim };
+        let ls = scene
+            .emitters
+            .sample(&scene.mesh, [uniform(rng), uniform(rng), uniform(rng)]);
+        let y = SurfacePoint {
+            p: ls.point,
+            ng: scene.mesh.normals[ls.prim as usize],
+            prim: ls.prim,
+        };
         let d = y.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
@@ -66,14 +80,18 @@ pub fn radiance(view: &SceneView, ray: &Ray, max_bounces: u32, rng: &mut Rng, co
         }
         beta *= kd;
         let next_ray = view.spawn(&x, wi);
-        let Some(y) = view.trace(&next_ray, counts) else { break };
+        let Some(y) = view.trace(&next_ray, counts) else {
+            break;
+        };
         let y_material = view.material(y.prim);
         if y_material.is_emitter() {
             let cos_light = y.ng.dot(-wi);
             if cos_light > 0.0 {
                 let dist2 = (y.p - x.p).length_squared();
-                let pdf_light = light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
-                radiance += beta * emitted(y_material, &y, -wi) * power_heuristic(pdf_bsdf, pdf_light);
+                let pdf_light =
+                    light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
+                radiance +=
+                    beta * emitted(y_material, &y, -wi) * power_heuristic(pdf_bsdf, pdf_light);
             }
         }
         if bounce >= RR_START {

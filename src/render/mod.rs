@@ -52,7 +52,12 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
     let mut tiles = Vec::new();
     for y0 in (0..height).step_by(TILE as usize) {
         for x0 in (0..width).step_by(TILE as usize) {
-            tiles.push(Tile { x0, y0, x1: (x0 + TILE).min(width), y1: (y0 + TILE).min(height) });
+            tiles.push(Tile {
+                x0,
+                y0,
+                x1: (x0 + TILE).min(width),
+                y1: (y0 + TILE).min(height),
+            });
         }
     }
     tiles
@@ -64,9 +69,11 @@ pub fn progress_bar(len: u64, label: &str, visible: bool) -> ProgressBar {
         return ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
     }
     let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    let style = ProgressStyle::with_template("{prefix:>8} [{bar:40}] {percent:>3}% {elapsed_precise} ETA {eta_precise}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+    let style = ProgressStyle::with_template(
+        "{prefix:>8} [{bar:40}] {percent:>3}% {elapsed_precise} ETA {eta_precise}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
     bar.set_style(style);
     bar.set_prefix(label.to_string());
     bar
@@ -103,7 +110,12 @@ pub fn render(view: &SceneView, settings: &RenderSettings) -> Film {
         }
         rays.add(result.rays);
     }
-    Film { image, variance_of_mean, rays, elapsed: start.elapsed() }
+    Film {
+        image,
+        variance_of_mean,
+        rays,
+        elapsed: start.elapsed(),
+    }
 }
 
 fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> TileResult {
@@ -121,7 +133,9 @@ fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> Tile
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
                 let value = match settings.method {
-                    Method::Pt => pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays),
+                    Method::Pt => {
+                        pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays)
+                    }
                 }
                 .as_dvec3();
                 sum += value;
@@ -130,10 +144,18 @@ fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> Tile
             let spp = settings.spp.max(1) as f64;
             let m = sum / spp;
             // Unbiased sample variance, divided by spp for the variance of the mean.
-            let var = if settings.spp > 1 { (sum_sq - sum * m) / (spp - 1.0) / spp } else { DVec3::ZERO };
+            let var = if settings.spp > 1 {
+                (sum_sq - sum * m) / (spp - 1.0) / spp
+            } else {
+                DVec3::ZERO
+            };
             mean.push(m.as_vec3().to_array());
             variance.push(var.max(DVec3::ZERO).to_array());
         }
     }
-    TileResult { mean, variance, rays }
+    TileResult {
+        mean,
+        variance,
+        rays,
+    }
 }

@@ -36,7 +36,10 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
     let sign = 1.0f32.copysign(n.z);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
-    (Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), Vec3::new(b, sign + n.y * n.y * a, -n.y))
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }
 
 /// Cosine-weighted direction on the hemisphere around unit `n`; its solid-angle density is
@@ -62,8 +65,12 @@ mod tests {
     fn basis_is_orthonormal() {
         let mut rng = sample_rng(1, 2, 3);
         for _ in 0..10_000 {
-            let n = Vec3::new(uniform(&mut rng) - 0.5, uniform(&mut rng) - 0.5, uniform(&mut rng) - 0.5)
-                .normalize_or(Vec3::Z);
+            let n = Vec3::new(
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+                uniform(&mut rng) - 0.5,
+            )
+            .normalize_or(Vec3::Z);
             let (t, b) = basis(n);
             for (x, y) in [(t, b), (t, n), (b, n)] {
                 assert!(x.dot(y).abs() < 1e-5, "{n} {t} {b}");

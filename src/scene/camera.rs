@@ -25,12 +25,27 @@ impl Camera {
         let true_up = right.cross(forward);
         let half_w = (0.5 * fov_x).tan();
         let half_h = half_w * height as f32 / width as f32;
-        Self { origin, fov_x, width, height, forward, right: right * half_w, up: true_up * half_h }
+        Self {
+            origin,
+            fov_x,
+            width,
+            height,
+            forward,
+            right: right * half_w,
+            up: true_up * half_h,
+        }
     }
 
     /// The same camera with another image size (the horizontal field of view is kept).
     pub fn resized(&self, width: u32, height: u32) -> Self {
-        Self::new(self.origin, self.origin + self.forward, self.up, self.fov_x, width, height)
+        Self::new(
+            self.origin,
+            self.origin + self.forward,
+            self.up,
+            self.fov_x,
+            width,
+            height,
+        )
     }
 
     /// The primary ray through continuous pixel coordinates `(px, py)`, `px ∈ [0, width)`,

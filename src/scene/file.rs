@@ -40,6 +40,8 @@ fn default_max_bounces() -> u32 {
 
 impl Default for RenderDefaults {
     fn default() -> Self {
-        Self { max_bounces: default_max_bounces() }
+        Self {
+            max_bounces: default_max_bounces(),
+        }
     }
 }

@@ -15,13 +15,24 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("{path}: cannot read: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{path}: {message}")]
     Toml { path: PathBuf, message: String },
     #[error("{path}: field `{field}`: {message}")]
-    Field { path: PathBuf, field: &'static str, message: String },
+    Field {
+        path: PathBuf,
+        field: &'static str,
+        message: String,
+    },
     #[error("{path}:{line}: {message}")]
-    Syntax { path: PathBuf, line: usize, message: String },
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
     #[error("{path}: {message}")]
     Mesh { path: PathBuf, message: String },
     #[error("{path}: the scene has no emitter (give some material a positive `Ke` and use it on a face)")]
@@ -75,20 +86,31 @@ impl Emitters {
                 cdf.push(total);
             }
         }
-        Self { prims, cdf, total_area: total }
+        Self {
+            prims,
+            cdf,
+            total_area: total,
+        }
     }
 
     /// Samples a point uniformly over all emitter area from three uniform numbers in [0, 1).
     pub fn sample(&self, mesh: &TriangleMesh, u: [f32; 3]) -> LightSample {
         let target = u[0] as f64 * self.total_area;
-        let i = self.cdf.partition_point(|&c| c <= target).min(self.prims.len() - 1);
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.prims.len() - 1);
         let prim = self.prims[i];
         let [a, b, c] = mesh.vertices(prim);
         // Uniform point in a triangle (square-root warp).
         let su = u[1].sqrt();
         let (b0, b1) = (1.0 - su, u[2] * su);
         let point = a * b0 + b * b1 + c * (1.0 - b0 - b1);
-        LightSample { point, prim, pdf_area: 1.0 / self.total_area }
+        LightSample {
+            point,
+            prim,
+            pdf_area: 1.0 / self.total_area,
+        }
     }
 }
 
@@ -123,25 +145,35 @@ impl Scene {
     /// Loads and validates a scene from its TOML file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let text = read(path)?;
-        let file: SceneFile = toml::from_str(&text)
-            .map_err(|e| SceneError::Toml { path: path.to_path_buf(), message: e.to_string().trim_end().to_string() })?;
+        let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
         let camera = build_camera(path, &file.camera)?;
         if file.render.max_bounces > MAX_BOUNCES_LIMIT {
             return Err(SceneError::Field {
                 path: path.to_path_buf(),
                 field: "render.max_bounces",
-                message: format!("{} is more than the limit of {MAX_BOUNCES_LIMIT}", file.render.max_bounces),
+                message: format!(
+                    "{} is more than the limit of {MAX_BOUNCES_LIMIT}",
+                    file.render.max_bounces
+                ),
             });
         }
         let dir = path.parent().unwrap_or(Path::new("."));
         let obj_path = dir.join(&file.mesh);
         let mut warnings = Vec::new();
         let (mesh, materials, material_of) = load_mesh(&obj_path, &mut warnings)?;
-        let emitters = Emitters::new(&mesh, |prim| materials[material_of[prim as usize] as usize].is_emitter());
+        let emitters = Emitters::new(&mesh, |prim| {
+            materials[material_of[prim as usize] as usize].is_emitter()
+        });
         if emitters.prims.is_empty() || emitters.total_area <= 0.0 {
             return Err(SceneError::NoEmitter { path: obj_path });
         }
-        let extent = mesh.positions.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let extent = mesh
+            .positions
+            .iter()
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
         Ok(Scene {
             path: path.to_path_buf(),
             camera,
@@ -162,33 +194,66 @@ pub const MAX_BOUNCES_LIMIT: u32 = 1000;
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
 
 fn read(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 fn build_camera(path: &Path, c: &CameraFile) -> Result<Camera, SceneError> {
-    let field_error = |field, message: String| SceneError::Field { path: path.to_path_buf(), field, message };
-    for (field, v) in [("camera.origin", c.origin), ("camera.target", c.target), ("camera.up", c.up)] {
+    let field_error = |field, message: String| SceneError::Field {
+        path: path.to_path_buf(),
+        field,
+        message,
+    };
+    for (field, v) in [
+        ("camera.origin", c.origin),
+        ("camera.target", c.target),
+        ("camera.up", c.up),
+    ] {
         if !v.iter().all(|x| x.is_finite()) {
-            return Err(field_error(field, format!("{v:?} has a non-finite component")));
+            return Err(field_error(
+                field,
+                format!("{v:?} has a non-finite component"),
+            ));
         }
     }
     if !(c.fov_x_deg.is_finite() && c.fov_x_deg > 0.0 && c.fov_x_deg < 180.0) {
-        return Err(field_error("camera.fov_x_deg", format!("{} is not in (0, 180)", c.fov_x_deg)));
+        return Err(field_error(
+            "camera.fov_x_deg",
+            format!("{} is not in (0, 180)", c.fov_x_deg),
+        ));
     }
     for (field, side) in [("camera.width", c.width), ("camera.height", c.height)] {
         if side == 0 || side > MAX_IMAGE_SIDE {
-            return Err(field_error(field, format!("{side} is not in 1..={MAX_IMAGE_SIDE}")));
+            return Err(field_error(
+                field,
+                format!("{side} is not in 1..={MAX_IMAGE_SIDE}"),
+            ));
         }
     }
     let (origin, target, up) = (Vec3::from(c.origin), Vec3::from(c.target), Vec3::from(c.up));
     let forward = target - origin;
     if forward.length() <= 1e-6 * origin.length().max(1.0) {
-        return Err(field_error("camera.target", "coincides with camera.origin".into()));
+        return Err(field_error(
+            "camera.target",
+            "coincides with camera.origin".into(),
+        ));
     }
     if forward.normalize().cross(up.normalize_or_zero()).length() < 1e-4 {
-        return Err(field_error("camera.up", "is zero or parallel to the viewing direction".into()));
+        return Err(field_error(
+            "camera.up",
+            "is zero or parallel to the viewing direction".into(),
+        ));
     }
-    Ok(Camera::new(origin, target, up, c.fov_x_deg.to_radians(), c.width, c.height))
+    Ok(Camera::new(
+        origin,
+        target,
+        up,
+        c.fov_x_deg.to_radians(),
+        c.width,
+        c.height,
+    ))
 }
 
 type LoadedMesh = (TriangleMesh, Vec<Material>, Vec<u32>);
@@ -203,17 +268,28 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
         let text = read(&mtl_path)?;
         defined.extend(validate::check_mtl(&mtl_path, &text, warnings)?);
     }
-    if let Some(missing) = summary.used_materials.iter().find(|m| !defined.contains(*m)) {
+    if let Some(missing) = summary
+        .used_materials
+        .iter()
+        .find(|m| !defined.contains(*m))
+    {
         return Err(SceneError::Mesh {
             path: obj_path.to_path_buf(),
             message: format!("material `{missing}` is used but defined in no `mtllib` file"),
         });
     }
 
-    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
-    let mesh_error = |message: String| SceneError::Mesh { path: obj_path.to_path_buf(), message };
-    let (models, mtl_result) =
-        tobj::load_obj(obj_path, &options).map_err(|e| mesh_error(format!("OBJ could not be loaded: {e}")))?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ..Default::default()
+    };
+    let mesh_error = |message: String| SceneError::Mesh {
+        path: obj_path.to_path_buf(),
+        message,
+    };
+    let (models, mtl_result) = tobj::load_obj(obj_path, &options)
+        .map_err(|e| mesh_error(format!("OBJ could not be loaded: {e}")))?;
     let tobj_materials = if summary.mtllibs.is_empty() {
         Vec::new()
     } else {
@@ -247,10 +323,17 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
             if m.indices.is_empty() {
                 continue;
             }
-            return Err(mesh_error(format!("object `{}` has faces but no material (add `usemtl`)", model.name)));
+            return Err(mesh_error(format!(
+                "object `{}` has faces but no material (add `usemtl`)",
+                model.name
+            )));
         };
         let base = positions.len() as u32;
-        positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
         for tri in m.indices.chunks_exact(3) {
             let t = [base + tri[0], base + tri[1], base + tri[2]];
             if triangle_area(t.map(|i| positions[i as usize])) > 0.0 {
@@ -262,12 +345,19 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
         }
     }
     if degenerate > 0 {
-        warnings.push(format!("{}: {degenerate} degenerate (zero-area) triangles dropped", obj_path.display()));
+        warnings.push(format!(
+            "{}: {degenerate} degenerate (zero-area) triangles dropped",
+            obj_path.display()
+        ));
     }
     if triangles.is_empty() {
         return Err(mesh_error("no triangles".into()));
     }
-    Ok((TriangleMesh::new(positions, triangles), materials, material_of))
+    Ok((
+        TriangleMesh::new(positions, triangles),
+        materials,
+        material_of,
+    ))
 }
 
 impl Scene {
