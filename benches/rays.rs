@@ -4,8 +4,8 @@
 //! `cargo bench --features embree,obvhs --bench rays [-- path/to/mesh.obj]`: without a path it
 //! uses the generated 106 800-triangle stress mesh of the cross-check test.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+#[path = "../tests/stress/mod.rs"]
+mod stress;
 
 use genpath::accel::{self, Accel, AccelError, AccelKind, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use glam::Vec3;
@@ -23,20 +23,20 @@ fn main() -> Result<(), Box<dyn Error>> {
     let path = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     let (mesh, label) = match &path {
         Some(path) => (load_obj(path)?, path.clone()),
-        None => (common::stress_mesh(7), "generated stress mesh".to_string()),
+        None => (stress::stress_mesh(7), "generated stress mesh".to_string()),
     };
-    let (lo, hi) = common::bounds(&mesh);
+    let (lo, hi) = stress::bounds(&mesh);
     let center = (lo + hi) / 2.0;
     let radius = (hi - lo).length() / 2.0;
     let eye = center + Vec3::new(0.07, 0.18, 1.0).normalize() * 1.3 * radius;
     let sets = [
         (
             "coherent",
-            common::camera_rays(eye, center, 50.0, RAYS, RAYS),
+            stress::camera_rays(eye, center, 50.0, RAYS, RAYS),
         ),
         (
             "incoherent",
-            common::random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
+            stress::random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
         ),
     ];
 

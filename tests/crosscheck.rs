@@ -10,7 +10,7 @@
 //!   agree to that absolute resolution instead, and the any-hit probes step by at least it.
 #![cfg(all(feature = "embree", feature = "obvhs"))]
 
-mod common;
+mod stress;
 
 use genpath::accel::{Accel, BvhAccel, EmbreeAccel, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use glam::Vec3;
@@ -323,7 +323,7 @@ fn check_packets(
 }
 
 fn stress_scene() -> TriangleMesh {
-    let mesh = common::stress_mesh(7);
+    let mesh = stress::stress_mesh(7);
     assert!(mesh.triangles.len() >= 100_000);
     mesh
 }
@@ -331,8 +331,8 @@ fn stress_scene() -> TriangleMesh {
 #[test]
 fn incoherent_rays_agree() {
     let mesh = stress_scene();
-    let (lo, hi) = common::bounds(&mesh);
-    let rays = common::random_rays(lo, hi, 100_000, 11);
+    let (lo, hi) = stress::bounds(&mesh);
+    let rays = stress::random_rays(lo, hi, 100_000, 11);
     let report = crosscheck(&mesh, &rays);
     println!("incoherent: {report}");
     report.assert_clean();
@@ -346,8 +346,8 @@ fn tiny_and_huge_scenes_agree() {
     for scale in [1e-4f32, 1e5] {
         let mut mesh = stress_scene();
         mesh.positions.iter_mut().for_each(|p| *p *= scale);
-        let (lo, hi) = common::bounds(&mesh);
-        let rays = common::random_rays(lo, hi, 20_000, 5);
+        let (lo, hi) = stress::bounds(&mesh);
+        let rays = stress::random_rays(lo, hi, 20_000, 5);
         let report = crosscheck(&mesh, &rays);
         println!("scale {scale:e}: {report}");
         report.assert_clean();
@@ -358,7 +358,7 @@ fn tiny_and_huge_scenes_agree() {
 #[test]
 fn coherent_rays_agree() {
     let mesh = stress_scene();
-    let rays = common::camera_rays(Vec3::new(0.3, 0.8, 4.5), Vec3::ZERO, 50.0, 320, 320);
+    let rays = stress::camera_rays(Vec3::new(0.3, 0.8, 4.5), Vec3::ZERO, 50.0, 320, 320);
     assert!(rays.len() >= 100_000);
     let report = crosscheck(&mesh, &rays);
     println!("coherent: {report}");
@@ -371,8 +371,8 @@ fn coherent_rays_agree() {
 
 // TODO(lead): once `genpath::scene` exists, add the shipped scenes, each a copy of
 // `coherent_rays_agree` over `Scene::load("scenes/<name>/scene.toml")?.mesh` with rays
-// `scene.camera.ray(x + 0.5, y + 0.5)` for every pixel (plus `common::random_rays` inside
-// `common::bounds(&scene.mesh)`):
+// `scene.camera.ray(x + 0.5, y + 0.5)` for every pixel (plus `stress::random_rays` inside
+// `stress::bounds(&scene.mesh)`):
 //   fn fig5_scene_agrees()  — scenes/fig5/scene.toml
 //   fn cbox_scene_agrees()  — scenes/cbox/scene.toml
 
@@ -506,8 +506,8 @@ impl Accel for Corrupted<'_> {
 #[test]
 fn crosscheck_catches_a_corrupted_back_end() {
     let mesh = stress_scene();
-    let (lo, hi) = common::bounds(&mesh);
-    let rays = common::random_rays(lo, hi, 5_000, 3);
+    let (lo, hi) = stress::bounds(&mesh);
+    let rays = stress::random_rays(lo, hi, 5_000, 3);
     let embree = EmbreeAccel::new(&mesh).expect("Embree builds the scene");
     let bvh = BvhAccel::new(&mesh);
     let clean = crosscheck_accels(&mesh, &embree, &bvh, &rays);
