@@ -1,5 +1,11 @@
 //! genpath: genetic path generation (Dutré, Suykens, Willems, "Optimized Monte Carlo Path
 //! Generation using Genetic Algorithms", KU Leuven report CW 267, 1998).
 
+#![deny(unsafe_code)]
+
 pub mod accel;
 pub mod image;
+pub mod path;
+pub mod render;
+pub mod sampling;
+pub mod scene;

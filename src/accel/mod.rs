@@ -10,6 +10,7 @@ use glam::Vec3;
 #[cfg(feature = "obvhs")]
 mod bvh;
 #[cfg(feature = "embree")]
+#[allow(unsafe_code)]
 mod embree;
 
 #[cfg(feature = "obvhs")]

@@ -1,0 +1,95 @@
+//! Light transport: the scene as the estimators see it, and the rendering methods.
+
+pub mod pt;
+
+use crate::accel::{Accel, Hit, Ray};
+use crate::scene::{Material, Scene};
+use glam::Vec3;
+
+/// Rendering methods selectable with `--method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
+    /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
+    Pt,
+}
+
+/// A surface point reached by a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    /// Unit geometric normal as stored (`cross(v1 − v0, v2 − v0)`): emission leaves on its side.
+    pub ng: Vec3,
+    pub prim: u32,
+}
+
+/// A scene together with the ray queries over it.
+pub struct SceneView<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a dyn Accel,
+    /// Ray origin offset along the normal, relative to the scene's size.
+    pub epsilon: f32,
+}
+
+/// Counts of ray queries, for statistics.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct RayCounts {
+    pub closest: u64,
+    pub shadow: u64,
+}
+
+impl RayCounts {
+    pub fn add(&mut self, other: RayCounts) {
+        self.closest += other.closest;
+        self.shadow += other.shadow;
+    }
+    pub fn total(&self) -> u64 {
+        self.closest + self.shadow
+    }
+}
+
+impl<'a> SceneView<'a> {
+    pub fn new(scene: &'a Scene, accel: &'a dyn Accel) -> Self {
+        Self { scene, accel, epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE) }
+    }
+
+    pub fn material(&self, prim: u32) -> &Material {
+        self.scene.material(prim)
+    }
+
+    fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
+        SurfacePoint { p: ray.origin + ray.dir * hit.t, ng: hit.ng, prim: hit.prim }
+    }
+
+    /// Closest surface along `ray`.
+    pub fn trace(&self, ray: &Ray, counts: &mut RayCounts) -> Option<SurfacePoint> {
+        counts.closest += 1;
+        self.accel.intersect(ray).map(|hit| self.surface_point(ray, &hit))
+    }
+
+    /// A ray leaving `x` in unit direction `dir`, its origin pushed off the surface on the
+    /// side it leaves through (no self-intersection).
+    pub fn spawn(&self, x: &SurfacePoint, dir: Vec3) -> Ray {
+        let offset = x.ng * self.epsilon.copysign(x.ng.dot(dir));
+        Ray::new(x.p + offset, dir, 0.0, f32::INFINITY)
+    }
+
+    /// Whether the segment between surface points `x` and `y` is free of occluders.
+    pub fn unoccluded(&self, x: &SurfacePoint, y: &SurfacePoint, counts: &mut RayCounts) -> bool {
+        counts.shadow += 1;
+        let d = y.p - x.p;
+        let from = x.p + x.ng * self.epsilon.copysign(x.ng.dot(d));
+        let to = y.p + y.ng * self.epsilon.copysign(-y.ng.dot(d));
+        !self.accel.occluded(&Ray::new(from, to - from, 0.0, 1.0))
+    }
+}
+
+/// Radiance leaving an emitter at `x` towards direction `w` (one-sided: normal side only).
+pub fn emitted(material: &Material, x: &SurfacePoint, w: Vec3) -> Vec3 {
+    if x.ng.dot(w) > 0.0 {
+        material.ke
+    } else {
+        Vec3::ZERO
+    }
+}

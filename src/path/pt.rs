@@ -1,0 +1,90 @@
+//! `pt`: unidirectional path tracing with next-event estimation at every vertex and BSDF
+//! sampling, combined by the power heuristic (Veach & Guibas 1995), Russian roulette from
+//! depth 5. The baseline users compare genpath against.
+
+use super::{emitted, RayCounts, SceneView, SurfacePoint};
+use crate::accel::Ray;
+use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, uniform, Rng};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// First bounce at which Russian roulette may end a path.
+pub const RR_START: u32 = 5;
+
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// Solid-angle density, as seen from a point at distance² `dist2`, of the emitter sampling
+/// strategy choosing the emitter point `y` with normal cosine `cos_light`.
+fn light_pdf_solid_angle(pdf_area: f64, dist2: f32, cos_light: f32) -> f32 {
+    (pdf_area * dist2 as f64 / cos_light as f64) as f32
+}
+
+/// One path-traced estimate of the radiance arriving along `ray`, with at most `max_bounces`
+/// scattering events.
+pub fn radiance(view: &SceneView, ray: &Ray, max_bounces: u32, rng: &mut Rng, counts: &mut RayCounts) -> Vec3 {
+    let scene = view.scene;
+    let Some(mut x) = view.trace(ray, counts) else { return Vec3::ZERO };
+    let mut wo = -ray.dir;
+    let mut radiance = emitted(view.material(x.prim), &x, wo);
+    let mut beta = Vec3::ONE;
+    for bounce in 1..=max_bounces {
+        let kd = view.material(x.prim).kd;
+        if kd.max_element() <= 0.0 {
+            break;
+        }
+        // Two-sided Lambertian: scatter on the side the path arrived from.
+        let n = if x.ng.dot(wo) >= 0.0 { x.ng } else { -x.ng };
+
+        // Next-event estimation.
+        let ls = scene.emitters.sample(&scene.mesh, [uniform(rng), uniform(rng), uniform(rng)]);
+        let y = SurfacePoint { p: ls.point, ng: scene.mesh.normals[ls.prim as usize], prim: ls.prim };
+        let d = y.p - x.p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
+        if cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 {
+            let le = view.material(y.prim).ke;
+            if le.max_element() > 0.0 && view.unoccluded(&x, &y, counts) {
+                let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
+                let weight = power_heuristic(pdf_light, cosine_hemisphere_pdf(cos_x));
+                radiance += beta * kd * FRAC_1_PI * le * (cos_x * weight / pdf_light);
+            }
+        }
+
+        // BSDF sampling: f·cos/pdf = kd for the cosine-sampled Lambertian lobe.
+        let wi = sample_cosine_hemisphere(n, [uniform(rng), uniform(rng)]);
+        let pdf_bsdf = cosine_hemisphere_pdf(n.dot(wi));
+        if pdf_bsdf <= 0.0 {
+            break;
+        }
+        beta *= kd;
+        let next_ray = view.spawn(&x, wi);
+        let Some(y) = view.trace(&next_ray, counts) else { break };
+        let y_material = view.material(y.prim);
+        if y_material.is_emitter() {
+            let cos_light = y.ng.dot(-wi);
+            if cos_light > 0.0 {
+                let dist2 = (y.p - x.p).length_squared();
+                let pdf_light = light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
+                radiance += beta * emitted(y_material, &y, -wi) * power_heuristic(pdf_bsdf, pdf_light);
+            }
+        }
+        if bounce >= RR_START {
+            let q = (1.0 - beta.max_element()).max(0.05);
+            if uniform(rng) < q {
+                break;
+            }
+            beta /= 1.0 - q;
+        }
+        x = y;
+        wo = -wi;
+    }
+    radiance
+}

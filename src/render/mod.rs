@@ -1,0 +1,139 @@
+//! Image rendering: tiles in parallel (rayon), one deterministic random stream per pixel
+//! sample, a progress bar with ETA on stderr.
+
+use crate::image::Image;
+use crate::path::{pt, Method, RayCounts, SceneView};
+use crate::sampling::{sample_rng, uniform};
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Side of the square tiles the image is split into for parallel rendering.
+pub const TILE: u32 = 16;
+
+/// What one render needs besides the scene.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RenderSettings {
+    pub method: Method,
+    pub spp: u32,
+    pub max_bounces: u32,
+    pub seed: u64,
+    /// Show a progress bar on stderr.
+    #[serde(skip)]
+    pub progress: bool,
+}
+
+/// A rendered image with the per-pixel statistics of its estimator.
+#[derive(Clone, Debug)]
+pub struct Film {
+    /// Per-pixel mean of the samples.
+    pub image: Image,
+    /// Per-pixel, per-channel estimated variance of that mean (sample variance / spp).
+    pub variance_of_mean: Vec<[f64; 3]>,
+    pub rays: RayCounts,
+    pub elapsed: Duration,
+}
+
+struct Tile {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+}
+
+struct TileResult {
+    mean: Vec<[f32; 3]>,
+    variance: Vec<[f64; 3]>,
+    rays: RayCounts,
+}
+
+fn tiles(width: u32, height: u32) -> Vec<Tile> {
+    let mut tiles = Vec::new();
+    for y0 in (0..height).step_by(TILE as usize) {
+        for x0 in (0..width).step_by(TILE as usize) {
+            tiles.push(Tile { x0, y0, x1: (x0 + TILE).min(width), y1: (y0 + TILE).min(height) });
+        }
+    }
+    tiles
+}
+
+/// A progress bar on stderr with ETA, or a hidden one.
+pub fn progress_bar(len: u64, label: &str, visible: bool) -> ProgressBar {
+    if !visible {
+        return ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
+    }
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template("{prefix:>8} [{bar:40}] {percent:>3}% {elapsed_precise} ETA {eta_precise}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_prefix(label.to_string());
+    bar
+}
+
+/// Renders every pixel of the scene's camera with `settings`.
+pub fn render(view: &SceneView, settings: &RenderSettings) -> Film {
+    let start = Instant::now();
+    let camera = &view.scene.camera;
+    let (width, height) = (camera.width, camera.height);
+    let tiles = tiles(width, height);
+    let bar = progress_bar(tiles.len() as u64, "render", settings.progress);
+    let results: Vec<TileResult> = tiles
+        .par_iter()
+        .map(|tile| {
+            let result = render_tile(view, settings, tile);
+            bar.inc(1);
+            result
+        })
+        .collect();
+    bar.finish_and_clear();
+
+    let mut image = Image::new(width, height);
+    let mut variance_of_mean = vec![[0.0; 3]; (width * height) as usize];
+    let mut rays = RayCounts::default();
+    for (tile, result) in tiles.iter().zip(&results) {
+        let tile_width = tile.x1 - tile.x0;
+        for y in tile.y0..tile.y1 {
+            for x in tile.x0..tile.x1 {
+                let i = ((y - tile.y0) * tile_width + (x - tile.x0)) as usize;
+                image.set(x, y, result.mean[i]);
+                variance_of_mean[(y * width + x) as usize] = result.variance[i];
+            }
+        }
+        rays.add(result.rays);
+    }
+    Film { image, variance_of_mean, rays, elapsed: start.elapsed() }
+}
+
+fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> TileResult {
+    let camera = &view.scene.camera;
+    let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
+    let mut mean = Vec::with_capacity(n);
+    let mut variance = Vec::with_capacity(n);
+    let mut rays = RayCounts::default();
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let pixel = y as u64 * camera.width as u64 + x as u64;
+            let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+            for s in 0..settings.spp {
+                let mut rng = sample_rng(settings.seed, pixel, s as u64);
+                // Box filter: a uniformly jittered position inside the pixel.
+                let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+                let value = match settings.method {
+                    Method::Pt => pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays),
+                }
+                .as_dvec3();
+                sum += value;
+                sum_sq += value * value;
+            }
+            let spp = settings.spp.max(1) as f64;
+            let m = sum / spp;
+            // Unbiased sample variance, divided by spp for the variance of the mean.
+            let var = if settings.spp > 1 { (sum_sq - sum * m) / (spp - 1.0) / spp } else { DVec3::ZERO };
+            mean.push(m.as_vec3().to_array());
+            variance.push(var.max(DVec3::ZERO).to_array());
+        }
+    }
+    TileResult { mean, variance, rays }
+}

@@ -1,0 +1,45 @@
+//! The scene description file (TOML), as written by the user.
+
+use serde::Deserialize;
+
+/// `scene.toml`: a mesh, a camera and optional render defaults.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// OBJ file, relative to the TOML file.
+    pub mesh: String,
+    pub camera: CameraFile,
+    #[serde(default)]
+    pub render: RenderDefaults,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub origin: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    /// Horizontal field of view in degrees.
+    pub fov_x_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Defaults a scene may set; every one is overridable on the command line.
+#[derive(Clone, Debug, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDefaults {
+    /// Scattering events on a path (Mitsuba's `max_depth` is this + 1).
+    #[serde(default = "default_max_bounces")]
+    pub max_bounces: u32,
+}
+
+fn default_max_bounces() -> u32 {
+    5
+}
+
+impl Default for RenderDefaults {
+    fn default() -> Self {
+        Self { max_bounces: default_max_bounces() }
+    }
+}

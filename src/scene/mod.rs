@@ -1,0 +1,278 @@
+//! Scenes: a TOML description, an OBJ/MTL mesh (through `tobj`), a camera, materials and
+//! the emitters, validated strictly at load time.
+
+mod camera;
+mod file;
+mod validate;
+
+pub use camera::Camera;
+pub use file::{CameraFile, RenderDefaults, SceneFile};
+
+use crate::accel::TriangleMesh;
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{path}: cannot read: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{path}: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: field `{field}`: {message}")]
+    Field { path: PathBuf, field: &'static str, message: String },
+    #[error("{path}:{line}: {message}")]
+    Syntax { path: PathBuf, line: usize, message: String },
+    #[error("{path}: {message}")]
+    Mesh { path: PathBuf, message: String },
+    #[error("{path}: the scene has no emitter (give some material a positive `Ke` and use it on a face)")]
+    NoEmitter { path: PathBuf },
+}
+
+/// A surface material (design §3). Lambertian albedo and a one-sided emission.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Two-sided Lambertian albedo.
+    pub kd: Vec3,
+    /// Radiance emitted on the normal side.
+    pub ke: Vec3,
+}
+
+impl Material {
+    pub fn is_emitter(&self) -> bool {
+        self.ke.max_element() > 0.0
+    }
+}
+
+/// The emitting triangles, sampled uniformly by area.
+#[derive(Clone, Debug)]
+pub struct Emitters {
+    /// Triangle index of each emitter triangle.
+    pub prims: Vec<u32>,
+    /// Running sum of areas, `cdf[i]` = area of emitters `0..=i`.
+    cdf: Vec<f64>,
+    pub total_area: f64,
+}
+
+/// A point on an emitter, sampled uniformly by area.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    pub point: Vec3,
+    pub prim: u32,
+    /// Density in area measure (1 / total emitter area).
+    pub pdf_area: f64,
+}
+
+impl Emitters {
+    fn new(mesh: &TriangleMesh, is_emitter: impl Fn(u32) -> bool) -> Self {
+        let mut prims = Vec::new();
+        let mut cdf = Vec::new();
+        let mut total = 0.0f64;
+        for prim in 0..mesh.triangles.len() as u32 {
+            if is_emitter(prim) {
+                total += triangle_area(mesh.vertices(prim));
+                prims.push(prim);
+                cdf.push(total);
+            }
+        }
+        Self { prims, cdf, total_area: total }
+    }
+
+    /// Samples a point uniformly over all emitter area from three uniform numbers in [0, 1).
+    pub fn sample(&self, mesh: &TriangleMesh, u: [f32; 3]) -> LightSample {
+        let target = u[0] as f64 * self.total_area;
+        let i = self.cdf.partition_point(|&c| c <= target).min(self.prims.len() - 1);
+        let prim = self.prims[i];
+        let [a, b, c] = mesh.vertices(prim);
+        // Uniform point in a triangle (square-root warp).
+        let su = u[1].sqrt();
+        let (b0, b1) = (1.0 - su, u[2] * su);
+        let point = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+        LightSample { point, prim, pdf_area: 1.0 / self.total_area }
+    }
+}
+
+pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f64 {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    0.5 * (b - a).cross(c - a).length()
+}
+
+/// A loaded, validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The TOML file it came from.
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub mesh: TriangleMesh,
+    pub materials: Vec<Material>,
+    /// Material index of each triangle.
+    pub material_of: Vec<u32>,
+    pub emitters: Emitters,
+    pub render: RenderDefaults,
+    /// Largest absolute coordinate of the scene: sets the scale of ray offsets.
+    pub extent: f32,
+    /// Non-fatal problems found while loading (ignored MTL statements, dropped triangles).
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn material(&self, prim: u32) -> &Material {
+        &self.materials[self.material_of[prim as usize] as usize]
+    }
+
+    /// Loads and validates a scene from its TOML file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = read(path)?;
+        let file: SceneFile = toml::from_str(&text)
+            .map_err(|e| SceneError::Toml { path: path.to_path_buf(), message: e.to_string().trim_end().to_string() })?;
+        let camera = build_camera(path, &file.camera)?;
+        if file.render.max_bounces > MAX_BOUNCES_LIMIT {
+            return Err(SceneError::Field {
+                path: path.to_path_buf(),
+                field: "render.max_bounces",
+                message: format!("{} is more than the limit of {MAX_BOUNCES_LIMIT}", file.render.max_bounces),
+            });
+        }
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let obj_path = dir.join(&file.mesh);
+        let mut warnings = Vec::new();
+        let (mesh, materials, material_of) = load_mesh(&obj_path, &mut warnings)?;
+        let emitters = Emitters::new(&mesh, |prim| materials[material_of[prim as usize] as usize].is_emitter());
+        if emitters.prims.is_empty() || emitters.total_area <= 0.0 {
+            return Err(SceneError::NoEmitter { path: obj_path });
+        }
+        let extent = mesh.positions.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        Ok(Scene {
+            path: path.to_path_buf(),
+            camera,
+            mesh,
+            materials,
+            material_of,
+            emitters,
+            render: file.render,
+            extent,
+            warnings,
+        })
+    }
+}
+
+/// Upper bound on `max_bounces`, far above anything useful, so that typos fail fast.
+pub const MAX_BOUNCES_LIMIT: u32 = 1000;
+/// Upper bound on the image side, so that a typo does not allocate terabytes.
+pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
+
+fn read(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })
+}
+
+fn build_camera(path: &Path, c: &CameraFile) -> Result<Camera, SceneError> {
+    let field_error = |field, message: String| SceneError::Field { path: path.to_path_buf(), field, message };
+    for (field, v) in [("camera.origin", c.origin), ("camera.target", c.target), ("camera.up", c.up)] {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(field_error(field, format!("{v:?} has a non-finite component")));
+        }
+    }
+    if !(c.fov_x_deg.is_finite() && c.fov_x_deg > 0.0 && c.fov_x_deg < 180.0) {
+        return Err(field_error("camera.fov_x_deg", format!("{} is not in (0, 180)", c.fov_x_deg)));
+    }
+    for (field, side) in [("camera.width", c.width), ("camera.height", c.height)] {
+        if side == 0 || side > MAX_IMAGE_SIDE {
+            return Err(field_error(field, format!("{side} is not in 1..={MAX_IMAGE_SIDE}")));
+        }
+    }
+    let (origin, target, up) = (Vec3::from(c.origin), Vec3::from(c.target), Vec3::from(c.up));
+    let forward = target - origin;
+    if forward.length() <= 1e-6 * origin.length().max(1.0) {
+        return Err(field_error("camera.target", "coincides with camera.origin".into()));
+    }
+    if forward.normalize().cross(up.normalize_or_zero()).length() < 1e-4 {
+        return Err(field_error("camera.up", "is zero or parallel to the viewing direction".into()));
+    }
+    Ok(Camera::new(origin, target, up, c.fov_x_deg.to_radians(), c.width, c.height))
+}
+
+type LoadedMesh = (TriangleMesh, Vec<Material>, Vec<u32>);
+
+fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, SceneError> {
+    let obj_text = read(obj_path)?;
+    let summary = validate::check_obj(obj_path, &obj_text, warnings)?;
+    let obj_dir = obj_path.parent().unwrap_or(Path::new("."));
+    let mut defined = std::collections::BTreeSet::new();
+    for lib in &summary.mtllibs {
+        let mtl_path = obj_dir.join(lib);
+        let text = read(&mtl_path)?;
+        defined.extend(validate::check_mtl(&mtl_path, &text, warnings)?);
+    }
+    if let Some(missing) = summary.used_materials.iter().find(|m| !defined.contains(*m)) {
+        return Err(SceneError::Mesh {
+            path: obj_path.to_path_buf(),
+            message: format!("material `{missing}` is used but defined in no `mtllib` file"),
+        });
+    }
+
+    let options = tobj::LoadOptions { triangulate: true, single_index: false, ..Default::default() };
+    let mesh_error = |message: String| SceneError::Mesh { path: obj_path.to_path_buf(), message };
+    let (models, mtl_result) =
+        tobj::load_obj(obj_path, &options).map_err(|e| mesh_error(format!("OBJ could not be loaded: {e}")))?;
+    let tobj_materials = if summary.mtllibs.is_empty() {
+        Vec::new()
+    } else {
+        mtl_result.map_err(|e| mesh_error(format!("MTL could not be loaded: {e}")))?
+    };
+    let materials: Vec<Material> = tobj_materials
+        .iter()
+        .map(|m| {
+            if m.specular.is_some_and(|ks| ks.iter().any(|&c| c > 0.0)) || m.illumination_model == Some(3) {
+                warnings.push(format!(
+                    "{}: material `{}`: glossy and mirror terms (`Ks`, `Ns`, `illum 3`) are not rendered yet and are ignored",
+                    obj_path.display(),
+                    m.name
+                ));
+            }
+            Material {
+                name: m.name.clone(),
+                kd: Vec3::from(m.diffuse.unwrap_or([0.0; 3])),
+                ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+            }
+        })
+        .collect();
+
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut material_of = Vec::new();
+    let mut degenerate = 0usize;
+    for model in &models {
+        let m = &model.mesh;
+        let Some(material) = m.material_id.filter(|&id| id < materials.len()) else {
+            if m.indices.is_empty() {
+                continue;
+            }
+            return Err(mesh_error(format!("object `{}` has faces but no material (add `usemtl`)", model.name)));
+        };
+        let base = positions.len() as u32;
+        positions.extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        for tri in m.indices.chunks_exact(3) {
+            let t = [base + tri[0], base + tri[1], base + tri[2]];
+            if triangle_area(t.map(|i| positions[i as usize])) > 0.0 {
+                triangles.push(t);
+                material_of.push(material as u32);
+            } else {
+                degenerate += 1;
+            }
+        }
+    }
+    if degenerate > 0 {
+        warnings.push(format!("{}: {degenerate} degenerate (zero-area) triangles dropped", obj_path.display()));
+    }
+    if triangles.is_empty() {
+        return Err(mesh_error("no triangles".into()));
+    }
+    Ok((TriangleMesh::new(positions, triangles), materials, material_of))
+}
+
+impl Scene {
+    /// Changes the image size, keeping the horizontal field of view.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        self.camera = self.camera.resized(width, height);
+    }
+}

@@ -1,0 +1,308 @@
+//! The command line on good and bad input: clear errors, non-zero exit, no panic, no output
+//! file; and determinism across thread counts.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn genpath(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_genpath"))
+        .args(args)
+        .output()
+        .expect("run genpath")
+}
+
+fn fig5() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fig5/scene.toml")
+}
+
+/// Runs a render that must fail; checks the exit code, that the message contains every
+/// `needles` and that no image or JSON was written.
+fn assert_fails(scene: &Path, extra: &[&str], out: &Path, needles: &[&str]) {
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--quiet",
+    ];
+    args.extend_from_slice(extra);
+    let output = genpath(&args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success(),
+        "expected failure for {scene:?}, stderr: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    for needle in needles {
+        assert!(stderr.contains(needle), "stderr lacks `{needle}`: {stderr}");
+    }
+    assert!(!out.exists(), "output written despite the error: {out:?}");
+    let mut json = out.as_os_str().to_owned();
+    json.push(".json");
+    assert!(!Path::new(&json).exists(), "JSON written despite the error");
+    let leftovers: Vec<_> = out
+        .parent()
+        .filter(|d| d.is_dir())
+        .map(|d| {
+            std::fs::read_dir(d)
+                .unwrap()
+                .filter_map(|e| e.ok())
+                .map(|e| e.file_name())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(
+        !leftovers
+            .iter()
+            .any(|n| n.to_string_lossy().contains(".tmp")),
+        "temp files left: {leftovers:?}"
+    );
+}
+
+const GOOD_OBJ: &str = "mtllib m.mtl\nusemtl light\nv 0 1 0\nv 1 1 0\nv 0 1 1\nf 1 2 3\n\
+                        usemtl white\nv -5 0 -5\nv -5 0 5\nv 5 0 5\nf 4 5 6\n";
+const GOOD_MTL: &str = "newmtl light\nKe 1 1 1\nnewmtl white\nKd 0.5 0.5 0.5\n";
+
+/// A small valid scene in `dir`, with any of its three files replaced.
+fn scene_with(dir: &Path, toml: Option<&str>, obj: Option<&str>, mtl: Option<&str>) -> PathBuf {
+    let default_toml = common::scene_toml("s.obj", [0.0, 3.0, 3.0], [0.0, 0.0, 0.0], 8);
+    common::write_files(
+        dir,
+        &[
+            ("s.toml", toml.unwrap_or(&default_toml)),
+            ("s.obj", obj.unwrap_or(GOOD_OBJ)),
+            ("m.mtl", mtl.unwrap_or(GOOD_MTL)),
+        ],
+    )
+}
+
+#[test]
+fn a_valid_small_scene_renders_with_json_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), None, None, None);
+    let out = dir.path().join("img.exr");
+    let output = genpath(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--quiet",
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(out.is_file());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("img.exr.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["settings"]["spp"], 2);
+    assert!(json["rays"]["total"].as_u64().unwrap() >= 8 * 8 * 2);
+}
+
+#[test]
+fn malformed_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), Some("mesh = \"s.obj\"\n[camera\n"), None, None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["s.toml", "line 2"],
+    );
+}
+
+#[test]
+fn unknown_toml_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml =
+        common::scene_toml("s.obj", [0.0, 3.0, 3.0], [0.0, 0.0, 0.0], 8) + "fov_y_deg = 3.0\n";
+    let scene = scene_with(dir.path(), Some(&toml), None, None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["s.toml", "unknown field", "fov_y_deg"],
+    );
+}
+
+#[test]
+fn bad_camera_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = common::scene_toml("s.obj", [0.0, 3.0, 3.0], [0.0, 3.0, 3.0], 8);
+    let scene = scene_with(dir.path(), Some(&toml), None, None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["s.toml", "camera.target"],
+    );
+}
+
+#[test]
+fn missing_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = common::scene_toml("nothere.obj", [0.0, 3.0, 3.0], [0.0, 0.0, 0.0], 8);
+    let scene = scene_with(dir.path(), Some(&toml), None, None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["nothere.obj", "cannot read"],
+    );
+}
+
+#[test]
+fn missing_mtl() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = GOOD_OBJ.replace("m.mtl", "gone.mtl");
+    let scene = scene_with(dir.path(), None, Some(&obj), None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["gone.mtl", "cannot read"],
+    );
+}
+
+#[test]
+fn undefined_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = GOOD_OBJ.replace("usemtl white", "usemtl chalk");
+    let scene = scene_with(dir.path(), None, Some(&obj), None);
+    assert_fails(&scene, &[], &dir.path().join("o.exr"), &["s.obj", "chalk"]);
+}
+
+#[test]
+fn nan_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = GOOD_OBJ.replace("v 1 1 0", "v 1 NaN 0");
+    let scene = scene_with(dir.path(), None, Some(&obj), None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["s.obj:4", "non-finite", "NaN"],
+    );
+}
+
+#[test]
+fn malformed_obj_and_mtl_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = GOOD_OBJ.replace("f 4 5 6", "f 4 5 9");
+    let scene = scene_with(dir.path(), None, Some(&obj), None);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["s.obj:11", "out of range"],
+    );
+    let mtl = GOOD_MTL.replace("Kd 0.5 0.5 0.5", "Kd 0.5 0.5");
+    let scene = scene_with(dir.path(), None, None, Some(&mtl));
+    assert_fails(&scene, &[], &dir.path().join("o.exr"), &["m.mtl:4", "Kd"]);
+}
+
+#[test]
+fn no_emitter() {
+    let dir = tempfile::tempdir().unwrap();
+    let mtl = GOOD_MTL.replace("Ke 1 1 1", "Kd 0.2 0.2 0.2");
+    let scene = scene_with(dir.path(), None, None, Some(&mtl));
+    assert_fails(&scene, &[], &dir.path().join("o.exr"), &["no emitter"]);
+}
+
+#[test]
+fn unwritable_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), None, None, None);
+    // A regular file used as a directory: unwritable even for root.
+    std::fs::write(dir.path().join("afile"), "x").unwrap();
+    assert_fails(&scene, &[], &dir.path().join("afile/o.exr"), &["afile"]);
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("missing_dir/o.exr"),
+        &["missing_dir"],
+    );
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.unknownformat"),
+        &["o.unknownformat"],
+    );
+}
+
+#[test]
+fn impossible_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), None, None, None);
+    let out = dir.path().join("o.exr");
+    assert_fails(&scene, &["--spp", "0"], &out, &["--spp"]);
+    assert_fails(&scene, &["--threads", "0"], &out, &["--threads"]);
+    assert_fails(&scene, &["--max-bounces", "100000"], &out, &["--max-bounces"]);
+    assert_fails(&scene, &["--accel", "optix"], &out, &["--accel"]);
+    assert_fails(&scene, &["--width", "999999999"], &out, &["--width"]);
+}
+
+/// The exact bits of every pixel of an EXR (OpenImageIO stamps a capture date into the
+/// header, so the files' bytes differ between runs; their pixels must not).
+fn pixel_bits(path: &Path) -> Vec<u32> {
+    let image = genpath::image::read_exr(path).unwrap();
+    image.pixels.iter().flatten().map(|c| c.to_bits()).collect()
+}
+
+#[test]
+fn one_and_two_threads_give_bit_identical_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |threads: &str| {
+        let out = dir.path().join(format!("t{threads}.exr"));
+        let output = genpath(&[
+            "render",
+            fig5().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--width",
+            "48",
+            "--height",
+            "40",
+            "--threads",
+            threads,
+            "--quiet",
+        ]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        pixel_bits(&out)
+    };
+    let one = render("1");
+    assert_eq!(one, render("2"));
+    // And the seed matters: a different seed must change the image.
+    let other = dir.path().join("seed.exr");
+    let output = genpath(&[
+        "render",
+        fig5().to_str().unwrap(),
+        "-o",
+        other.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--width",
+        "48",
+        "--height",
+        "40",
+        "--seed",
+        "2",
+        "--quiet",
+    ]);
+    assert!(output.status.success());
+    assert_ne!(one, pixel_bits(&other));
+}
