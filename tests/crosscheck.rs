@@ -13,6 +13,7 @@
 mod stress;
 
 use genpath::accel::{Accel, BvhAccel, EmbreeAccel, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use genpath::scene::Scene;
 use glam::Vec3;
 use std::fmt;
 
@@ -369,12 +370,35 @@ fn coherent_rays_agree() {
     );
 }
 
-// TODO(lead): once `genpath::scene` exists, add the shipped scenes, each a copy of
-// `coherent_rays_agree` over `Scene::load("scenes/<name>/scene.toml")?.mesh` with rays
-// `scene.camera.ray(x + 0.5, y + 0.5)` for every pixel (plus `stress::random_rays` inside
-// `stress::bounds(&scene.mesh)`):
-//   fn fig5_scene_agrees()  — scenes/fig5/scene.toml
-//   fn cbox_scene_agrees()  — scenes/cbox/scene.toml
+/// A shipped scene: every pixel centre of its camera at 320 × 320, and as many random rays
+/// inside its bounds.
+fn shipped_scene_agrees(name: &str) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+        .join("scene.toml");
+    let scene = Scene::load(&path).unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+    let camera = scene.camera.resized(320, 320);
+    let mut rays: Vec<Ray> = (0..320 * 320)
+        .map(|i| camera.ray((i % 320) as f32 + 0.5, (i / 320) as f32 + 0.5))
+        .collect();
+    let (lo, hi) = stress::bounds(&scene.mesh);
+    rays.extend(stress::random_rays(lo, hi, 100_000, 13));
+    let report = crosscheck(&scene.mesh, &rays);
+    println!("{name}: {report}");
+    report.assert_clean();
+    assert!(report.hits > rays.len() / 2, "{report}");
+}
+
+#[test]
+fn fig5_scene_agrees() {
+    shipped_scene_agrees("fig5");
+}
+
+#[test]
+fn cbox_scene_agrees() {
+    shipped_scene_agrees("cbox");
+}
 
 /// A two-triangle quad in z = 0 sharing the diagonal v0–v2.
 fn quad() -> TriangleMesh {
