@@ -1,16 +1,19 @@
 //! Rays per second of each built back-end, on one thread: single rays against 16-wide packets,
 //! coherent (camera) against incoherent (random) rays, closest hit and any hit.
 //!
-//! `cargo bench --features embree,obvhs --bench rays [-- path/to/mesh.obj]`: without a path it
-//! uses the generated 106 800-triangle stress mesh of the cross-check test.
+//! `cargo bench --features embree,obvhs --bench rays [-- scenes/cbox/scene.toml]`: a scene's
+//! camera gives the coherent rays; without a scene, the generated 106 800-triangle stress mesh
+//! of the cross-check test is seen by a camera placed outside its bounds.
 
 #[path = "../tests/stress/mod.rs"]
 mod stress;
 
-use genpath::accel::{self, Accel, AccelError, AccelKind, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use genpath::accel::{self, Accel, AccelError, AccelKind, Hit, Ray, PACKET_SIZE};
+use genpath::scene::Scene;
 use glam::Vec3;
 use std::error::Error;
 use std::hint::black_box;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// Rays per set (a 1024² camera image); every timing covers a whole set.
@@ -19,21 +22,29 @@ const RAYS: u32 = 1024;
 const PASSES: usize = 3;
 
 fn main() -> Result<(), Box<dyn Error>> {
-    // `cargo bench` passes `--bench`; anything else not starting with `-` is a mesh path.
+    // `cargo bench` passes `--bench`; anything else not starting with `-` is a scene path.
     let path = std::env::args().skip(1).find(|a| !a.starts_with('-'));
-    let (mesh, label) = match &path {
-        Some(path) => (load_obj(path)?, path.clone()),
-        None => (stress::stress_mesh(7), "generated stress mesh".to_string()),
+    let (mesh, coherent, label) = match &path {
+        Some(path) => {
+            let scene = Scene::load(Path::new(path))?;
+            let camera = scene.camera.resized(RAYS, RAYS);
+            let rays = stress::tiled_pixels(RAYS, RAYS)
+                .map(|(x, y)| camera.ray(x as f32 + 0.5, y as f32 + 0.5))
+                .collect();
+            (scene.mesh, rays, path.clone())
+        }
+        None => {
+            let mesh = stress::stress_mesh(7);
+            let (lo, hi) = stress::bounds(&mesh);
+            let center = (lo + hi) / 2.0;
+            let eye = center + Vec3::new(0.07, 0.18, 1.0).normalize() * 0.65 * (hi - lo).length();
+            let rays = stress::camera_rays(eye, center, 50.0, RAYS, RAYS);
+            (mesh, rays, "generated stress mesh".to_string())
+        }
     };
     let (lo, hi) = stress::bounds(&mesh);
-    let center = (lo + hi) / 2.0;
-    let radius = (hi - lo).length() / 2.0;
-    let eye = center + Vec3::new(0.07, 0.18, 1.0).normalize() * 1.3 * radius;
     let sets = [
-        (
-            "coherent",
-            stress::camera_rays(eye, center, 50.0, RAYS, RAYS),
-        ),
+        ("coherent", coherent),
         (
             "incoherent",
             stress::random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
@@ -153,41 +164,4 @@ fn occluded_packets(accel: &dyn Accel, rays: &[Ray]) -> usize {
             blocked.iter().filter(|&&b| b).count()
         })
         .sum()
-}
-
-/// All triangles of an OBJ file as one mesh.
-fn load_obj(path: &str) -> Result<TriangleMesh, Box<dyn Error>> {
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, _materials) = tobj::load_obj(path, &options)?;
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for model in models {
-        let base = positions.len() as u32;
-        positions.extend(
-            model
-                .mesh
-                .positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2])),
-        );
-        triangles.extend(
-            model
-                .mesh
-                .indices
-                .chunks_exact(3)
-                .map(|t| [base + t[0], base + t[1], base + t[2]]),
-        );
-    }
-    if triangles
-        .iter()
-        .flatten()
-        .any(|&i| i as usize >= positions.len())
-    {
-        return Err(format!("{path}: a face refers to a vertex that does not exist").into());
-    }
-    Ok(TriangleMesh::new(positions, triangles))
 }

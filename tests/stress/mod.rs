@@ -117,28 +117,32 @@ pub fn random_rays(lo: Vec3, hi: Vec3, count: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
-/// Coherent rays: a pinhole camera's `width × height` pixel centres, ordered in 4×4 tiles so
-/// that each packet of [`PACKET_SIZE`] consecutive rays covers one tile.
-pub fn camera_rays(eye: Vec3, target: Vec3, fov_x_deg: f32, width: u32, height: u32) -> Vec<Ray> {
+/// Pixel coordinates of a `width × height` image in 4×4 tiles, so that each packet of
+/// [`PACKET_SIZE`] consecutive pixels covers one tile.
+pub fn tiled_pixels(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
     const TILE: u32 = 4;
     const _: () = assert!((TILE * TILE) as usize == PACKET_SIZE);
+    (0..height).step_by(TILE as usize).flat_map(move |ty| {
+        (0..width).step_by(TILE as usize).flat_map(move |tx| {
+            (ty..(ty + TILE).min(height))
+                .flat_map(move |y| (tx..(tx + TILE).min(width)).map(move |x| (x, y)))
+        })
+    })
+}
+
+/// Coherent rays: a pinhole camera's `width × height` pixel centres in [`tiled_pixels`] order.
+pub fn camera_rays(eye: Vec3, target: Vec3, fov_x_deg: f32, width: u32, height: u32) -> Vec<Ray> {
     let forward = (target - eye).normalize();
     let right = forward.cross(Vec3::Y).normalize();
     let up = right.cross(forward);
     let half_width = (fov_x_deg.to_radians() / 2.0).tan();
     let half_height = half_width * height as f32 / width as f32;
-    let mut rays = Vec::with_capacity((width * height) as usize);
-    for ty in (0..height).step_by(TILE as usize) {
-        for tx in (0..width).step_by(TILE as usize) {
-            for y in ty..(ty + TILE).min(height) {
-                for x in tx..(tx + TILE).min(width) {
-                    let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * half_width;
-                    let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * half_height;
-                    let dir = (forward + sx * right + sy * up).normalize();
-                    rays.push(Ray::new(eye, dir, 0.0, f32::INFINITY));
-                }
-            }
-        }
-    }
-    rays
+    tiled_pixels(width, height)
+        .map(|(x, y)| {
+            let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * half_width;
+            let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * half_height;
+            let dir = (forward + sx * right + sy * up).normalize();
+            Ray::new(eye, dir, 0.0, f32::INFINITY)
+        })
+        .collect()
 }
