@@ -57,7 +57,7 @@ fn probe() -> Option<Embree> {
         candidates.push((PathBuf::from(dir), None));
     }
 
-    candidates.into_iter().find_map(|(include_dir, lib_dir)| {
+    let found = candidates.into_iter().find_map(|(include_dir, lib_dir)| {
         if !include_dir.join("rtcore.h").is_file() {
             return None;
         }
@@ -80,7 +80,17 @@ fn probe() -> Option<Embree> {
                 None
             }
         }
-    })
+    });
+    if let (Some(prefix), Some(found)) = (&prefix, &found) {
+        if found.lib_dir.is_none() {
+            println!(
+                "cargo:warning=EMBREE_DIR={} has no include/embree4 or include/embree3; using {}",
+                prefix.display(),
+                found.include_dir.display()
+            );
+        }
+    }
+    found
 }
 
 /// `RTC_VERSION_MAJOR` from `rtcore_config.h`, e.g. `#define RTC_VERSION_MAJOR 3`.

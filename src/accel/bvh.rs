@@ -1,8 +1,13 @@
-//! Ray queries through the pure-Rust `obvhs` crate: a compressed wide BVH (CWBVH, 8-wide)
-//! built with PLOC, traversed one ray at a time.
+//! Ray queries through the pure-Rust `obvhs` crate: a binary BVH built with PLOC and
+//! reinsertion, traversed one ray at a time.
+//!
+//! Not obvhs's faster CWBVH: its node test clamps the entry distance to a fixed 1e-4
+//! (`cwbvh::node::EPSILON`) instead of the ray's `tmin`, so it misses every hit closer than
+//! 1e-4 whose leaf box ends before that — all hits of a scene of scale 1e-4, and any-hit
+//! queries with `tmax < 1e-4`. The BVH2 node test has no such floor.
 
 use super::{Accel, Hit, Ray, TriangleMesh, PACKET_SIZE};
-use obvhs::cwbvh::{builder::build_cwbvh_from_tris, CwBvh};
+use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
 use obvhs::ray::RayHit;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
@@ -11,7 +16,7 @@ use std::time::Duration;
 
 pub struct BvhAccel {
     /// `None` for an empty mesh, which obvhs cannot build a tree for.
-    bvh: Option<CwBvh>,
+    bvh: Option<Bvh2>,
     /// Triangles in the BVH's leaf order, so a leaf's primitives are read contiguously;
     /// `prim_ids[i]` is the index of `tris[i]` in [`TriangleMesh::triangles`].
     tris: Vec<RtTriangle>,
@@ -36,7 +41,7 @@ impl BvhAccel {
             };
         }
         // medium_build: about Embree's build time with faster traversal (obvhs's own advice).
-        let bvh = build_cwbvh_from_tris(
+        let bvh = build_bvh2_from_tris(
             &triangles,
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
