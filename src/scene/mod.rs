@@ -39,19 +39,40 @@ pub enum SceneError {
     NoEmitter { path: PathBuf },
 }
 
-/// A surface material (design §3). Lambertian albedo and a one-sided emission.
+/// A surface material (design §3): a two-sided Lambertian lobe plus a normalised
+/// modified-Phong lobe, or an ideal mirror; and a one-sided emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
-    /// Two-sided Lambertian albedo.
+    /// Two-sided Lambertian albedo (`Kd`).
     pub kd: Vec3,
-    /// Radiance emitted on the normal side.
+    /// Phong lobe albedo at normal incidence (`Ks`), or the mirror's reflectance.
+    pub ks: Vec3,
+    /// Phong exponent (`Ns`).
+    pub ns: f32,
+    /// Ideal mirror (`illum 3`): a delta BRDF of reflectance `ks`.
+    pub mirror: bool,
+    /// Radiance emitted on the normal side (`Ke`).
     pub ke: Vec3,
 }
 
 impl Material {
     pub fn is_emitter(&self) -> bool {
         self.ke.max_element() > 0.0
+    }
+
+    /// Whether the Phong lobe is present (and the surface is not a mirror).
+    pub fn is_glossy(&self) -> bool {
+        !self.mirror && self.ks.max_element() > 0.0
+    }
+
+    /// Whether light can scatter off the surface at all.
+    pub fn scatters(&self) -> bool {
+        if self.mirror {
+            self.ks.max_element() > 0.0
+        } else {
+            self.kd.max_element() > 0.0 || self.ks.max_element() > 0.0
+        }
     }
 }
 
@@ -298,20 +319,32 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
     let materials: Vec<Material> = tobj_materials
         .iter()
         .map(|m| {
-            if m.specular.is_some_and(|ks| ks.iter().any(|&c| c > 0.0)) || m.illumination_model == Some(3) {
+            let kd = Vec3::from(m.diffuse.unwrap_or([0.0; 3]));
+            let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
+            let mirror = m.illumination_model == Some(3);
+            if mirror && kd.max_element() > 0.0 {
                 warnings.push(format!(
-                    "{}: material `{}`: glossy and mirror terms (`Ks`, `Ns`, `illum 3`) are not rendered yet and are ignored",
+                    "{}: material `{}` is a mirror (`illum 3`): its `Kd` is ignored",
                     obj_path.display(),
                     m.name
                 ));
             }
-            Material {
-                name: m.name.clone(),
-                kd: Vec3::from(m.diffuse.unwrap_or([0.0; 3])),
-                ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+            if !mirror && (kd + ks).max_element() > 1.0 {
+                return Err(mesh_error(format!(
+                    "material `{}`: `Kd + Ks` exceeds 1 in some channel, so it would create energy",
+                    m.name
+                )));
             }
+            Ok(Material {
+                name: m.name.clone(),
+                kd: if mirror { Vec3::ZERO } else { kd },
+                ks,
+                ns: m.shininess.unwrap_or(1.0),
+                mirror,
+                ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+            })
         })
-        .collect();
+        .collect::<Result<_, SceneError>>()?;
 
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
