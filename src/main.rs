@@ -3,8 +3,11 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use genpath::accel::{self, AccelKind};
+use genpath::path::generator::{PathGenerator, ABSORPTION_MAX, ABSORPTION_MIN};
+use genpath::path::mixture::Mixture;
+use genpath::path::mixture_file;
 use genpath::path::{Method, SceneView};
-use genpath::render::{self, RenderSettings};
+use genpath::render::{self, Estimator, RenderSettings};
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -49,6 +52,12 @@ struct RenderArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = Method::Pt)]
     method: Method,
+    /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
+    #[arg(long, value_name = "FILE")]
+    generators: Option<PathBuf>,
+    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
+    srt_absorption: f64,
     /// Samples (paths) per pixel.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
     spp: u32,
@@ -73,6 +82,15 @@ struct RenderArgs {
     /// No progress bar and no warnings on stderr.
     #[arg(short, long)]
     quiet: bool,
+}
+
+fn parse_absorption(text: &str) -> Result<f64, String> {
+    let a: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
+        Ok(a)
+    } else {
+        Err(format!("must be in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]"))
+    }
 }
 
 fn main() {
@@ -138,8 +156,34 @@ fn run_render(args: RenderArgs) -> Result<()> {
         seed: args.seed,
         progress: !args.quiet,
     };
+    let mixture = match settings.method {
+        Method::Pt => None,
+        Method::Srt => Some(Mixture::new(
+            vec![PathGenerator::srt(
+                settings.max_bounces,
+                args.srt_absorption,
+                mixture_file::uniform_light(&scene),
+            )],
+            vec![1.0],
+        )),
+        Method::Mixture => {
+            let Some(file) = &args.generators else {
+                bail!("--method mixture needs --generators FILE");
+            };
+            Some(mixture_file::load(
+                file,
+                &scene,
+                settings.max_bounces,
+                args.srt_absorption,
+            )?)
+        }
+    };
+    if args.generators.is_some() && settings.method != Method::Mixture {
+        bail!("--generators is only used with --method mixture");
+    }
+    let estimator = mixture.as_ref().map_or(Estimator::Pt, Estimator::Mixture);
     let view = SceneView::new(&scene, accel.as_ref());
-    let film = pool.install(|| render::render(&view, &settings));
+    let film = pool.install(|| render::render(&view, &settings, estimator));
     let render_s = film.elapsed.as_secs_f64();
 
     let t_write = Instant::now();
@@ -155,6 +199,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         "settings": settings,
         "threads": pool.current_num_threads(),
         "accel": accel.name(),
+        "mixture": mixture,
         "width": scene.camera.width,
         "height": scene.camera.height,
         "times_s": { "load": load_s, "accel_build": accel_s, "render": render_s, "write": write_s },

@@ -5,7 +5,7 @@ mod common;
 
 use genpath::accel::{self, AccelKind};
 use genpath::path::{Method, SceneView};
-use genpath::render::{render, RenderSettings};
+use genpath::render::{render, Estimator, RenderSettings};
 use genpath::scene::Scene;
 
 const RHO: f32 = 0.5;
@@ -42,7 +42,7 @@ fn furnace(rho: f32, max_bounces: u32) -> (f64, f64) {
         seed: 7,
         progress: false,
     };
-    let film = render(&view, &settings);
+    let film = render(&view, &settings, Estimator::Pt);
     let n = film.image.pixels.len() as f64;
     let mean = film.image.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / n;
     let var_of_grand_mean = film.variance_of_mean.iter().map(|v| v[0]).sum::<f64>() / (n * n);

@@ -1,5 +1,8 @@
 //! Light transport: the scene as the estimators see it, and the rendering methods.
 
+pub mod generator;
+pub mod mixture;
+pub mod mixture_file;
 pub mod pt;
 
 use crate::accel::{Accel, Hit, Ray};
@@ -13,6 +16,11 @@ pub enum Method {
     /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
     /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
     Pt,
+    /// The paper's baseline "stochastic ray tracing": BRDF sampling with fixed absorption,
+    /// next-event estimation only at the path's end.
+    Srt,
+    /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
+    Mixture,
 }
 
 /// A surface point reached by a ray.

@@ -4,9 +4,8 @@
 
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
-use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, uniform, Rng};
+use crate::sampling::{brdf, uniform, Rng};
 use glam::Vec3;
-use std::f32::consts::FRAC_1_PI;
 
 /// First bounce at which Russian roulette may end a path.
 pub const RR_START: u32 = 5;
@@ -43,42 +42,51 @@ pub fn radiance(
     let mut radiance = emitted(view.material(x.prim), &x, wo);
     let mut beta = Vec3::ONE;
     for bounce in 1..=max_bounces {
-        let kd = view.material(x.prim).kd;
-        if kd.max_element() <= 0.0 {
+        let material = view.material(x.prim);
+        if !material.scatters() {
             break;
         }
-        // Two-sided Lambertian: scatter on the side the path arrived from.
-        let n = if x.ng.dot(wo) >= 0.0 { x.ng } else { -x.ng };
+        let n = brdf::facing_normal(x.ng, wo);
 
-        // Next-event estimation.
-        let ls = scene
-            .emitters
-            .sample(&scene.mesh, [uniform(rng), uniform(rng), uniform(rng)]);
-        let y = SurfacePoint {
-            p: ls.point,
-            ng: scene.mesh.normals[ls.prim as usize],
-            prim: ls.prim,
-        };
-        let d = y.p - x.p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-        if cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 {
-            let le = view.material(y.prim).ke;
-            if le.max_element() > 0.0 && view.unoccluded(&x, &y, counts) {
-                let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
-                let weight = power_heuristic(pdf_light, cosine_hemisphere_pdf(cos_x));
-                radiance += beta * kd * FRAC_1_PI * le * (cos_x * weight / pdf_light);
+        // Next-event estimation (impossible through a mirror's delta).
+        if !material.mirror {
+            let u = [uniform(rng), uniform(rng), uniform(rng)];
+            let ls = scene.emitters.sample(&scene.mesh, u);
+            let y = SurfacePoint {
+                p: ls.point,
+                ng: scene.mesh.normals[ls.prim as usize],
+                prim: ls.prim,
+            };
+            let d = y.p - x.p;
+            let dist2 = d.length_squared();
+            let wi = d / dist2.sqrt();
+            let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
+            if cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 {
+                let le = view.material(y.prim).ke;
+                let f = brdf::eval(material, n, wo, wi);
+                if le.max_element() > 0.0
+                    && f.max_element() > 0.0
+                    && view.unoccluded(&x, &y, counts)
+                {
+                    let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
+                    let pdf_brdf = brdf::pdf(material, n, wo, wi) as f32;
+                    let weight = power_heuristic(pdf_light, pdf_brdf);
+                    radiance += beta * f * le * (cos_x * weight / pdf_light);
+                }
             }
         }
 
-        // BSDF sampling: f·cos/pdf = kd for the cosine-sampled Lambertian lobe.
-        let wi = sample_cosine_hemisphere(n, [uniform(rng), uniform(rng)]);
-        let pdf_bsdf = cosine_hemisphere_pdf(n.dot(wi));
-        if pdf_bsdf <= 0.0 {
+        // BRDF sampling.
+        let u = [
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+        ];
+        let Some(bs) = brdf::sample(material, n, wo, u) else {
             break;
-        }
-        beta *= kd;
+        };
+        beta *= bs.weight;
+        let wi = bs.wi;
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace(&next_ray, counts) else {
             break;
@@ -87,11 +95,15 @@ pub fn radiance(
         if y_material.is_emitter() {
             let cos_light = y.ng.dot(-wi);
             if cos_light > 0.0 {
-                let dist2 = (y.p - x.p).length_squared();
-                let pdf_light =
-                    light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
-                radiance +=
-                    beta * emitted(y_material, &y, -wi) * power_heuristic(pdf_bsdf, pdf_light);
+                let weight = if bs.delta {
+                    1.0
+                } else {
+                    let dist2 = (y.p - x.p).length_squared();
+                    let pdf_light =
+                        light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
+                    power_heuristic(bs.pdf as f32, pdf_light)
+                };
+                radiance += beta * emitted(y_material, &y, -wi) * weight;
             }
         }
         if bounce >= RR_START {

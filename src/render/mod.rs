@@ -2,7 +2,8 @@
 //! sample, a progress bar with ETA on stderr.
 
 use crate::image::Image;
-use crate::path::{pt, Method, RayCounts, SceneView};
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{sample_rng, uniform};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -22,6 +23,15 @@ pub struct RenderSettings {
     /// Show a progress bar on stderr.
     #[serde(skip)]
     pub progress: bool,
+}
+
+/// How each pixel sample is estimated.
+#[derive(Clone, Copy)]
+pub enum Estimator<'a> {
+    /// Path tracing (`pt`).
+    Pt,
+    /// The same mixture of path generators at every pixel (`srt`, `mixture`): eq. 8.
+    Mixture(&'a Mixture),
 }
 
 /// A rendered image with the per-pixel statistics of its estimator.
@@ -80,7 +90,7 @@ pub fn progress_bar(len: u64, label: &str, visible: bool) -> ProgressBar {
 }
 
 /// Renders every pixel of the scene's camera with `settings`.
-pub fn render(view: &SceneView, settings: &RenderSettings) -> Film {
+pub fn render(view: &SceneView, settings: &RenderSettings, estimator: Estimator) -> Film {
     let start = Instant::now();
     let camera = &view.scene.camera;
     let (width, height) = (camera.width, camera.height);
@@ -89,7 +99,7 @@ pub fn render(view: &SceneView, settings: &RenderSettings) -> Film {
     let results: Vec<TileResult> = tiles
         .par_iter()
         .map(|tile| {
-            let result = render_tile(view, settings, tile);
+            let result = render_tile(view, settings, estimator, tile);
             bar.inc(1);
             result
         })
@@ -118,12 +128,18 @@ pub fn render(view: &SceneView, settings: &RenderSettings) -> Film {
     }
 }
 
-fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> TileResult {
+fn render_tile(
+    view: &SceneView,
+    settings: &RenderSettings,
+    estimator: Estimator,
+    tile: &Tile,
+) -> TileResult {
     let camera = &view.scene.camera;
     let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
     let mut mean = Vec::with_capacity(n);
     let mut variance = Vec::with_capacity(n);
     let mut rays = RayCounts::default();
+    let mut scratch = MixtureScratch::default();
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
@@ -132,12 +148,28 @@ fn render_tile(view: &SceneView, settings: &RenderSettings, tile: &Tile) -> Tile
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                let value = match settings.method {
-                    Method::Pt => {
+                let value = match estimator {
+                    Estimator::Pt => {
                         pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays)
+                            .as_dvec3()
                     }
-                }
-                .as_dvec3();
+                    Estimator::Mixture(mixture) => match view.trace(&ray, &mut rays) {
+                        None => DVec3::ZERO,
+                        Some(x1) => {
+                            let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();
+                            direct
+                                + mixture.estimate(
+                                    view,
+                                    ray.origin,
+                                    x1,
+                                    settings.max_bounces,
+                                    &mut rng,
+                                    &mut rays,
+                                    &mut scratch,
+                                )
+                        }
+                    },
+                };
                 sum += value;
                 sum_sq += value * value;
             }

@@ -4,6 +4,10 @@
 //! (seed, pixel, sample index), so an image does not depend on the thread count or tile
 //! order, and a single pixel can be re-rendered alone.
 
+pub mod anchor;
+pub mod brdf;
+pub mod light_point;
+
 use glam::Vec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;
@@ -40,21 +44,6 @@ pub fn basis(n: Vec3) -> (Vec3, Vec3) {
         Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
         Vec3::new(b, sign + n.y * n.y * a, -n.y),
     )
-}
-
-/// Cosine-weighted direction on the hemisphere around unit `n`; its solid-angle density is
-/// `cos θ / π` ([`cosine_hemisphere_pdf`]).
-pub fn sample_cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {
-    let r = u[0].sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u[1];
-    let z = (1.0 - u[0]).max(0.0).sqrt();
-    let (t, b) = basis(n);
-    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * z).normalize()
-}
-
-/// Solid-angle density of [`sample_cosine_hemisphere`] for `cos_theta = dot(n, ω)`.
-pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    cos_theta.max(0.0) * std::f32::consts::FRAC_1_PI
 }
 
 #[cfg(test)]

@@ -1,0 +1,133 @@
+//! Weighted sets of path generators (paper eq. 7) and the balance-heuristic estimator
+//! (paper eq. 8).
+
+use super::generator::{Contribution, PathGenerator, PathVertices};
+use super::{RayCounts, SceneView, SurfacePoint};
+use crate::sampling::{uniform, Rng};
+use glam::{DVec3, Vec3};
+
+/// A weighted set of path generators, `pdf(X) = Σ w_g p_g(X)`, `Σ w_g = 1`. Component 0 is
+/// the defensive `srt` generator: with weight ≥ `w_min` it keeps every light-carrying path
+/// reachable, so the estimator stays unbiased whatever the other components do.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Mixture {
+    pub generators: Vec<PathGenerator>,
+    pub weights: Vec<f64>,
+    /// Fault injection for statistical tests: (component, factor) multiplies that
+    /// component's density in [`Mixture::pdf_path`] only, making the estimator biased.
+    #[serde(skip)]
+    pdf_error: Option<(usize, f64)>,
+}
+
+/// Reusable buffers of one worker, so that sampling allocates nothing per path.
+#[derive(Default)]
+pub struct MixtureScratch {
+    path: PathVertices,
+    contributions: Vec<Contribution>,
+}
+
+impl Mixture {
+    /// A mixture of the given generators; `weights` are normalised.
+    pub fn new(generators: Vec<PathGenerator>, weights: Vec<f64>) -> Self {
+        let total: f64 = weights.iter().sum();
+        Self {
+            generators,
+            weights: weights.iter().map(|w| w / total).collect(),
+            pdf_error: None,
+        }
+    }
+
+    /// This mixture with component `index`'s density deliberately scaled by `factor` when
+    /// evaluated (not when sampled): a wrong input that unbiasedness tests must reject.
+    pub fn with_pdf_error(mut self, index: usize, factor: f64) -> Self {
+        self.pdf_error = Some((index, factor));
+        self
+    }
+
+    /// One normalised mixture from several, each scaled by its weight (for pixels between
+    /// GA pixels): the union of their components. Still one mixture, so still unbiased.
+    pub fn combine(parts: &[(f64, &Mixture)]) -> Self {
+        let total: f64 = parts.iter().map(|(w, _)| w).sum();
+        let mut generators = Vec::new();
+        let mut weights = Vec::new();
+        for (w, m) in parts {
+            for (g, wg) in m.generators.iter().zip(&m.weights) {
+                generators.push(g.clone());
+                weights.push(w / total * wg);
+            }
+        }
+        Self {
+            generators,
+            weights,
+            pdf_error: None,
+        }
+    }
+
+    /// Mixture density of a path (eq. 7).
+    pub fn pdf_path(
+        &self,
+        view: &SceneView,
+        path: &PathVertices,
+        c: &Contribution,
+        max_bounces: u32,
+    ) -> f64 {
+        let mut pdf = 0.0;
+        for (i, (g, &w)) in self.generators.iter().zip(&self.weights).enumerate() {
+            if w > 0.0 {
+                let scale = match self.pdf_error {
+                    Some((index, factor)) if index == i => factor,
+                    _ => 1.0,
+                };
+                pdf += w * scale * g.pdf_path(view, path, c.len, c.nee, max_bounces);
+            }
+        }
+        pdf
+    }
+
+    /// Picks a component by its weight.
+    fn choose(&self, u: f64) -> usize {
+        let mut acc = 0.0;
+        for (i, w) in self.weights.iter().enumerate() {
+            acc += w;
+            if u < acc {
+                return i;
+            }
+        }
+        self.weights.len() - 1
+    }
+
+    /// One sample of eq. 8 for the radiance arriving from `x1` (the first hit of a camera
+    /// ray from `camera`), emission seen directly at `x1` excluded.
+    #[allow(clippy::too_many_arguments)]
+    pub fn estimate(
+        &self,
+        view: &SceneView,
+        camera: Vec3,
+        x1: SurfacePoint,
+        max_bounces: u32,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        scratch: &mut MixtureScratch,
+    ) -> DVec3 {
+        let g = self.choose(uniform(rng) as f64);
+        scratch.contributions.clear();
+        self.generators[g].sample_path(
+            view,
+            camera,
+            x1,
+            max_bounces,
+            rng,
+            counts,
+            &mut scratch.path,
+            &mut scratch.contributions,
+        );
+        let mut sum = DVec3::ZERO;
+        for c in &scratch.contributions {
+            let pdf = self.pdf_path(view, &scratch.path, c, max_bounces);
+            if pdf > 0.0 {
+                sum += c.f / pdf;
+            }
+        }
+        sum
+    }
+}

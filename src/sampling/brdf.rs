@@ -1,0 +1,136 @@
+//! The BRDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
+//! normalised modified-Phong lobe (chosen by albedo), or an ideal mirror (a delta).
+//!
+//! Directions are unit vectors pointing away from the surface; `n` is the geometric normal
+//! turned to the side of `wo` ([`facing_normal`]). Densities are solid-angle densities over
+//! the full sphere (zero below the surface for the Lambertian lobe), in `f64`.
+
+use crate::scene::Material;
+use glam::{DVec3, Vec3};
+use std::f64::consts::{FRAC_1_PI, PI};
+
+/// The geometric normal turned towards `wo`: the side a two-sided surface scatters on.
+pub fn facing_normal(ng: Vec3, wo: Vec3) -> Vec3 {
+    if ng.dot(wo) >= 0.0 {
+        ng
+    } else {
+        -ng
+    }
+}
+
+/// Mirror reflection of `wo` about `n`.
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * n.dot(wo) * n - wo
+}
+
+fn channel_sum(c: Vec3) -> f64 {
+    (c.x + c.y + c.z) as f64
+}
+
+/// Probability of sampling the Lambertian lobe rather than the Phong lobe.
+fn diffuse_probability(m: &Material) -> f64 {
+    let (d, s) = (channel_sum(m.kd), channel_sum(m.ks));
+    if d + s > 0.0 {
+        d / (d + s)
+    } else {
+        1.0
+    }
+}
+
+/// `cos α` between `wi` and the mirror direction of `wo`, in f64.
+fn cos_lobe(n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
+    reflect(wo, n).as_dvec3().normalize().dot(wi.as_dvec3())
+}
+
+/// BRDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta) and below the surface.
+pub fn eval(m: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    if m.mirror || n.dot(wi) <= 0.0 || n.dot(wo) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let mut f = m.kd * std::f32::consts::FRAC_1_PI;
+    if m.is_glossy() {
+        let c = cos_lobe(n, wo, wi);
+        if c > 0.0 {
+            let ns = m.ns as f64;
+            f += m.ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32;
+        }
+    }
+    f
+}
+
+/// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
+pub fn pdf(m: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
+    if m.mirror {
+        return 0.0;
+    }
+    let p_diffuse = diffuse_probability(m);
+    let cos = n.as_dvec3().dot(wi.as_dvec3());
+    let mut pdf = if cos > 0.0 {
+        p_diffuse * cos * FRAC_1_PI
+    } else {
+        0.0
+    };
+    if m.is_glossy() {
+        let c = cos_lobe(n, wo, wi);
+        if c > 0.0 {
+            let ns = m.ns as f64;
+            pdf += (1.0 - p_diffuse) * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns);
+        }
+    }
+    pdf
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BrdfSample {
+    pub wi: Vec3,
+    /// Solid-angle density; 1 for a delta (it then cancels in `weight`).
+    pub pdf: f64,
+    /// `f · |cos| / pdf` (for a mirror: its reflectance).
+    pub weight: Vec3,
+    pub delta: bool,
+}
+
+/// A unit direction around unit `axis` with `cos θ = c` and azimuth `phi`.
+fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
+    let s = (1.0 - c * c).max(0.0).sqrt();
+    let (t, b) = crate::sampling::basis(axis.as_vec3());
+    (t.as_dvec3() * (s * phi.cos()) + b.as_dvec3() * (s * phi.sin()) + axis * c).normalize()
+}
+
+/// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
+/// (below the surface, or a black material).
+pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
+    if m.mirror {
+        let wi = reflect(wo, n).normalize();
+        return (m.ks.max_element() > 0.0).then_some(BrdfSample {
+            wi,
+            pdf: 1.0,
+            weight: m.ks,
+            delta: true,
+        });
+    }
+    if !m.scatters() {
+        return None;
+    }
+    let phi = 2.0 * PI * u[2];
+    let wi = if u[0] < diffuse_probability(m) {
+        around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi)
+    } else {
+        let c = u[1].powf(1.0 / (m.ns as f64 + 1.0));
+        around(reflect(wo, n).as_dvec3().normalize(), c, phi)
+    }
+    .as_vec3();
+    let pdf = pdf(m, n, wo, wi);
+    let cos = n.dot(wi);
+    if cos <= 0.0 || pdf <= 0.0 {
+        return None;
+    }
+    let weight = eval(m, n, wo, wi) * (cos as f64 / pdf) as f32;
+    Some(BrdfSample {
+        wi,
+        pdf,
+        weight,
+        delta: false,
+    })
+}

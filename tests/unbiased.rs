@@ -1,0 +1,182 @@
+//! Unbiasedness: `srt`, a hand-made anchor mixture and `pt` estimate the same image. Per
+//! block of pixels, the difference of two methods' means must lie inside a 99.9 % interval
+//! (Šidák-corrected over all blocks and channels) computed from their sample variances; and
+//! the same comparison must reject a mixture whose one component's density is off by 10 %.
+
+use genpath::accel::{self, AccelKind};
+use genpath::path::generator::PathGenerator;
+use genpath::path::mixture::Mixture;
+use genpath::path::{mixture_file, Method, SceneView};
+use genpath::render::{render, Estimator, Film, RenderSettings};
+use genpath::scene::Scene;
+use statrs::distribution::{ContinuousCDF, Normal};
+use std::path::{Path, PathBuf};
+
+const SIZE: u32 = 64;
+const BLOCK: u32 = 32;
+const SPP: u32 = 2048;
+const SRT_ABSORPTION: f64 = 0.5;
+
+fn scene_dir(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
+enum Which {
+    Pt,
+    Srt,
+    Anchors { pdf_error: Option<f64> },
+}
+
+fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
+    let mut scene = Scene::load(&scene_dir(name).join("scene.toml")).unwrap();
+    scene.resize(SIZE, SIZE);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let mixture = match which {
+        Which::Pt => None,
+        Which::Srt => Some(Mixture::new(
+            vec![PathGenerator::srt(
+                max_bounces,
+                SRT_ABSORPTION,
+                mixture_file::uniform_light(&scene),
+            )],
+            vec![1.0],
+        )),
+        Which::Anchors { pdf_error } => {
+            let m = mixture_file::load(
+                &scene_dir(name).join("anchors.toml"),
+                &scene,
+                max_bounces,
+                SRT_ABSORPTION,
+            )
+            .unwrap();
+            Some(match pdf_error {
+                Some(factor) => m.with_pdf_error(1, factor),
+                None => m,
+            })
+        }
+    };
+    let settings = RenderSettings {
+        method: Method::Pt,
+        spp,
+        max_bounces,
+        seed,
+        progress: false,
+    };
+    let estimator = mixture.as_ref().map_or(Estimator::Pt, Estimator::Mixture);
+    render(&view, &settings, estimator)
+}
+
+/// Per block and channel: (mean, variance of that mean).
+fn block_means(film: &Film) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for by in (0..SIZE).step_by(BLOCK as usize) {
+        for bx in (0..SIZE).step_by(BLOCK as usize) {
+            for c in 0..3 {
+                let (mut sum, mut var) = (0.0, 0.0);
+                for y in by..by + BLOCK {
+                    for x in bx..bx + BLOCK {
+                        sum += film.image.get(x, y)[c] as f64;
+                        var += film.variance_of_mean[(y * SIZE + x) as usize][c];
+                    }
+                }
+                let n = (BLOCK * BLOCK) as f64;
+                out.push((sum / n, var / (n * n)));
+            }
+        }
+    }
+    out
+}
+
+/// Critical |z| of a two-sided 99.9 % interval, Šidák-corrected over `comparisons`.
+fn z_critical(comparisons: usize) -> f64 {
+    let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
+    Normal::new(0.0, 1.0)
+        .unwrap()
+        .inverse_cdf(1.0 - alpha / 2.0)
+}
+
+/// Largest |z| over blocks and channels, and the largest relative standard error.
+fn compare(a: &Film, b: &Film) -> (f64, f64, usize) {
+    let (a, b) = (block_means(a), block_means(b));
+    let mut max_z = 0.0f64;
+    let mut max_rel = 0.0f64;
+    for ((ma, va), (mb, vb)) in a.iter().zip(&b) {
+        let se = (va + vb).sqrt();
+        if se > 0.0 {
+            max_z = max_z.max((ma - mb).abs() / se);
+            max_rel = max_rel.max(se / ma.abs().max(mb.abs()).max(1e-12));
+        } else {
+            assert_eq!(ma, mb, "zero variance but different means");
+        }
+    }
+    (max_z, max_rel, a.len())
+}
+
+fn check_agree(name: &str, max_bounces: u32) {
+    let pt = render_with(name, Which::Pt, max_bounces, SPP, 11);
+    for (label, which, spp) in [
+        ("srt", Which::Srt, SPP),
+        ("anchors", Which::Anchors { pdf_error: None }, SPP),
+    ] {
+        let film = render_with(name, which, max_bounces, spp, 23);
+        let (z, rel, n) = compare(&film, &pt);
+        let zc = z_critical(n);
+        eprintln!("{name} n={max_bounces}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}");
+        assert!(
+            z <= zc,
+            "{name} n={max_bounces}: {label} vs pt: max |z| {z:.2} > {zc:.2}"
+        );
+        // Sharp enough to mean something: every block known to 2.5 % or better.
+        assert!(
+            rel < 0.025,
+            "{name} n={max_bounces}: {label}: relative standard error {rel:.4} too wide"
+        );
+    }
+}
+
+fn check_rejects_wrong_pdf(name: &str) {
+    let pt = render_with(name, Which::Pt, 5, SPP, 11);
+    let wrong = render_with(
+        name,
+        Which::Anchors {
+            pdf_error: Some(1.1),
+        },
+        5,
+        SPP,
+        23,
+    );
+    let (z, _, n) = compare(&wrong, &pt);
+    eprintln!(
+        "{name}: density ×1.1: max |z| {z:.2} (critical {:.2})",
+        z_critical(n)
+    );
+    assert!(
+        z > z_critical(n),
+        "{name}: a component density off by 10 % went unnoticed (max |z| {z:.2})"
+    );
+}
+
+#[test]
+fn fig5_methods_agree() {
+    check_agree("fig5", 3);
+    check_agree("fig5", 5);
+}
+
+#[test]
+fn fig1_methods_agree() {
+    check_agree("fig1", 3);
+    check_agree("fig1", 5);
+}
+
+#[test]
+fn fig5_rejects_a_wrong_component_density() {
+    check_rejects_wrong_pdf("fig5");
+}
+
+#[test]
+fn fig1_rejects_a_wrong_component_density() {
+    check_rejects_wrong_pdf("fig1");
+}
