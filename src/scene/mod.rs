@@ -79,7 +79,7 @@ impl Material {
 /// The emitting triangles, sampled uniformly by area.
 #[derive(Clone, Debug)]
 pub struct Emitters {
-    /// Triangle index of each emitter triangle.
+    /// Triangle index of each emitter triangle, increasing.
     pub prims: Vec<u32>,
     /// Running sum of areas, `cdf[i]` = area of emitters `0..=i`.
     cdf: Vec<f64>,
@@ -96,7 +96,8 @@ pub struct LightSample {
 }
 
 impl Emitters {
-    fn new(mesh: &TriangleMesh, is_emitter: impl Fn(u32) -> bool) -> Self {
+    /// The triangles of `mesh` for which `is_emitter` holds, in increasing index order.
+    pub fn new(mesh: &TriangleMesh, is_emitter: impl Fn(u32) -> bool) -> Self {
         let mut prims = Vec::new();
         let mut cdf = Vec::new();
         let mut total = 0.0f64;
@@ -114,14 +115,25 @@ impl Emitters {
         }
     }
 
-    /// Samples a point uniformly over all emitter area from three uniform numbers in [0, 1).
-    pub fn sample(&self, mesh: &TriangleMesh, u: [f32; 3]) -> LightSample {
-        let target = u[0] as f64 * self.total_area;
+    /// Whether triangle `prim` is an emitter (`prims` is sorted).
+    pub fn contains(&self, prim: u32) -> bool {
+        self.prims.binary_search(&prim).is_ok()
+    }
+
+    /// The emitter triangle chosen with probability proportional to its area by a uniform
+    /// `u` in [0, 1] (1, from rounding, picks the last). There must be at least one emitter.
+    pub fn pick(&self, u: f64) -> u32 {
+        let target = u * self.total_area;
         let i = self
             .cdf
             .partition_point(|&c| c <= target)
             .min(self.prims.len() - 1);
-        let prim = self.prims[i];
+        self.prims[i]
+    }
+
+    /// Samples a point uniformly over all emitter area from three uniform numbers in [0, 1).
+    pub fn sample(&self, mesh: &TriangleMesh, u: [f32; 3]) -> LightSample {
+        let prim = self.pick(u[0] as f64);
         let [a, b, c] = mesh.vertices(prim);
         // Uniform point in a triangle (square-root warp).
         let su = u[1].sqrt();
