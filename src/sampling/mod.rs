@@ -4,6 +4,9 @@
 //! (seed, pixel, sample index), so an image does not depend on the thread count or tile
 //! order, and a single pixel can be re-rendered alone.
 
+pub mod anchor;
+pub mod light_point;
+
 use glam::Vec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;

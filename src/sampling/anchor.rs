@@ -1,0 +1,203 @@
+//! The anchor-point sampler (paper §5.2, design §4): more directions inside a cone around the
+//! direction to an anchor point, the rest uniformly over the remainder of the sphere.
+//!
+//! Densities are over the full sphere of directions in solid-angle measure, in `f64`:
+//! `p1 = α/Ωc` inside the cone, `p2 = (1−α)/(4π−Ωc)` outside, with `Ωc = 4π sin²(θc/2)` and
+//! `4π−Ωc = 4π cos²(θc/2)`. The usual `2π(1−cos θc)` cancels catastrophically for tiny cones
+//! (it is exactly 0 in `f32` for θc = 1e-4), and its complement does for cones near π.
+//! Directions are parameterised by `h = 1−cos θ` (the cap of height `h` has solid angle
+//! `2πh`), sampled directly rather than through `cos θ`, for the same reason.
+
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Invalid parameters of an [`AnchorSampler`].
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum AnchorError {
+    #[error("anchor point {0} is not finite")]
+    Anchor(DVec3),
+    #[error("cone half-angle {0} is not in (0, π)")]
+    ConeAngle(f64),
+    #[error("probability in the cone {0} is not in (0, 1)")]
+    Alpha(f64),
+}
+
+/// A cone of half-angle `theta_c` around the direction from the shading point to `anchor`,
+/// holding probability `alpha`; the rest of the sphere holds `1 − alpha` uniformly.
+/// `p1 < p2` (a cone that is *avoided*) is allowed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnchorSampler {
+    /// A point on a surface that the cone aims at.
+    pub anchor: DVec3,
+    /// Cone half-angle in (0, π).
+    pub theta_c: f64,
+    /// Probability mass inside the cone, in (0, 1): both densities stay positive, so every
+    /// direction can be sampled (unbiasedness, design §5).
+    pub alpha: f64,
+}
+
+/// Solid angle of a cone of half-angle `theta_c`: `4π sin²(θc/2)`, accurate for tiny cones.
+pub fn cone_solid_angle(theta_c: f64) -> f64 {
+    let s = (0.5 * theta_c).sin();
+    4.0 * PI * s * s
+}
+
+impl AnchorSampler {
+    pub fn new(anchor: DVec3, theta_c: f64, alpha: f64) -> Result<Self, AnchorError> {
+        if !anchor.is_finite() {
+            return Err(AnchorError::Anchor(anchor));
+        }
+        if !(theta_c > 0.0 && theta_c < PI) {
+            return Err(AnchorError::ConeAngle(theta_c));
+        }
+        if !(alpha > 0.0 && alpha < 1.0) {
+            return Err(AnchorError::Alpha(alpha));
+        }
+        Ok(Self {
+            anchor,
+            theta_c,
+            alpha,
+        })
+    }
+
+    /// The cone axis seen from `from`. Where `from` coincides with the anchor the direction
+    /// is undefined; the axis is then +z, so that `sample` and `pdf` still agree on one
+    /// valid density.
+    pub fn axis(&self, from: DVec3) -> DVec3 {
+        (self.anchor - from).try_normalize().unwrap_or(DVec3::Z)
+    }
+
+    /// `(h_c, g_c)`: the extent in `h = 1 − cos θ` of the cone, `[0, h_c]`, and of the rest
+    /// of the sphere measured from the antipode, `g = 2 − h ∈ [0, g_c]`. Both are computed
+    /// from the half-angle so neither cancels: `h_c = 2 sin²(θc/2)`, `g_c = 2 cos²(θc/2)`.
+    fn extents(&self) -> (f64, f64) {
+        let (s, c) = (0.5 * self.theta_c).sin_cos();
+        (2.0 * s * s, 2.0 * c * c)
+    }
+
+    /// `(p1, p2)`: the densities inside and outside the cone, per steradian.
+    pub fn densities(&self) -> (f64, f64) {
+        let (hc, gc) = self.extents();
+        // Ωc = 2π h_c and 4π − Ωc = 2π g_c.
+        (
+            self.alpha / (2.0 * PI * hc),
+            (1.0 - self.alpha) / (2.0 * PI * gc),
+        )
+    }
+
+    /// A unit direction from three uniform numbers in [0, 1): `u[0]` picks the cone with
+    /// probability α, `u[1]` the polar coordinate, `u[2]` the azimuth.
+    pub fn sample(&self, from: DVec3, u: [f64; 3]) -> DVec3 {
+        let axis = self.axis(from);
+        let (hc, gc) = self.extents();
+        // Uniform in h (inside) or in g = 2 − h (outside) is uniform in solid angle. Outside,
+        // g is drawn directly so that directions near the antipode keep their precision.
+        let (cos_t, sin_t) = if u[0] < self.alpha {
+            let h = u[1] * hc;
+            (1.0 - h, (h * (2.0 - h)).sqrt())
+        } else {
+            let g = (1.0 - u[1]) * gc;
+            (g - 1.0, (g * (2.0 - g)).sqrt())
+        };
+        let (sin_p, cos_p) = (2.0 * PI * u[2]).sin_cos();
+        let (t, b) = basis(axis);
+        (t * (sin_t * cos_p) + b * (sin_t * sin_p) + axis * cos_t).normalize()
+    }
+
+    /// Solid-angle density of [`sample`](Self::sample) for the unit direction `dir`.
+    pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
+        let (p1, p2) = self.densities();
+        if self.inside(from, dir) {
+            p1
+        } else {
+            p2
+        }
+    }
+
+    /// Whether unit `dir` lies strictly inside the cone. The angle `2·atan2(|d−a|, |d+a|)`
+    /// stays accurate near 0 and near π, where `acos(d·a)` does not.
+    pub fn inside(&self, from: DVec3, dir: DVec3) -> bool {
+        let axis = self.axis(from);
+        2.0 * (dir - axis).length().atan2((dir + axis).length()) < self.theta_c
+    }
+}
+
+/// An orthonormal basis `(t, b)` completing unit `n`, in `f64` (Duff et al., "Building an
+/// Orthonormal Basis, Revisited").
+fn basis(n: DVec3) -> (DVec3, DVec3) {
+    let sign = 1.0f64.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        DVec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solid_angle_is_stable_and_matches_the_cap_formula() {
+        for theta in [0.3, 1.0, 2.5] {
+            let cap = 2.0 * PI * (1.0 - f64::cos(theta));
+            assert!(
+                (cone_solid_angle(theta) - cap).abs() < 1e-12 * cap,
+                "{theta}"
+            );
+        }
+        // 4π sin²(θ/2) ≈ πθ² for tiny θ, where 1 − cos θ has no significant digit left.
+        let theta: f64 = 1e-9;
+        let small = PI * theta * theta;
+        assert!((cone_solid_angle(theta) - small).abs() < 1e-12 * small);
+        assert!((cone_solid_angle(PI) - 4.0 * PI).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rejects_invalid_parameters() {
+        let a = DVec3::new(0.0, 1.0, 0.0);
+        assert!(AnchorSampler::new(a, 0.3, 0.5).is_ok());
+        assert_eq!(
+            AnchorSampler::new(a, 0.0, 0.5),
+            Err(AnchorError::ConeAngle(0.0))
+        );
+        assert_eq!(
+            AnchorSampler::new(a, PI, 0.5),
+            Err(AnchorError::ConeAngle(PI))
+        );
+        assert_eq!(
+            AnchorSampler::new(a, 0.3, 1.0),
+            Err(AnchorError::Alpha(1.0))
+        );
+        assert!(AnchorSampler::new(a, 0.3, f64::NAN).is_err());
+        assert!(AnchorSampler::new(DVec3::splat(f64::INFINITY), 0.3, 0.5).is_err());
+    }
+
+    #[test]
+    fn samples_land_on_the_chosen_side_even_for_extreme_cones() {
+        let from = DVec3::new(0.3, -0.2, 0.1);
+        let anchor = DVec3::new(-1.0, 2.0, 0.5);
+        for theta_c in [1e-7, 1e-4, 1.0, PI - 1e-4, PI - 1e-7] {
+            let s = AnchorSampler::new(anchor, theta_c, 0.5).unwrap();
+            for i in 0..64 {
+                // Stay away from the cone's edge, where rounding may pick either side.
+                let v = 0.01 + 0.98 * (i as f64 + 0.5) / 64.0;
+                let inside = s.sample(from, [0.25, v, v * 0.7]);
+                let outside = s.sample(from, [0.75, v, v * 0.3]);
+                assert!((inside.length() - 1.0).abs() < 1e-15 && s.inside(from, inside));
+                assert!((outside.length() - 1.0).abs() < 1e-15 && !s.inside(from, outside));
+            }
+        }
+    }
+
+    #[test]
+    fn coincident_anchor_uses_the_z_axis() {
+        let p = DVec3::new(0.5, 0.5, 0.5);
+        let s = AnchorSampler::new(p, 0.2, 0.9).unwrap();
+        assert_eq!(s.axis(p), DVec3::Z);
+        let (p1, p2) = s.densities();
+        assert_eq!(s.pdf(p, DVec3::Z), p1);
+        assert_eq!(s.pdf(p, -DVec3::Z), p2);
+    }
+}
