@@ -113,13 +113,13 @@ impl LightPointSampler {
             let point = uniform_in_triangle(self.region.vertices(mesh), u[1], u[2]);
             (point, self.region.prim)
         } else {
-            let v = ((u[0] - self.beta) / (1.0 - self.beta)).min(1.0 - f64::EPSILON / 2.0);
-            let prim = emitters.pick(v);
+            // `pick` clamps a rescaled number that rounds up to 1.
+            let prim = emitters.pick((u[0] - self.beta) / (1.0 - self.beta));
             (uniform_in_triangle(vertices(mesh, prim), u[1], u[2]), prim)
         }
     }
 
-    /// Area density of [`sample`](Self::sample) at `point` on triangle `prim`:
+    /// Area density of [`sample`](Self::sample) at `point`, a point on triangle `prim`:
     /// `β·[point in region]/area(region) + (1−β)/total_area`, and 0 off the emitters.
     pub fn pdf_area(
         &self,

@@ -121,7 +121,7 @@ impl Emitters {
     }
 
     /// The emitter triangle chosen with probability proportional to its area by a uniform
-    /// `u` in [0, 1). There must be at least one emitter.
+    /// `u` in [0, 1] (1, from rounding, picks the last). There must be at least one emitter.
     pub fn pick(&self, u: f64) -> u32 {
         let target = u * self.total_area;
         let i = self
