@@ -311,3 +311,103 @@ fn one_and_two_threads_give_bit_identical_images() {
     assert!(output.status.success());
     assert_ne!(one, pixel_bits(&other));
 }
+
+#[test]
+fn srt_and_mixture_methods_render() {
+    let dir = tempfile::tempdir().unwrap();
+    for (method, extra) in [
+        ("srt", vec![]),
+        ("mixture", vec!["--generators", "scenes/fig5/anchors.toml"]),
+    ] {
+        let out = dir.path().join(format!("{method}.exr"));
+        let mut args = vec![
+            "render",
+            "scenes/fig5/scene.toml",
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            "2",
+        ];
+        args.extend([
+            "--width", "16", "--height", "16", "--quiet", "--method", method,
+        ]);
+        args.extend(extra);
+        let output = Command::new(env!("CARGO_BIN_EXE_genpath"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{method}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let json = std::fs::read_to_string(dir.path().join(format!("{method}.exr.json"))).unwrap();
+        assert!(
+            json.contains("\"generators\""),
+            "{method}: the mixture is not in the JSON"
+        );
+    }
+}
+
+#[test]
+fn bad_generator_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.exr");
+    let anchors = std::fs::read_to_string(fig5().with_file_name("anchors.toml")).unwrap();
+    let cases = [
+        (
+            anchors.replace("theta_c = 0.45", "theta_c = 4.0"),
+            "cone half-angle",
+        ),
+        (
+            anchors.replace("alpha = 0.85", "alpha = 1.0"),
+            "probability in the cone",
+        ),
+        (
+            anchors.replace("absorption = 0.95", "absorption = 1.5"),
+            "absorption 1.5",
+        ),
+        (anchors.replace("prim = 8", "prim = 0"), "not an emitter"),
+        (anchors.replace("level = 0", "level = 40"), "level"),
+        (anchors.replace("beta = 0.5", "beta = 1.0"), "region"),
+        (
+            anchors.replace("srt_weight = 0.2", "srt_weight = 0.0"),
+            "srt_weight",
+        ),
+        (
+            anchors.replace("weight = 1.0", "weight = -1.0"),
+            "weight -1",
+        ),
+        (anchors.replace("theta_c", "theta"), "unknown field"),
+        ("[[generators]\n".to_string(), "generators.toml"),
+    ];
+    for (text, needle) in cases {
+        let path = dir.path().join("generators.toml");
+        std::fs::write(&path, text).unwrap();
+        assert_fails(
+            &fig5(),
+            &[
+                "--method",
+                "mixture",
+                "--generators",
+                path.to_str().unwrap(),
+            ],
+            &out,
+            &[needle],
+        );
+    }
+    assert_fails(&fig5(), &["--method", "mixture"], &out, &["--generators"]);
+    assert_fails(
+        &fig5(),
+        &["--method", "mixture", "--generators", "/nonexistent.toml"],
+        &out,
+        &["nonexistent.toml"],
+    );
+    assert_fails(
+        &fig5(),
+        &["--method", "srt", "--srt-absorption", "1.0"],
+        &out,
+        &["--srt-absorption"],
+    );
+}

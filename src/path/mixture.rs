@@ -131,3 +131,36 @@ impl Mixture {
         sum
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::path::generator::PathGenerator;
+    use crate::sampling::light_point::{LightPointSampler, LightRegion};
+
+    fn generator(absorption: f64) -> PathGenerator {
+        let light = LightPointSampler {
+            region: LightRegion {
+                prim: 0,
+                level: 0,
+                cell: 0,
+            },
+            beta: 0.0,
+        };
+        PathGenerator::srt(3, absorption, light)
+    }
+
+    #[test]
+    fn combine_is_a_normalised_union() {
+        let a = Mixture::new(vec![generator(0.1), generator(0.2)], vec![1.0, 3.0]);
+        let b = Mixture::new(vec![generator(0.3)], vec![2.0]);
+        let c = Mixture::combine(&[(3.0, &a), (1.0, &b)]);
+        assert_eq!(c.generators.len(), 3);
+        let expected = [0.75 * 0.25, 0.75 * 0.75, 0.25];
+        for (w, e) in c.weights.iter().zip(expected) {
+            assert!((w - e).abs() < 1e-15, "{:?}", c.weights);
+        }
+        assert!((c.weights.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        assert_eq!(c.generators[2], b.generators[0]);
+    }
+}
