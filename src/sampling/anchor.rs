@@ -8,6 +8,7 @@
 //! Directions are parameterised by `h = 1−cos θ` (the cap of height `h` has solid angle
 //! `2πh`), sampled directly rather than through `cos θ`, for the same reason.
 
+use super::basis;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -121,18 +122,6 @@ impl AnchorSampler {
         let axis = self.axis(from);
         2.0 * (dir - axis).length().atan2((dir + axis).length()) < self.theta_c
     }
-}
-
-/// An orthonormal basis `(t, b)` completing unit `n`, in `f64` (Duff et al., "Building an
-/// Orthonormal Basis, Revisited").
-fn basis(n: DVec3) -> (DVec3, DVec3) {
-    let sign = 1.0f64.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        DVec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
 }
 
 #[cfg(test)]

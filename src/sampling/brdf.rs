@@ -94,8 +94,8 @@ pub struct BrdfSample {
 /// A unit direction around unit `axis` with `cos θ = c` and azimuth `phi`.
 fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
     let s = (1.0 - c * c).max(0.0).sqrt();
-    let (t, b) = crate::sampling::basis(axis.as_vec3());
-    (t.as_dvec3() * (s * phi.cos()) + b.as_dvec3() * (s * phi.sin()) + axis * c).normalize()
+    let (t, b) = crate::sampling::basis(axis);
+    (t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c).normalize()
 }
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy

@@ -8,7 +8,7 @@ pub mod anchor;
 pub mod brdf;
 pub mod light_point;
 
-use glam::Vec3;
+use glam::DVec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;
 
@@ -36,13 +36,13 @@ pub fn uniform(rng: &mut Rng) -> f32 {
 
 /// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal
 /// Basis, Revisited").
-pub fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
+pub fn basis(n: DVec3) -> (DVec3, DVec3) {
+    let sign = 1.0f64.copysign(n.z);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
     (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        DVec3::new(b, sign + n.y * n.y * a, -n.y),
     )
 }
 
@@ -54,17 +54,17 @@ mod tests {
     fn basis_is_orthonormal() {
         let mut rng = sample_rng(1, 2, 3);
         for _ in 0..10_000 {
-            let n = Vec3::new(
-                uniform(&mut rng) - 0.5,
-                uniform(&mut rng) - 0.5,
-                uniform(&mut rng) - 0.5,
+            let n = DVec3::new(
+                uniform(&mut rng) as f64 - 0.5,
+                uniform(&mut rng) as f64 - 0.5,
+                uniform(&mut rng) as f64 - 0.5,
             )
-            .normalize_or(Vec3::Z);
+            .normalize_or(DVec3::Z);
             let (t, b) = basis(n);
             for (x, y) in [(t, b), (t, n), (b, n)] {
-                assert!(x.dot(y).abs() < 1e-5, "{n} {t} {b}");
+                assert!(x.dot(y).abs() < 1e-12, "{n} {t} {b}");
             }
-            assert!((t.length() - 1.0).abs() < 1e-5 && (b.length() - 1.0).abs() < 1e-5);
+            assert!((t.length() - 1.0).abs() < 1e-12 && (b.length() - 1.0).abs() < 1e-12);
         }
     }
 
