@@ -37,9 +37,14 @@ fn diffuse_probability(m: &Material) -> f64 {
     }
 }
 
-/// `cos α` between `wi` and the mirror direction of `wo`, in f64.
+/// `cos α` between `wi` and the mirror direction of `wo`, in f64. `wi` is renormalised too:
+/// an f32 unit vector is off by up to ~1e-7 in length, which `cos^ns` would multiply by `ns`
+/// (a 3e-4 relative error of the density at `ns = 1e4`).
 fn cos_lobe(n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
-    reflect(wo, n).as_dvec3().normalize().dot(wi.as_dvec3())
+    reflect(wo, n)
+        .as_dvec3()
+        .normalize()
+        .dot(wi.as_dvec3().normalize())
 }
 
 /// BRDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta) and below the surface.
@@ -64,7 +69,7 @@ pub fn pdf(m: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
         return 0.0;
     }
     let p_diffuse = diffuse_probability(m);
-    let cos = n.as_dvec3().dot(wi.as_dvec3());
+    let cos = n.as_dvec3().normalize().dot(wi.as_dvec3().normalize());
     let mut pdf = if cos > 0.0 {
         p_diffuse * cos * FRAC_1_PI
     } else {
