@@ -157,7 +157,10 @@ impl<'a> GenePool<'a> {
     }
 
     /// A directional sampler of either type and, for an anchor, its triangle.
-    pub fn random_sampler(&self, rng: &mut crate::sampling::Rng) -> (DirectionSampler, Option<u32>) {
+    pub fn random_sampler(
+        &self,
+        rng: &mut crate::sampling::Rng,
+    ) -> (DirectionSampler, Option<u32>) {
         if rng.random::<f64>() < 0.5 {
             return (DirectionSampler::Brdf, None);
         }

@@ -55,12 +55,7 @@ fn ranking(v: &[f64], order: &mut Vec<usize>) {
 }
 
 /// Runs the genetic algorithm on the test paths of one pixel.
-pub fn evolve(
-    config: &GaConfig,
-    paths: &TestPaths,
-    view: &SceneView,
-    rng: &mut Rng,
-) -> Evolution {
+pub fn evolve(config: &GaConfig, paths: &TestPaths, view: &SceneView, rng: &mut Rng) -> Evolution {
     let n = config.population.max(1);
     let mut pool = GenePool::new(view.scene, paths.max_bounces, config);
     let mut population: Vec<Individual> = (0..n)

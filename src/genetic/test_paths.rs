@@ -10,16 +10,14 @@
 //! Paths are traced one at a time (not yet in 16-wide packets).
 
 use super::luminance;
-use crate::path::generator::{
-    Contribution, DirectionSampler, PathGenerator, PathVertices,
-};
+use crate::path::generator::{Contribution, DirectionSampler, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::{brdf, sample_rng, uniform, Rng};
 use glam::DVec3;
 
 /// Test paths of one pixel.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct TestPaths {
     /// Number of sampled paths, zero-contribution ones included (`M` of eq. 10).
     pub sampled: usize,
@@ -66,6 +64,24 @@ fn choose(q: &Mixture, u: f64) -> usize {
 }
 
 impl TestPaths {
+    /// An empty store (no path sampled yet).
+    pub fn new(max_bounces: u32) -> Self {
+        Self {
+            sampled: 0,
+            max_bounces,
+            f2_over_q: Vec::new(),
+            len: Vec::new(),
+            nee: Vec::new(),
+            light_point: Vec::new(),
+            light_prim: Vec::new(),
+            offsets: vec![0],
+            point: Vec::new(),
+            wi: Vec::new(),
+            brdf_pdf: Vec::new(),
+            delta: Vec::new(),
+        }
+    }
+
     /// Samples `m` paths from `q` through pixel `(x, y)` (box filter: a uniformly jittered
     /// camera ray), path `j` with the random stream `sample_rng(seed, pixel, j)`.
     pub fn sample(
@@ -78,11 +94,7 @@ impl TestPaths {
     ) -> (Self, RayCounts) {
         let camera = &view.scene.camera;
         let pixel = y as u64 * camera.width as u64 + x as u64;
-        let mut paths = Self {
-            max_bounces,
-            offsets: vec![0],
-            ..Self::default()
-        };
+        let mut paths = Self::new(max_bounces);
         let mut counts = RayCounts::default();
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
@@ -116,7 +128,8 @@ impl TestPaths {
         (paths, counts)
     }
 
-    /// Stores the part of `path` that contribution `c` uses, with its `F²/q`.
+    /// Stores the part of `path` that contribution `c` uses, with its `F²/q` (`sampled`,
+    /// the `M` of eq. 10, is the caller's to count).
     pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: f64) {
         let scattering = if c.nee { c.len - 1 } else { c.len };
         for v in &path.vertices[..scattering] {
