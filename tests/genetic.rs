@@ -280,7 +280,7 @@ fn measured_second_moment(
 /// light) are i.i.d. over the M test paths.
 fn eq10_with_variance(view: &SceneView, paths: &TestPaths, mixture: &Mixture) -> (f64, f64) {
     let v = second_moment(view, paths, mixture);
-    // Σ t² through single-path stores is slow; recompute the terms directly instead.
+    // The variance needs the individual terms, which `second_moment` does not expose.
     let mut pdf = vec![0.0; paths.len()];
     let mut one = vec![0.0; paths.len()];
     for (g, w) in mixture.generators.iter().zip(&mixture.weights) {
@@ -364,4 +364,149 @@ fn eq10_ranks_good_anchors_above_bad_ones() {
         assert!(v_good < 0.5 * v_bad, "good {v_good} vs bad {v_bad}");
     }
     assert!(v_good < 0.5 * v_srt, "good {v_good} vs srt {v_srt}");
+}
+
+/// The cached evaluator gives eq. 10 of each individual's own mixture.
+#[test]
+fn cached_fitness_equals_the_direct_evaluation() {
+    let (scene, accel) = fig5();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let config = GaConfig::default();
+    let (paths, _) = TestPaths::sample(
+        &view,
+        &srt_mixture(&scene),
+        FLOOR_PIXEL,
+        5000,
+        MAX_BOUNCES,
+        8,
+    );
+    let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config);
+    let mut rng = Rng::seed_from_u64(9);
+    let mut population: Vec<Individual> = (0..10)
+        .map(|_| pool.random_individual(&config, &mut rng))
+        .collect();
+    let mut evaluator = Evaluator::default();
+    let mut v = Vec::new();
+    // Several generations, so that cached, evicted and reused slots all take part.
+    for _ in 0..5 {
+        evaluator.evaluate(&view, &paths, &population, &mut v);
+        for (ind, &vi) in population.iter().zip(&v) {
+            let direct = second_moment(&view, &paths, &ind.to_mixture());
+            assert!(
+                (vi - direct).abs() <= 1e-12 * direct,
+                "cached {vi} vs direct {direct}"
+            );
+        }
+        let copy = population[0].clone();
+        for ind in &mut population {
+            mutate(ind, &mut pool, &config, &mut rng);
+        }
+        population[9] = copy;
+    }
+    assert!(evaluator.generator_evaluations < 5 * 10 * (config.generators as u64 + 1));
+}
+
+/// The GA finds generators that beat srt by a clear margin on a floor pixel, on its own test
+/// paths and on independent ones; elitism keeps the best V from increasing; and the run is
+/// deterministic given the seed.
+#[test]
+fn ga_improves_on_srt() {
+    let (scene, accel) = fig5();
+    let view = SceneView::new(&scene, accel.as_ref());
+    assert_on_floor(&view, FLOOR_PIXEL);
+    let config = GaConfig::default();
+    let srt = srt_mixture(&scene);
+    let (paths, _) =
+        TestPaths::sample(&view, &srt, FLOOR_PIXEL, config.test_paths, MAX_BOUNCES, 10);
+    let start = Instant::now();
+    let evolution = evolve(&config, &paths, &view, &mut Rng::seed_from_u64(11));
+    let elapsed = start.elapsed().as_secs_f64();
+    let v_srt = second_moment(&view, &paths, &srt);
+    let (fresh, _) = TestPaths::sample(&view, &srt, FLOOR_PIXEL, 200_000, MAX_BOUNCES, 12);
+    let best = evolution.best.to_mixture();
+    let (fresh_best, fresh_srt) = (
+        second_moment(&view, &fresh, &best),
+        second_moment(&view, &fresh, &srt),
+    );
+    eprintln!(
+        "{} light paths of {}; V srt {v_srt:.4e}, best {:.4e}; on fresh paths srt {fresh_srt:.4e}, best {fresh_best:.4e}",
+        paths.len(), paths.sampled, evolution.best_v
+    );
+    eprintln!(
+        "{} individuals, {} generators evaluated in {elapsed:.3} s: {:.0} individuals/s",
+        evolution.individual_evaluations,
+        evolution.generator_evaluations,
+        evolution.individual_evaluations as f64 / elapsed
+    );
+    for (g, s) in evolution.history.iter().enumerate() {
+        eprintln!("generation {g}: best {:.4e}, mean {:.4e}", s.best, s.mean);
+    }
+    eprintln!("best: {:#?}", evolution.best);
+    for w in evolution.history.windows(2) {
+        assert!(
+            w[1].best <= w[0].best,
+            "best V increased: {} -> {}",
+            w[0].best,
+            w[1].best
+        );
+    }
+    assert_eq!(
+        evolution.best_v,
+        evolution.history.last().map_or(f64::NAN, |h| h.best)
+    );
+    assert!(
+        evolution.best_v < 0.5 * v_srt,
+        "GA {} vs srt {v_srt}",
+        evolution.best_v
+    );
+    assert!(
+        fresh_best < 0.6 * fresh_srt,
+        "fresh paths: GA {fresh_best} vs srt {fresh_srt}"
+    );
+    let again = evolve(&config, &paths, &view, &mut Rng::seed_from_u64(11));
+    assert_eq!(again.best_v.to_bits(), evolution.best_v.to_bits());
+    assert_eq!(again.best, evolution.best);
+}
+
+#[test]
+fn config_defaults_are_valid_and_bad_values_rejected() {
+    let config = GaConfig::default();
+    config.validate().expect("defaults are valid");
+    let text = toml::to_string(&config).expect("serialises");
+    assert_eq!(toml::from_str::<GaConfig>(&text).expect("parses"), config);
+    assert!(
+        toml::from_str::<GaConfig>("populaton = 3").is_err(),
+        "unknown field accepted"
+    );
+    let partial: GaConfig = toml::from_str("population = 7").expect("partial config");
+    assert_eq!(partial.population, 7);
+    assert_eq!(partial.generations, config.generations);
+    for bad in [
+        GaConfig {
+            population: 0,
+            ..config.clone()
+        },
+        GaConfig {
+            elitism: config.population + 1,
+            ..config.clone()
+        },
+        GaConfig {
+            p_cross: 1.5,
+            ..config.clone()
+        },
+        GaConfig {
+            p_weight: f64::NAN,
+            ..config.clone()
+        },
+        GaConfig {
+            defensive_weight: 0.001,
+            ..config.clone()
+        },
+        GaConfig {
+            srt_absorption: 1.0,
+            ..config.clone()
+        },
+    ] {
+        assert!(bad.validate().is_err(), "{bad:?} accepted");
+    }
 }

@@ -33,7 +33,7 @@ pub struct Evolution {
 /// Index drawn with probability proportional to `fitness` (uniformly when all are 0).
 fn roulette(fitness: &[f64], rng: &mut Rng) -> usize {
     let total: f64 = fitness.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return rng.random_range(0..fitness.len());
     }
     let target = rng.random::<f64>() * total;
