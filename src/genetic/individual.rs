@@ -1,0 +1,234 @@
+//! Individuals of the genetic algorithm (paper §5.3): weighted sets of path generators, and
+//! the random draws that create and mutate their parts.
+//!
+//! Component 0 of every individual is the defensive `srt` generator, never mutated, with
+//! weight ≥ `GaConfig::defensive_weight`: whatever the evolved components do, the mixture
+//! covers every light-carrying path, so the final estimator stays unbiased (design §5).
+
+use super::GaConfig;
+use crate::path::generator::{
+    DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN,
+};
+use crate::path::mixture::Mixture;
+use crate::path::mixture_file;
+use crate::sampling::anchor::AnchorSampler;
+use crate::sampling::light_point::{LightPointSampler, LightRegion};
+use crate::scene::{triangle_area, Scene};
+use glam::DVec3;
+use rand::Rng as _;
+use std::f64::consts::PI;
+
+/// Light regions are drawn up to this subdivision level (16 cells per emitter triangle).
+pub const MAX_LIGHT_LEVEL: u8 = 2;
+/// Random cone half-angles are log-uniform in this range (radians).
+pub const THETA_C_RANGE: (f64, f64) = (0.02, 1.5);
+/// Random cone probabilities `α` are uniform in this range.
+pub const ALPHA_RANGE: (f64, f64) = (0.05, 0.95);
+/// Random light-region probabilities `β` are uniform in `[0, BETA_MAX)`.
+pub const BETA_MAX: f64 = 0.95;
+
+/// A generator with an identity: copies (crossover, elitism) keep the id, any change gets a
+/// new one, so the fitness cache evaluates each distinct generator once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gene {
+    pub id: u64,
+    pub generator: PathGenerator,
+    /// Per step: the triangle its anchor lies on (`None` for a BRDF sampler).
+    pub anchor_prims: Vec<Option<u32>>,
+}
+
+/// A weighted set of generators; `genes[0]` is the defensive `srt` generator (id 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Individual {
+    pub genes: Vec<Gene>,
+    /// Sum to 1; `weights[0] ≥ GaConfig::defensive_weight`.
+    pub weights: Vec<f64>,
+}
+
+impl Individual {
+    /// The mixture of eq. 7 this individual stands for.
+    pub fn to_mixture(&self) -> Mixture {
+        Mixture::new(
+            self.genes.iter().map(|g| g.generator.clone()).collect(),
+            self.weights.clone(),
+        )
+    }
+
+    /// Normalises the weights to sum 1 with the defensive one at least `defensive`.
+    pub fn normalise_weights(&mut self, defensive: f64) {
+        let others: f64 = self.weights[1..].iter().sum();
+        let total = self.weights[0] + others;
+        let w0 = if total > 0.0 {
+            self.weights[0] / total
+        } else {
+            1.0
+        };
+        if others <= 0.0 || w0 >= 1.0 {
+            self.weights.iter_mut().for_each(|w| *w = 0.0);
+            self.weights[0] = 1.0;
+            return;
+        }
+        let w0 = w0.max(defensive);
+        let scale = (1.0 - w0) / others;
+        for w in &mut self.weights[1..] {
+            *w *= scale;
+        }
+        // The defensive weight takes the rounding error, so the sum is 1 to an ulp or two.
+        self.weights[0] = 1.0 - self.weights[1..].iter().sum::<f64>();
+    }
+}
+
+/// What random draws need of the scene, and the source of fresh gene ids.
+pub struct GenePool<'a> {
+    pub scene: &'a Scene,
+    pub max_bounces: u32,
+    srt: PathGenerator,
+    /// Running sum of triangle areas, for anchors uniform by area on all surfaces.
+    area_cdf: Vec<f64>,
+    next_id: u64,
+}
+
+/// A uniform number in `[lo, hi)`.
+fn range(rng: &mut crate::sampling::Rng, (lo, hi): (f64, f64)) -> f64 {
+    lo + (hi - lo) * rng.random::<f64>()
+}
+
+impl<'a> GenePool<'a> {
+    pub fn new(scene: &'a Scene, max_bounces: u32, config: &GaConfig) -> Self {
+        let mut total = 0.0;
+        let area_cdf = (0..scene.mesh.triangles.len() as u32)
+            .map(|prim| {
+                total += triangle_area(scene.mesh.vertices(prim));
+                total
+            })
+            .collect();
+        Self {
+            scene,
+            max_bounces,
+            srt: PathGenerator::srt(
+                max_bounces,
+                config.srt_absorption,
+                mixture_file::uniform_light(scene),
+            ),
+            area_cdf,
+            next_id: 1,
+        }
+    }
+
+    /// The defensive component every individual carries.
+    pub fn srt(&self) -> Gene {
+        Gene {
+            id: 0,
+            generator: self.srt.clone(),
+            anchor_prims: vec![None; self.srt.steps.len()],
+        }
+    }
+
+    pub fn fresh_id(&mut self) -> u64 {
+        self.next_id += 1;
+        self.next_id
+    }
+
+    /// A point uniform by area on the scene's surfaces, and its triangle.
+    pub fn random_surface_point(&self, rng: &mut crate::sampling::Rng) -> (DVec3, u32) {
+        let total = self.area_cdf.last().copied().unwrap_or(0.0);
+        let target = rng.random::<f64>() * total;
+        let prim = self
+            .area_cdf
+            .partition_point(|&c| c <= target)
+            .min(self.area_cdf.len() - 1) as u32;
+        let [a, b, c] = self.scene.mesh.vertices(prim).map(|v| v.as_dvec3());
+        let su = rng.random::<f64>().sqrt();
+        let u2 = rng.random::<f64>();
+        (a * (1.0 - su) + b * (su * (1.0 - u2)) + c * (su * u2), prim)
+    }
+
+    pub fn random_theta_c(rng: &mut crate::sampling::Rng) -> f64 {
+        let (lo, hi) = THETA_C_RANGE;
+        (lo.ln() + (hi.ln() - lo.ln()) * rng.random::<f64>()).exp()
+    }
+
+    pub fn random_alpha(rng: &mut crate::sampling::Rng) -> f64 {
+        range(rng, ALPHA_RANGE)
+    }
+
+    pub fn random_absorption(rng: &mut crate::sampling::Rng) -> f64 {
+        range(rng, (ABSORPTION_MIN, ABSORPTION_MAX))
+    }
+
+    /// A directional sampler of either type and, for an anchor, its triangle.
+    pub fn random_sampler(
+        &self,
+        rng: &mut crate::sampling::Rng,
+    ) -> (DirectionSampler, Option<u32>) {
+        if rng.random::<f64>() < 0.5 {
+            return (DirectionSampler::Brdf, None);
+        }
+        let (anchor, prim) = self.random_surface_point(rng);
+        let sampler = AnchorSampler {
+            anchor,
+            theta_c: Self::random_theta_c(rng),
+            alpha: Self::random_alpha(rng),
+        };
+        (DirectionSampler::Anchor(sampler), Some(prim))
+    }
+
+    /// A light region on an emitter picked by area, at a random level, and a random `β`.
+    pub fn random_light(&self, rng: &mut crate::sampling::Rng) -> LightPointSampler {
+        let emitters = &self.scene.emitters;
+        let prim = emitters.pick(rng.random::<f64>());
+        let level = rng.random_range(0..=MAX_LIGHT_LEVEL);
+        let cell = rng.random_range(0..1u32 << (2 * u32::from(level)));
+        LightPointSampler {
+            region: LightRegion { prim, level, cell },
+            beta: range(rng, (0.0, BETA_MAX)),
+        }
+    }
+
+    /// A random generator: one step per vertex that can scatter before `max_bounces` (the
+    /// absorption there is 1 anyway), each of a random type and absorption.
+    pub fn random_gene(&mut self, rng: &mut crate::sampling::Rng) -> Gene {
+        let n = self.max_bounces.saturating_sub(1).max(1) as usize;
+        let mut steps = Vec::with_capacity(n);
+        let mut anchor_prims = Vec::with_capacity(n);
+        for _ in 0..n {
+            let (sampler, prim) = self.random_sampler(rng);
+            steps.push(Step {
+                sampler,
+                absorption: Self::random_absorption(rng),
+            });
+            anchor_prims.push(prim);
+        }
+        Gene {
+            id: self.fresh_id(),
+            generator: PathGenerator {
+                steps,
+                light: self.random_light(rng),
+            },
+            anchor_prims,
+        }
+    }
+
+    /// A random individual: the defensive component and `config.generators` random ones,
+    /// with random weights.
+    pub fn random_individual(
+        &mut self,
+        config: &GaConfig,
+        rng: &mut crate::sampling::Rng,
+    ) -> Individual {
+        let mut genes = vec![self.srt()];
+        let mut weights = vec![range(rng, (0.0, 1.0))];
+        for _ in 0..config.generators {
+            genes.push(self.random_gene(rng));
+            weights.push(range(rng, (0.1, 1.0)));
+        }
+        let mut ind = Individual { genes, weights };
+        ind.normalise_weights(config.defensive_weight);
+        ind
+    }
+}
+
+/// Cone half-angles are kept inside (0, π) with a margin: `THETA_C_RANGE` widened.
+pub fn clamp_theta_c(theta: f64) -> f64 {
+    theta.clamp(1e-3, PI - 1e-3)
+}
