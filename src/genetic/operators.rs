@@ -8,6 +8,7 @@
 use super::individual::{clamp_theta_c, Gene, GenePool, Individual, BETA_MAX};
 use super::GaConfig;
 use crate::path::generator::{DirectionSampler, ABSORPTION_MAX, ABSORPTION_MIN};
+use crate::sampling::light_point::barycentric;
 use crate::sampling::Rng;
 use glam::DVec3;
 use rand::Rng as _;
@@ -38,17 +39,6 @@ fn sigmoid(x: f64) -> f64 {
 /// `p ∈ (0, 1)` moved in logit space, then clamped to `[lo, hi]`.
 fn perturb_probability(p: f64, rng: &mut Rng, lo: f64, hi: f64) -> f64 {
     sigmoid(logit(p.clamp(lo, hi)) + LOGIT_SIGMA * normal(rng)).clamp(lo, hi)
-}
-
-/// Barycentric coordinates of `p` (in the triangle's plane) with respect to `[a, b, c]`.
-fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> DVec3 {
-    let (e1, e2, d) = (b - a, c - a, p - a);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (dp1, dp2) = (d.dot(e1), d.dot(e2));
-    let det = d11 * d22 - d12 * d12;
-    let b1 = (d22 * dp1 - d12 * dp2) / det;
-    let b2 = (d11 * dp2 - d12 * dp1) / det;
-    DVec3::new(1.0 - b1 - b2, b1, b2)
 }
 
 /// `anchor` on triangle `prim` moved by a Gaussian step in the triangle's plane and clamped

@@ -171,7 +171,7 @@ fn uniform_in_triangle([a, b, c]: [DVec3; 3], u1: f64, u2: f64) -> DVec3 {
 
 /// Barycentric coordinates `(b0, b1, b2)` of `p` with respect to `[a, b, c]`, of its
 /// projection onto the triangle's plane.
-fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> DVec3 {
+pub fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> DVec3 {
     let (e1, e2, d) = (b - a, c - a, p - a);
     let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let (dp1, dp2) = (d.dot(e1), d.dot(e2));
