@@ -58,6 +58,17 @@ fn finite_numbers(
         .collect()
 }
 
+/// The statements of an OBJ or MTL text: (1-based line, keyword, arguments), comments and
+/// blank lines skipped.
+fn statements(text: &str) -> impl Iterator<Item = (usize, &str, Vec<&str>)> {
+    text.lines().enumerate().filter_map(|(i, raw)| {
+        let content = raw.split('#').next().unwrap_or("");
+        let mut words = content.split_whitespace();
+        let keyword = words.next()?;
+        Some((i + 1, keyword, words.collect()))
+    })
+}
+
 /// Checks an OBJ file's statements: finite vertices, face indices in range, known
 /// statements only.
 pub fn check_obj(
@@ -68,14 +79,7 @@ pub fn check_obj(
     let mut summary = ObjSummary::default();
     let mut vertices: i64 = 0;
     let mut warned = BTreeSet::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let content = raw.split('#').next().unwrap_or("").trim();
-        let mut words = content.split_whitespace();
-        let Some(keyword) = words.next() else {
-            continue;
-        };
-        let args: Vec<&str> = words.collect();
+    for (line, keyword, args) in statements(text) {
         match keyword {
             "v" => {
                 finite_numbers(path, line, "v", &args, &[3, 4, 6])?;
@@ -161,14 +165,7 @@ pub fn check_mtl(
     let mut defined = BTreeSet::new();
     let mut current: Option<String> = None;
     let mut warned = BTreeSet::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let content = raw.split('#').next().unwrap_or("").trim();
-        let mut words = content.split_whitespace();
-        let Some(keyword) = words.next() else {
-            continue;
-        };
-        let args: Vec<&str> = words.collect();
+    for (line, keyword, args) in statements(text) {
         let needs_material = |current: &Option<String>| {
             if current.is_none() {
                 Err(parse_error(
