@@ -3,6 +3,8 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use genpath::accel::{self, AccelKind};
+use genpath::genetic::plan::{Plan, PlanConfig};
+use genpath::genetic::GaConfig;
 use genpath::path::generator::{PathGenerator, ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture::Mixture;
 use genpath::path::mixture_file;
@@ -82,6 +84,104 @@ struct RenderArgs {
     /// No progress bar and no warnings on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// With `--method ga`: also write an image of the GA pixels with their evolved anchor
+    /// points and cones drawn over the render.
+    #[arg(long, value_name = "FILE")]
+    explain: Option<PathBuf>,
+    #[command(flatten)]
+    ga: GaArgs,
+}
+
+/// Settings of `--method ga` (paper §4–5, design §6–7); defaults from `GaConfig::default()`.
+#[derive(Args)]
+#[command(next_help_heading = "Genetic algorithm (--method ga)")]
+struct GaArgs {
+    /// Individuals per generation (the paper: 150).
+    #[arg(long, default_value_t = GaConfig::default().population as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    population: u32,
+    /// Generations, the random first one included (the paper: 200).
+    #[arg(long, default_value_t = GaConfig::default().generations as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    generations: u32,
+    /// Evolved generators per individual (S), besides the defensive srt one.
+    #[arg(long, value_name = "S", default_value_t = GaConfig::default().generators as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    ga_generators: u32,
+    /// Test paths per GA pixel (M of eq. 10), zero-contribution paths included.
+    #[arg(long, value_name = "M", default_value_t = GaConfig::default().test_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    test_paths: u32,
+    /// Best individuals copied unchanged into the next generation (E).
+    #[arg(long, value_name = "E", default_value_t = GaConfig::default().elitism)]
+    elitism: usize,
+    /// Crossover probability per pair of parents.
+    #[arg(long, default_value_t = GaConfig::default().p_cross, value_parser = parse_probability)]
+    p_cross: f64,
+    /// Mutation probability per sampler.
+    #[arg(long, default_value_t = GaConfig::default().p_sampler_mutate, value_parser = parse_probability)]
+    p_mutate: f64,
+    /// Probability per individual that two generators switch positions.
+    #[arg(long, default_value_t = GaConfig::default().p_switch, value_parser = parse_probability)]
+    p_switch: f64,
+    /// Probability per individual of a weight mutation.
+    #[arg(long, default_value_t = GaConfig::default().p_weight, value_parser = parse_probability)]
+    p_weight: f64,
+    /// Probability per generator of an absorption mutation.
+    #[arg(long, default_value_t = GaConfig::default().p_absorb, value_parser = parse_probability)]
+    p_absorb: f64,
+    /// Smallest weight of the defensive srt component of every evolved mixture.
+    #[arg(long, default_value_t = GaConfig::default().defensive_weight)]
+    defensive_weight: f64,
+    /// Standard deviation of an anchor shift, relative to the scene's size.
+    #[arg(long, default_value_t = GaConfig::default().anchor_shift)]
+    anchor_shift: f64,
+    /// Distance between GA pixels on the grid, in pixels.
+    #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    ga_grid: u32,
+    /// Extra GA pixels where the baseline variance is high, as a fraction of the grid's.
+    #[arg(long, default_value_t = PlanConfig::default().extra)]
+    ga_extra: f64,
+    /// srt samples per pixel of the baseline pass that places the extra GA pixels.
+    #[arg(long, default_value_t = PlanConfig::default().baseline_spp, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    baseline_spp: u32,
+    /// Nearest GA pixels whose mixtures each pixel combines.
+    #[arg(long, default_value_t = PlanConfig::default().neighbours)]
+    ga_neighbours: usize,
+}
+
+impl GaArgs {
+    fn configs(&self, srt_absorption: f64) -> Result<(GaConfig, PlanConfig)> {
+        let ga = GaConfig {
+            population: self.population as usize,
+            generations: self.generations as usize,
+            generators: self.ga_generators as usize,
+            test_paths: self.test_paths as usize,
+            elitism: self.elitism,
+            p_cross: self.p_cross,
+            p_sampler_mutate: self.p_mutate,
+            p_switch: self.p_switch,
+            p_weight: self.p_weight,
+            p_absorb: self.p_absorb,
+            defensive_weight: self.defensive_weight,
+            srt_absorption,
+            anchor_shift: self.anchor_shift,
+        };
+        let plan = PlanConfig {
+            grid: self.ga_grid,
+            extra: self.ga_extra,
+            baseline_spp: self.baseline_spp,
+            neighbours: self.ga_neighbours,
+        };
+        ga.validate()?;
+        plan.validate()?;
+        Ok((ga, plan))
+    }
+}
+
+fn parse_probability(text: &str) -> Result<f64, String> {
+    let p: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=1.0).contains(&p) {
+        Ok(p)
+    } else {
+        Err("must be in [0, 1]".into())
+    }
 }
 
 fn parse_absorption(text: &str) -> Result<f64, String> {
@@ -126,6 +226,13 @@ fn run_render(args: RenderArgs) -> Result<()> {
     for output in &args.outputs {
         check_output(output)?;
     }
+    if let Some(explain) = &args.explain {
+        if args.method != Method::Ga {
+            bail!("--explain is only used with --method ga");
+        }
+        check_output(explain)?;
+    }
+    let (ga_config, plan_config) = args.ga.configs(args.srt_absorption)?;
     let t_load = Instant::now();
     let mut scene = Scene::load(&args.scene)?;
     if args.width.is_some() || args.height.is_some() {
@@ -157,7 +264,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         progress: !args.quiet,
     };
     let mixture = match settings.method {
-        Method::Pt => None,
+        Method::Pt | Method::Ga => None,
         Method::Srt => Some(Mixture::new(
             vec![PathGenerator::srt(
                 settings.max_bounces,
@@ -181,14 +288,37 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if args.generators.is_some() && settings.method != Method::Mixture {
         bail!("--generators is only used with --method mixture");
     }
-    let estimator = mixture.as_ref().map_or(Estimator::Pt, Estimator::Mixture);
     let view = SceneView::new(&scene, accel.as_ref());
+    let plan = if settings.method == Method::Ga {
+        Some(pool.install(|| {
+            Plan::build(
+                &view,
+                &ga_config,
+                &plan_config,
+                settings.max_bounces,
+                settings.seed,
+                settings.progress,
+            )
+        })?)
+    } else {
+        None
+    };
+    let estimator = match (&plan, &mixture) {
+        (Some(plan), _) => Estimator::Ga(plan),
+        (None, Some(mixture)) => Estimator::Mixture(mixture),
+        (None, None) => Estimator::Pt,
+    };
     let film = pool.install(|| render::render(&view, &settings, estimator));
     let render_s = film.elapsed.as_secs_f64();
+    let plan_s = plan.as_ref().map_or(0.0, |p| p.elapsed().as_secs_f64());
 
     let t_write = Instant::now();
     for output in &args.outputs {
         genpath::image::write(output, &film.image)?;
+    }
+    if let (Some(file), Some(plan)) = (&args.explain, &plan) {
+        let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
+        genpath::image::write(file, &picture)?;
     }
     let write_s = t_write.elapsed().as_secs_f64();
 
@@ -202,7 +332,16 @@ fn run_render(args: RenderArgs) -> Result<()> {
         "mixture": mixture,
         "width": scene.camera.width,
         "height": scene.camera.height,
-        "times_s": { "load": load_s, "accel_build": accel_s, "render": render_s, "write": write_s },
+        "ga": plan.as_ref().map(|p| ga_stats(p, &ga_config, &plan_config)),
+        "times_s": {
+            "load": load_s,
+            "accel_build": accel_s,
+            "baseline": plan.as_ref().map(|p| p.stats.baseline_seconds),
+            "ga": plan.as_ref().map(|p| p.stats.ga_seconds),
+            "render": render_s,
+            "write": write_s,
+            "total_render": plan_s + render_s,
+        },
         "rays": { "closest": film.rays.closest, "shadow": film.rays.shadow, "total": film.rays.total() },
         "rays_per_s": film.rays.total() as f64 / render_s.max(1e-9),
         "warnings": scene.warnings,
@@ -214,6 +353,13 @@ fn run_render(args: RenderArgs) -> Result<()> {
         genpath::image::write_bytes_atomic(Path::new(&json_path), text.as_bytes())?;
     }
     if !args.quiet {
+        if let Some(plan) = &plan {
+            let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
+            eprintln!(
+                "genpath: GA on {} pixels ({improved} improved on srt) in {plan_s:.2} s",
+                plan.pixels.len()
+            );
+        }
         eprintln!(
             "genpath: {}×{} {} spp in {render_s:.2} s ({:.2} Mrays/s) → {}",
             scene.camera.width,
@@ -228,6 +374,43 @@ fn run_render(args: RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
+/// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list.
+fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Value {
+    const CURVES: usize = 8;
+    let n = plan.pixels.len();
+    let curves: Vec<_> = (0..n.min(CURVES))
+        .map(|i| {
+            let p = &plan.pixels[i * n / n.min(CURVES)];
+            serde_json::json!({ "x": p.x, "y": p.y, "history": p.history })
+        })
+        .collect();
+    let pixels: Vec<_> = plan
+        .pixels
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "x": p.x, "y": p.y, "origin": p.origin,
+                "v_srt": p.v_srt, "v_best": p.v_best, "kept_srt": p.kept_srt,
+                "test_paths": p.test_paths, "light_paths": p.light_paths,
+                "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
+                "mixture": p.mixture,
+            })
+        })
+        .collect();
+    let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
+    serde_json::json!({
+        "config": ga,
+        "plan": config,
+        "stats": plan.stats,
+        "ga_pixels": n,
+        "improved_pixels": plan.pixels.iter().filter(|p| !p.kept_srt).count(),
+        "individual_evaluations_per_cpu_s": plan.stats.individual_evaluations as f64 / evolve_s,
+        "fitness_curves": curves,
+        "pixels": pixels,
+    })
 }
 
 fn run_compare(args: CompareArgs) -> Result<()> {
@@ -256,4 +439,16 @@ fn run_compare(args: CompareArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// Clap's own consistency checks (duplicate names, defaults that fail their parsers).
+    #[test]
+    fn command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
 }

@@ -8,10 +8,14 @@
 //! * [`individual`]: individuals and their random initialisation.
 //! * [`operators`]: crossover and mutations (paper §5.5).
 //! * [`population`]: selection, elitism and the generation loop.
+//! * [`explain`]: an image of what was learned (`--explain`).
+//! * [`plan`]: which pixels run the GA, and the mixture every pixel renders with.
 
+pub mod explain;
 pub mod fitness;
 pub mod individual;
 pub mod operators;
+pub mod plan;
 pub mod population;
 pub mod test_paths;
 

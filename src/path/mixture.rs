@@ -48,12 +48,26 @@ impl Mixture {
     /// GA pixels): the union of their components. Still one mixture, so still unbiased.
     pub fn combine(parts: &[(f64, &Mixture)]) -> Self {
         let total: f64 = parts.iter().map(|(w, _)| w).sum();
-        let mut generators = Vec::new();
-        let mut weights = Vec::new();
+        let parts: Vec<(f64, &Mixture)> = parts.iter().map(|&(w, m)| (w / total, m)).collect();
+        Self::union(&parts)
+    }
+
+    /// The union of several mixtures, mixture `m` scaled by `w`, with the weights as given
+    /// (the caller normalises them). A generator that occurs in several parts (the defensive
+    /// `srt` one, a shared neighbour's) becomes one component with the summed weight, so its
+    /// density is evaluated once per path.
+    pub fn union(parts: &[(f64, &Mixture)]) -> Self {
+        let mut generators: Vec<PathGenerator> = Vec::new();
+        let mut weights: Vec<f64> = Vec::new();
         for (w, m) in parts {
             for (g, wg) in m.generators.iter().zip(&m.weights) {
-                generators.push(g.clone());
-                weights.push(w / total * wg);
+                match generators.iter().position(|h| h == g) {
+                    Some(i) => weights[i] += w * wg,
+                    None => {
+                        generators.push(g.clone());
+                        weights.push(w * wg);
+                    }
+                }
             }
         }
         Self {

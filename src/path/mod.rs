@@ -21,6 +21,9 @@ pub enum Method {
     Srt,
     /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
     Mixture,
+    /// Genetic path generation: per GA pixel, a mixture evolved to minimise the variance
+    /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
+    Ga,
 }
 
 /// A surface point reached by a ray.

@@ -1,6 +1,7 @@
 //! Image rendering: tiles in parallel (rayon), one deterministic random stream per pixel
 //! sample, a progress bar with ETA on stderr.
 
+use crate::genetic::plan::Plan;
 use crate::image::Image;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
@@ -32,6 +33,8 @@ pub enum Estimator<'a> {
     Pt,
     /// The same mixture of path generators at every pixel (`srt`, `mixture`): eq. 8.
     Mixture(&'a Mixture),
+    /// Per pixel, the mixture the GA plan gives it (`ga`): eq. 8.
+    Ga(&'a Plan),
 }
 
 /// A rendered image with the per-pixel statistics of its estimator.
@@ -143,17 +146,24 @@ fn render_tile(
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
+            let local = match estimator {
+                Estimator::Ga(plan) => Some(plan.mixture_at(x, y)),
+                _ => None,
+            };
+            let mixture = match estimator {
+                Estimator::Pt => None,
+                Estimator::Mixture(m) => Some(m),
+                Estimator::Ga(_) => local.as_ref(),
+            };
             let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
             for s in 0..settings.spp {
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                let value = match estimator {
-                    Estimator::Pt => {
-                        pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays)
-                            .as_dvec3()
-                    }
-                    Estimator::Mixture(mixture) => match view.trace(&ray, &mut rays) {
+                let value = match mixture {
+                    None => pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays)
+                        .as_dvec3(),
+                    Some(mixture) => match view.trace(&ray, &mut rays) {
                         None => DVec3::ZERO,
                         Some(x1) => {
                             let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();

@@ -56,4 +56,53 @@ impl Camera {
         let dir = (self.forward + sx * self.right + sy * self.up).normalize();
         Ray::new(self.origin, dir, 0.0, f32::INFINITY)
     }
+
+    /// Continuous pixel coordinates of world point `p` (the inverse of [`Camera::ray`]) and
+    /// its depth along the viewing direction; `None` behind the camera.
+    pub fn project(&self, p: Vec3) -> Option<(f32, f32, f32)> {
+        let d = p - self.origin;
+        let depth = d.dot(self.forward);
+        if depth.is_nan() || depth <= 0.0 {
+            return None;
+        }
+        let sx = d.dot(self.right) / (depth * self.right.length_squared());
+        let sy = d.dot(self.up) / (depth * self.up.length_squared());
+        Some((
+            0.5 * (sx + 1.0) * self.width as f32,
+            0.5 * (1.0 - sy) * self.height as f32,
+            depth,
+        ))
+    }
+
+    /// Pixels per unit length at `depth`, across the image.
+    pub fn pixels_per_unit(&self, depth: f32) -> f32 {
+        0.5 * self.width as f32 / (self.right.length() * depth)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn project_inverts_ray() {
+        let camera = Camera::new(
+            Vec3::new(0.3, 1.0, 4.0),
+            Vec3::new(0.0, 0.8, 0.0),
+            Vec3::Y,
+            0.9,
+            64,
+            48,
+        );
+        for (px, py) in [(0.5, 0.5), (31.2, 17.9), (63.9, 47.1)] {
+            let ray = camera.ray(px, py);
+            let (x, y, depth) = camera.project(ray.origin + 2.5 * ray.dir).unwrap();
+            assert!(
+                (x - px).abs() < 1e-3 && (y - py).abs() < 1e-3,
+                "{x} {y} vs {px} {py}"
+            );
+            assert!(depth > 0.0 && depth < 2.5);
+        }
+        assert!(camera.project(camera.origin - camera.forward).is_none());
+    }
 }

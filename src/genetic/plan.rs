@@ -1,0 +1,478 @@
+//! The pixel plan of `--method ga` (design §7): which pixels run the genetic algorithm, and
+//! which mixture every pixel renders with.
+//!
+//! 1. **Baseline.** A few `srt` samples per pixel estimate its relative variance and whether
+//!    it sees any scattering surface at all (pixels that see only background or an emitter
+//!    need no GA: their value is emission seen directly).
+//! 2. **GA pixels.** One per cell of a regular grid (`grid` pixels apart, at the cell's
+//!    centre or the scattering pixel closest to it), plus extra pixels in the cells with the
+//!    highest baseline relative variance, at their noisiest pixel.
+//! 3. **Evolution.** Per GA pixel, `M` test paths from the defensive `srt` density and the
+//!    genetic algorithm on them, in parallel; every pixel has its own random streams, derived
+//!    from the seed and the pixel alone, so the result does not depend on the thread count.
+//!    A pixel keeps `srt` alone when the GA found nothing better on its test paths.
+//! 4. **Interpolation.** Every pixel renders with the union of its nearest GA pixels'
+//!    mixtures, each scaled by a normalised inverse-square distance weight: one mixture whose
+//!    weights sum to 1, containing the defensive `srt` component, so the estimator stays
+//!    unbiased.
+//!
+//! The test paths and the GA draw from streams disjoint from the final render's, so the
+//! mixtures do not depend on the samples they are used with.
+
+use super::population::{evolve, GenerationStats};
+use super::test_paths::TestPaths;
+use super::{fitness, luminance, GaConfig, GaConfigError};
+use crate::path::generator::PathGenerator;
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{emitted, mixture_file, RayCounts, SceneView};
+use crate::render::progress_bar;
+use crate::sampling::{sample_rng, uniform};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Stream tags: the baseline, the test paths and the GA use seeds derived from the user's
+/// seed with these, never the render's own streams.
+const BASELINE_STREAM: u64 = 0x6261_7365_6c69_6e65;
+const TEST_PATH_STREAM: u64 = 0x7465_7374_7061_7468;
+const GA_STREAM: u64 = 0x6765_6e65_7469_6373;
+
+/// Where the genetic algorithm runs and how its results spread over the image.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlanConfig {
+    /// Distance between grid GA pixels, in pixels, along both axes.
+    pub grid: u32,
+    /// Extra GA pixels at high baseline variance, as a fraction of the grid pixels.
+    pub extra: f64,
+    /// `srt` samples per pixel of the baseline pass.
+    pub baseline_spp: u32,
+    /// GA pixels whose mixtures each pixel combines.
+    pub neighbours: usize,
+}
+
+impl Default for PlanConfig {
+    fn default() -> Self {
+        Self {
+            grid: 16,
+            extra: 0.25,
+            baseline_spp: 4,
+            neighbours: 4,
+        }
+    }
+}
+
+impl PlanConfig {
+    pub fn validate(&self) -> Result<(), GaConfigError> {
+        let fail = |m: String| Err(GaConfigError(m));
+        if self.grid == 0 {
+            return fail("the GA grid spacing must be at least 1 pixel".into());
+        }
+        if !(self.extra.is_finite() && (0.0..=16.0).contains(&self.extra)) {
+            return fail(format!("extra GA pixels {} is not in [0, 16]", self.extra));
+        }
+        if self.baseline_spp == 0 {
+            return fail("the baseline needs at least 1 sample per pixel".into());
+        }
+        if !(1..=64).contains(&self.neighbours) {
+            return fail(format!(
+                "GA neighbours per pixel {} is not in [1, 64]",
+                self.neighbours
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why a GA pixel was chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Origin {
+    Grid,
+    /// High baseline variance.
+    Extra,
+}
+
+/// The outcome of the genetic algorithm at one pixel.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GaPixel {
+    pub x: u32,
+    pub y: u32,
+    pub origin: Origin,
+    /// The mixture this pixel renders with and lends its neighbours.
+    pub mixture: Mixture,
+    /// Eq. 10 on the test paths: the defensive `srt` density alone, and the best individual.
+    pub v_srt: f64,
+    pub v_best: f64,
+    /// The GA's best individual was no better than `srt`, which is kept instead.
+    pub kept_srt: bool,
+    /// Test paths sampled (`M`) and those that carry light (stored).
+    pub test_paths: usize,
+    pub light_paths: usize,
+    /// Best and mean `V` per generation.
+    pub history: Vec<GenerationStats>,
+    pub individual_evaluations: u64,
+    pub generator_evaluations: u64,
+    pub test_path_seconds: f64,
+    pub ga_seconds: f64,
+}
+
+/// Per-phase totals of a plan.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PlanStats {
+    /// Wall-clock seconds of the baseline pass and of the GA phase (test paths included).
+    pub baseline_seconds: f64,
+    pub ga_seconds: f64,
+    /// Summed over GA pixels (CPU seconds): tracing test paths, and evolving.
+    pub test_path_cpu_seconds: f64,
+    pub evolve_cpu_seconds: f64,
+    /// Pixels that see no scattering surface in the baseline (background or emitters only).
+    pub skipped_pixels: usize,
+    /// Grid cells without a scattering pixel, hence without a GA pixel.
+    pub empty_cells: usize,
+    pub individual_evaluations: u64,
+    pub generator_evaluations: u64,
+    pub rays: RayCounts,
+}
+
+/// GA pixels and their mixtures, and how every other pixel combines them.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    width: u32,
+    height: u32,
+    pub pixels: Vec<GaPixel>,
+    /// The defensive density alone: the mixture of an image without any GA pixel.
+    pub srt: Mixture,
+    neighbours: usize,
+    /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
+    unnormalised: bool,
+    pub stats: PlanStats,
+}
+
+/// Per-pixel baseline estimate.
+#[derive(Clone, Copy, Default)]
+struct Baseline {
+    /// Relative variance of one `srt` sample: `Var[L] / (E[L]² + 0.01)` (luminance).
+    rel_variance: f64,
+    /// Some baseline ray hit a scattering surface.
+    scatters: bool,
+}
+
+fn derived_seed(seed: u64, stream: u64) -> u64 {
+    // One sample_rng draw mixes the two into a fresh 64-bit seed.
+    let mut rng = sample_rng(seed, stream, u64::MAX);
+    rand::Rng::random::<u64>(&mut rng)
+}
+
+fn baseline(
+    view: &SceneView,
+    srt: &Mixture,
+    config: &PlanConfig,
+    max_bounces: u32,
+    seed: u64,
+) -> (Vec<Baseline>, RayCounts) {
+    let camera = &view.scene.camera;
+    let (width, height) = (camera.width, camera.height);
+    let seed = derived_seed(seed, BASELINE_STREAM);
+    let rows: Vec<(Vec<Baseline>, RayCounts)> = (0..height)
+        .into_par_iter()
+        .map(|y| {
+            let mut counts = RayCounts::default();
+            let mut scratch = MixtureScratch::default();
+            let row = (0..width)
+                .map(|x| {
+                    let pixel = y as u64 * width as u64 + x as u64;
+                    let (mut sum, mut sum_sq, mut scatters) = (0.0, 0.0, false);
+                    for s in 0..config.baseline_spp {
+                        let mut rng = sample_rng(seed, pixel, s as u64);
+                        let ray =
+                            camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+                        let Some(x1) = view.trace(&ray, &mut counts) else {
+                            continue;
+                        };
+                        let material = view.material(x1.prim);
+                        scatters |= material.scatters();
+                        let value = emitted(material, &x1, -ray.dir).as_dvec3()
+                            + srt.estimate(
+                                view,
+                                ray.origin,
+                                x1,
+                                max_bounces,
+                                &mut rng,
+                                &mut counts,
+                                &mut scratch,
+                            );
+                        let l = luminance(value);
+                        sum += l;
+                        sum_sq += l * l;
+                    }
+                    let n = config.baseline_spp as f64;
+                    let mean = sum / n;
+                    let var = if n > 1.0 {
+                        ((sum_sq - sum * mean) / (n - 1.0)).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    Baseline {
+                        rel_variance: var / (mean * mean + 0.01),
+                        scatters,
+                    }
+                })
+                .collect();
+            (row, counts)
+        })
+        .collect();
+    let mut counts = RayCounts::default();
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for (row, c) in rows {
+        out.extend(row);
+        counts.add(c);
+    }
+    (out, counts)
+}
+
+/// The GA pixels: one per grid cell, then extras in the noisiest cells.
+fn choose_pixels(
+    base: &[Baseline],
+    width: u32,
+    height: u32,
+    config: &PlanConfig,
+) -> (Vec<(u32, u32, Origin)>, usize) {
+    let g = config.grid;
+    let mut chosen = Vec::new();
+    let mut cells = Vec::new();
+    let mut empty = 0;
+    for cy in (0..height).step_by(g as usize) {
+        for cx in (0..width).step_by(g as usize) {
+            let (x1, y1) = ((cx + g).min(width), (cy + g).min(height));
+            let centre = ((cx + x1 - 1) as f64 / 2.0, (cy + y1 - 1) as f64 / 2.0);
+            let mut best: Option<(f64, u32, u32)> = None;
+            let (mut noise, mut noisiest) = (0.0, None::<(f64, u32, u32)>);
+            for y in cy..y1 {
+                for x in cx..x1 {
+                    let b = base[(y * width + x) as usize];
+                    if !b.scatters {
+                        continue;
+                    }
+                    let d = (x as f64 - centre.0).powi(2) + (y as f64 - centre.1).powi(2);
+                    if best.is_none_or(|(bd, ..)| d < bd) {
+                        best = Some((d, x, y));
+                    }
+                    noise += b.rel_variance;
+                    if noisiest.is_none_or(|(v, ..)| b.rel_variance > v) {
+                        noisiest = Some((b.rel_variance, x, y));
+                    }
+                }
+            }
+            match best {
+                Some((_, x, y)) => {
+                    chosen.push((x, y, Origin::Grid));
+                    if let Some((_, nx, ny)) = noisiest {
+                        if (nx, ny) != (x, y) {
+                            cells.push((noise / ((x1 - cx) * (y1 - cy)) as f64, nx, ny));
+                        }
+                    }
+                }
+                None => empty += 1,
+            }
+        }
+    }
+    let extra = (config.extra * chosen.len() as f64).round() as usize;
+    cells.sort_by(|a, b| b.0.total_cmp(&a.0).then((a.2, a.1).cmp(&(b.2, b.1))));
+    chosen.extend(
+        cells
+            .iter()
+            .take(extra)
+            .map(|&(_, x, y)| (x, y, Origin::Extra)),
+    );
+    (chosen, empty)
+}
+
+/// Test paths and evolution at one pixel.
+fn run_pixel(
+    view: &SceneView,
+    srt: &Mixture,
+    ga: &GaConfig,
+    (x, y, origin): (u32, u32, Origin),
+    max_bounces: u32,
+    seed: u64,
+) -> (GaPixel, RayCounts) {
+    let t0 = Instant::now();
+    let (paths, counts) = TestPaths::sample(
+        view,
+        srt,
+        (x, y),
+        ga.test_paths,
+        max_bounces,
+        derived_seed(seed, TEST_PATH_STREAM),
+    );
+    let test_path_seconds = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let pixel = y as u64 * view.scene.camera.width as u64 + x as u64;
+    let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, 0);
+    let v_srt = fitness::second_moment(view, &paths, srt);
+    let (mixture, v_best, kept_srt, history, evals) = if paths.is_empty() {
+        (srt.clone(), v_srt, true, Vec::new(), (0, 0))
+    } else {
+        let evolution = evolve(ga, &paths, view, &mut rng);
+        let evals = (
+            evolution.individual_evaluations,
+            evolution.generator_evaluations,
+        );
+        if evolution.best_v < v_srt {
+            (
+                evolution.best.to_mixture(),
+                evolution.best_v,
+                false,
+                evolution.history,
+                evals,
+            )
+        } else {
+            (srt.clone(), v_srt, true, evolution.history, evals)
+        }
+    };
+    let pixel = GaPixel {
+        x,
+        y,
+        origin,
+        mixture,
+        v_srt,
+        v_best,
+        kept_srt,
+        test_paths: paths.sampled,
+        light_paths: paths.len(),
+        history,
+        individual_evaluations: evals.0,
+        generator_evaluations: evals.1,
+        test_path_seconds,
+        ga_seconds: t1.elapsed().as_secs_f64(),
+    };
+    (pixel, counts)
+}
+
+impl Plan {
+    /// Runs the baseline, picks the GA pixels and evolves each of them (in parallel on the
+    /// current rayon pool), with progress bars on stderr when `progress`.
+    pub fn build(
+        view: &SceneView,
+        ga: &GaConfig,
+        config: &PlanConfig,
+        max_bounces: u32,
+        seed: u64,
+        progress: bool,
+    ) -> Result<Self, GaConfigError> {
+        ga.validate()?;
+        config.validate()?;
+        let scene = view.scene;
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let srt = Mixture::new(
+            vec![PathGenerator::srt(
+                max_bounces,
+                ga.srt_absorption,
+                mixture_file::uniform_light(scene),
+            )],
+            vec![1.0],
+        );
+        let mut stats = PlanStats::default();
+
+        let t0 = Instant::now();
+        let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
+        stats.rays.add(counts);
+        stats.skipped_pixels = base.iter().filter(|b| !b.scatters).count();
+        let (chosen, empty) = choose_pixels(&base, width, height, config);
+        stats.empty_cells = empty;
+        stats.baseline_seconds = t0.elapsed().as_secs_f64();
+
+        let t1 = Instant::now();
+        let bar = progress_bar(chosen.len() as u64, "GA", progress);
+        let results: Vec<(GaPixel, RayCounts)> = chosen
+            .par_iter()
+            .map(|&c| {
+                let r = run_pixel(view, &srt, ga, c, max_bounces, seed);
+                bar.inc(1);
+                r
+            })
+            .collect();
+        bar.finish_and_clear();
+        stats.ga_seconds = t1.elapsed().as_secs_f64();
+        let mut pixels = Vec::with_capacity(results.len());
+        for (p, counts) in results {
+            stats.rays.add(counts);
+            stats.test_path_cpu_seconds += p.test_path_seconds;
+            stats.evolve_cpu_seconds += p.ga_seconds;
+            stats.individual_evaluations += p.individual_evaluations;
+            stats.generator_evaluations += p.generator_evaluations;
+            pixels.push(p);
+        }
+        Ok(Self {
+            width,
+            height,
+            pixels,
+            srt,
+            neighbours: config.neighbours,
+            unnormalised: false,
+            stats,
+        })
+    }
+
+    /// This plan with its interpolation weights deliberately left unnormalised: a wrong input
+    /// that the unbiasedness test must reject.
+    pub fn with_unnormalised_interpolation(mut self) -> Self {
+        self.unnormalised = true;
+        self
+    }
+
+    /// The GA pixels nearest to `(x, y)` (up to `neighbours`) and their weights, into `out`:
+    /// inverse squared distance, normalised to sum 1; a GA pixel itself takes weight 1.
+    pub fn interpolation(&self, x: u32, y: u32, out: &mut Vec<(f64, usize)>) {
+        out.clear();
+        for (i, p) in self.pixels.iter().enumerate() {
+            let d2 = (p.x as f64 - x as f64).powi(2) + (p.y as f64 - y as f64).powi(2);
+            if d2 == 0.0 {
+                out.clear();
+                out.push((1.0, i));
+                return;
+            }
+            // Keep the `neighbours` smallest distances, sorted, ties by index.
+            if out.len() < self.neighbours || d2 < out[out.len() - 1].0 {
+                let at = out.partition_point(|&(d, _)| d <= d2);
+                out.insert(at, (d2, i));
+                out.truncate(self.neighbours);
+            }
+        }
+        let mut total = 0.0;
+        for (w, _) in out.iter_mut() {
+            *w = 1.0 / *w;
+            total += *w;
+        }
+        if !self.unnormalised {
+            out.iter_mut().for_each(|(w, _)| *w /= total);
+        }
+    }
+
+    /// The mixture pixel `(x, y)` renders with.
+    pub fn mixture_at(&self, x: u32, y: u32) -> Mixture {
+        let mut weights = Vec::with_capacity(self.neighbours);
+        self.interpolation(x, y, &mut weights);
+        if weights.is_empty() {
+            return self.srt.clone();
+        }
+        let parts: Vec<(f64, &Mixture)> = weights
+            .iter()
+            .map(|&(w, i)| (w, &self.pixels[i].mixture))
+            .collect();
+        Mixture::union(&parts)
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Wall-clock time of the whole plan (baseline and GA).
+    pub fn elapsed(&self) -> Duration {
+        Duration::from_secs_f64(self.stats.baseline_seconds + self.stats.ga_seconds)
+    }
+}
