@@ -411,3 +411,129 @@ fn bad_generator_files() {
         &["--srt-absorption"],
     );
 }
+
+#[test]
+fn impossible_ga_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), None, None, None);
+    let out = dir.path().join("o.exr");
+    let ga = |extra: &[&'static str]| [&["--method", "ga"], extra].concat();
+    assert_fails(&scene, &ga(&["--p-cross", "2"]), &out, &["--p-cross"]);
+    assert_fails(&scene, &ga(&["--population", "0"]), &out, &["--population"]);
+    assert_fails(&scene, &ga(&["--test-paths", "0"]), &out, &["--test-paths"]);
+    assert_fails(&scene, &ga(&["--ga-grid", "0"]), &out, &["--ga-grid"]);
+    assert_fails(
+        &scene,
+        &ga(&["--population", "4", "--elitism", "5"]),
+        &out,
+        &["elitism 5 exceeds the population 4"],
+    );
+    assert_fails(
+        &scene,
+        &ga(&["--defensive-weight", "0"]),
+        &out,
+        &["defensive_weight"],
+    );
+    assert_fails(&scene, &ga(&["--ga-extra", "NaN"]), &out, &["extra"]);
+    let explain = dir.path().join("e.png");
+    let explain = explain.to_str().unwrap();
+    assert_fails(
+        &scene,
+        &["--explain", explain],
+        &out,
+        &["--explain is only used with --method ga"],
+    );
+    assert!(!Path::new(explain).exists());
+    assert_fails(
+        &scene,
+        &ga(&["--explain", "/nonexistent-dir/e.png"]),
+        &out,
+        &["nonexistent-dir"],
+    );
+}
+
+/// `--method ga` end to end on a small image: the image, the explanation and the JSON
+/// statistics (per-phase times, fitness curves, evolved generators); bit-identical for 1
+/// and 2 threads, and a different seed changes it.
+#[test]
+fn ga_method_renders_deterministically_with_stats_and_explanation() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |threads: &str, seed: &str| {
+        let out = dir.path().join(format!("ga{threads}-{seed}.exr"));
+        let explain = dir.path().join(format!("ga{threads}-{seed}.png"));
+        let output = genpath(&[
+            "render",
+            fig5().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--explain",
+            explain.to_str().unwrap(),
+            "--method",
+            "ga",
+            "--spp",
+            "4",
+            "--width",
+            "48",
+            "--height",
+            "40",
+            "--ga-grid",
+            "16",
+            "--test-paths",
+            "3000",
+            "--population",
+            "12",
+            "--generations",
+            "6",
+            "--threads",
+            threads,
+            "--seed",
+            seed,
+            "--quiet",
+        ]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        assert!(explain.exists(), "no explanation image");
+        let mut json = out.clone().into_os_string();
+        json.push(".json");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        (pixel_bits(&out), stats)
+    };
+    let (one, stats) = render("1", "1");
+    let (two, _) = render("2", "1");
+    assert_eq!(one, two, "the GA render depends on the thread count");
+    let (other, _) = render("2", "7");
+    assert_ne!(one, other, "the seed does not matter");
+
+    let ga = &stats["ga"];
+    let pixels = ga["pixels"].as_array().expect("GA pixels in the JSON");
+    // 48×40 with a 16-pixel grid: 3×3 cells, all of them see the room.
+    assert!(pixels.len() >= 9, "{} GA pixels", pixels.len());
+    for p in pixels {
+        assert_eq!(p["test_paths"], 3000);
+        let weights = p["mixture"]["weights"].as_array().unwrap();
+        let sum: f64 = weights.iter().map(|w| w.as_f64().unwrap()).sum();
+        assert!((sum - 1.0).abs() < 1e-9, "weights sum to {sum}");
+        assert!(p["mixture"]["generators"][0]["steps"].is_array());
+    }
+    let curves = ga["fitness_curves"].as_array().unwrap();
+    assert!(!curves.is_empty());
+    for c in curves {
+        let history = c["history"].as_array().unwrap();
+        assert!(history.is_empty() || history.len() == 6, "{c}");
+        // Elitism: the best V never increases.
+        let best: Vec<f64> = history
+            .iter()
+            .map(|h| h["best"].as_f64().unwrap())
+            .collect();
+        assert!(best.windows(2).all(|w| w[1] <= w[0]), "{best:?}");
+    }
+    for phase in ["baseline", "ga", "render"] {
+        assert!(stats["times_s"][phase].as_f64().unwrap() >= 0.0, "{phase}");
+    }
+    assert_eq!(ga["config"]["population"], 12);
+    assert_eq!(ga["plan"]["grid"], 16);
+}

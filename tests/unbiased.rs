@@ -1,9 +1,12 @@
-//! Unbiasedness: `srt`, a hand-made anchor mixture and `pt` estimate the same image. Per
+//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga` and `pt` estimate the same image. Per
 //! block of pixels, the difference of two methods' means must lie inside a 99.9 % interval
 //! (Šidák-corrected over all blocks and channels) computed from their sample variances; and
-//! the same comparison must reject a mixture whose one component's density is off by 10 %.
+//! the same comparison must reject a mixture whose one component's density is off by 10 %,
+//! and a `ga` render whose interpolation weights were left unnormalised.
 
 use genpath::accel::{self, AccelKind};
+use genpath::genetic::plan::{Plan, PlanConfig};
+use genpath::genetic::GaConfig;
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
 use genpath::path::{mixture_file, Method, SceneView};
@@ -26,7 +29,29 @@ fn scene_dir(name: &str) -> PathBuf {
 enum Which {
     Pt,
     Srt,
-    Anchors { pdf_error: Option<f64> },
+    Anchors {
+        pdf_error: Option<f64>,
+    },
+    /// A small GA (cheap test paths and generations; unbiasedness does not depend on how
+    /// well it converged), optionally with unnormalised interpolation weights.
+    Ga {
+        unnormalised: bool,
+    },
+}
+
+fn small_ga() -> (GaConfig, PlanConfig) {
+    let ga = GaConfig {
+        population: 16,
+        generations: 8,
+        test_paths: 4000,
+        srt_absorption: SRT_ABSORPTION,
+        ..GaConfig::default()
+    };
+    let plan = PlanConfig {
+        grid: 16,
+        ..PlanConfig::default()
+    };
+    (ga, plan)
 }
 
 fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
@@ -34,8 +59,23 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     scene.resize(SIZE, SIZE);
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
+    let mut plan = None;
     let mixture = match which {
         Which::Pt => None,
+        Which::Ga { unnormalised } => {
+            let (ga, config) = small_ga();
+            let p = Plan::build(&view, &ga, &config, max_bounces, seed, false).unwrap();
+            assert!(
+                p.pixels.iter().any(|p| !p.kept_srt),
+                "{name}: the GA improved on srt nowhere, so the test would only test srt"
+            );
+            plan = Some(if unnormalised {
+                p.with_unnormalised_interpolation()
+            } else {
+                p
+            });
+            None
+        }
         Which::Srt => Some(Mixture::new(
             vec![PathGenerator::srt(
                 max_bounces,
@@ -65,7 +105,11 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         seed,
         progress: false,
     };
-    let estimator = mixture.as_ref().map_or(Estimator::Pt, Estimator::Mixture);
+    let estimator = match (&plan, &mixture) {
+        (Some(plan), _) => Estimator::Ga(plan),
+        (None, Some(mixture)) => Estimator::Mixture(mixture),
+        (None, None) => Estimator::Pt,
+    };
     render(&view, &settings, estimator)
 }
 
@@ -120,6 +164,13 @@ fn check_agree(name: &str, max_bounces: u32) {
     for (label, which, spp) in [
         ("srt", Which::Srt, SPP),
         ("anchors", Which::Anchors { pdf_error: None }, SPP),
+        (
+            "ga",
+            Which::Ga {
+                unnormalised: false,
+            },
+            SPP,
+        ),
     ] {
         let film = render_with(name, which, max_bounces, spp, 23);
         let (z, rel, n) = compare(&film, &pt);
@@ -156,6 +207,21 @@ fn check_rejects_wrong_pdf(name: &str) {
     assert!(
         z > z_critical(n),
         "{name}: a component density off by 10 % went unnoticed (max |z| {z:.2})"
+    );
+}
+
+#[test]
+fn fig5_rejects_unnormalised_interpolation_weights() {
+    let pt = render_with("fig5", Which::Pt, 5, SPP / 8, 11);
+    let wrong = render_with("fig5", Which::Ga { unnormalised: true }, 5, SPP / 8, 23);
+    let (z, _, n) = compare(&wrong, &pt);
+    eprintln!(
+        "fig5: ga with unnormalised interpolation: max |z| {z:.2} (critical {:.2})",
+        z_critical(n)
+    );
+    assert!(
+        z > z_critical(n),
+        "fig5: unnormalised interpolation weights went unnoticed (max |z| {z:.2})"
     );
 }
 
