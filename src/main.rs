@@ -2,14 +2,13 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
-use genpath::accel::{self, AccelKind};
+use genpath::accel::{self, Accel, AccelKind};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::genetic::GaConfig;
-use genpath::path::generator::{PathGenerator, ABSORPTION_MAX, ABSORPTION_MIN};
-use genpath::path::mixture::Mixture;
+use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
-use genpath::path::{Method, SceneView};
-use genpath::render::{self, Estimator, RenderSettings};
+use genpath::path::{Method, RayCounts, SceneView};
+use genpath::render::{self, Estimator, MethodConfig, Prepared, RenderSettings};
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -31,6 +30,9 @@ enum Command {
     Render(RenderArgs),
     /// Compare an image with a reference: relMSE, MSE, MAPE, fraction of NaN/Inf/negative pixels.
     Compare(CompareArgs),
+    /// Render a long path-tracing reference in two independent halves, with its own noise
+    /// estimate (relMSE between the halves / 4) in the JSON.
+    Reference(ReferenceArgs),
 }
 
 #[derive(Args)]
@@ -44,25 +46,11 @@ struct CompareArgs {
     json: bool,
 }
 
+/// What every command that renders needs: the scene, how to trace it, and the seed.
 #[derive(Args)]
-struct RenderArgs {
+struct SceneArgs {
     /// Scene description (TOML).
     scene: PathBuf,
-    /// Output image; repeat for several formats. A `<FILE>.json` with statistics is written beside each.
-    #[arg(short, long = "output", value_name = "FILE", required = true)]
-    outputs: Vec<PathBuf>,
-    /// Rendering method.
-    #[arg(long, value_enum, default_value_t = Method::Pt)]
-    method: Method,
-    /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
-    #[arg(long, value_name = "FILE")]
-    generators: Option<PathBuf>,
-    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
-    srt_absorption: f64,
-    /// Samples (paths) per pixel.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
-    spp: u32,
     /// Scattering events per path; defaults to the scene's `render.max_bounces`.
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES_LIMIT as i64))]
     max_bounces: Option<u32>,
@@ -84,12 +72,52 @@ struct RenderArgs {
     /// No progress bar and no warnings on stderr.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// The method and its own settings.
+#[derive(Args)]
+struct MethodArgs {
+    /// Rendering method.
+    #[arg(long, value_enum, default_value_t = Method::Pt)]
+    method: Method,
+    /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
+    #[arg(long, value_name = "FILE")]
+    generators: Option<PathBuf>,
+    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
+    srt_absorption: f64,
+    #[command(flatten)]
+    ga: GaArgs,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output image; repeat for several formats. A `<FILE>.json` with statistics is written beside each.
+    #[arg(short, long = "output", value_name = "FILE", required = true)]
+    outputs: Vec<PathBuf>,
+    /// Samples (paths) per pixel.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
+    spp: u32,
     /// With `--method ga`: also write an image of the GA pixels with their evolved anchor
     /// points and cones drawn over the render.
     #[arg(long, value_name = "FILE")]
     explain: Option<PathBuf>,
     #[command(flatten)]
-    ga: GaArgs,
+    method: MethodArgs,
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The reference image (EXR); `<FILE>.json` beside it holds its noise estimate.
+    #[arg(short, long = "output", value_name = "FILE")]
+    output: PathBuf,
+    /// Path-tracing samples per pixel, split into two independent halves.
+    #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(2..=1 << 24))]
+    spp: u32,
 }
 
 /// Settings of `--method ga` (paper §4–5, design §6–7); defaults from `GaConfig::default()`.
@@ -198,6 +226,7 @@ fn main() {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Compare(args) => run_compare(args),
+        Command::Reference(args) => run_reference(args),
     };
     if let Err(error) = result {
         eprintln!("genpath: error: {error:#}");
@@ -222,138 +251,180 @@ fn check_output(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// A loaded scene with its accelerator and worker pool, and how long loading took.
+struct Session {
+    scene: Scene,
+    accel: Box<dyn Accel>,
+    pool: rayon::ThreadPool,
+    load_s: f64,
+    accel_s: f64,
+}
+
+impl Session {
+    fn open(args: &SceneArgs) -> Result<Self> {
+        let t_load = Instant::now();
+        let mut scene = Scene::load(&args.scene)?;
+        if args.width.is_some() || args.height.is_some() {
+            scene.resize(
+                args.width.unwrap_or(scene.camera.width),
+                args.height.unwrap_or(scene.camera.height),
+            );
+        }
+        if !args.quiet {
+            for warning in &scene.warnings {
+                eprintln!("genpath: warning: {warning}");
+            }
+        }
+        let load_s = t_load.elapsed().as_secs_f64();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(args.threads.unwrap_or(0) as usize)
+            .build()
+            .context("cannot start the worker threads")?;
+        let t_accel = Instant::now();
+        let accel = accel::build(args.accel, &scene.mesh)?;
+        Ok(Self {
+            scene,
+            accel,
+            pool,
+            load_s,
+            accel_s: t_accel.elapsed().as_secs_f64(),
+        })
+    }
+
+    fn settings(&self, args: &SceneArgs, method: Method, spp: u32) -> RenderSettings {
+        RenderSettings {
+            method,
+            spp,
+            max_bounces: args.max_bounces.unwrap_or(self.scene.render.max_bounces),
+            seed: args.seed,
+            progress: !args.quiet,
+        }
+    }
+
+    /// What the JSON of every render records first.
+    fn stats(&self, settings: &RenderSettings) -> serde_json::Map<String, serde_json::Value> {
+        let value = serde_json::json!({
+            "genpath_version": env!("CARGO_PKG_VERSION"),
+            "command_line": std::env::args().collect::<Vec<_>>(),
+            "scene": self.scene.path,
+            "settings": settings,
+            "threads": self.pool.current_num_threads(),
+            "accel": self.accel.name(),
+            "width": self.scene.camera.width,
+            "height": self.scene.camera.height,
+            "warnings": self.scene.warnings,
+        });
+        match value {
+            serde_json::Value::Object(map) => map,
+            _ => unreachable!("a JSON object literal"),
+        }
+    }
+}
+
+fn rays_json(rays: RayCounts) -> serde_json::Value {
+    serde_json::json!({ "closest": rays.closest, "shadow": rays.shadow, "total": rays.total() })
+}
+
+/// Writes `stats` as `<output>.json` beside each output.
+fn write_stats(outputs: &[PathBuf], stats: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(stats)?;
+    for output in outputs {
+        let mut json_path = output.clone().into_os_string();
+        json_path.push(".json");
+        genpath::image::write_bytes_atomic(Path::new(&json_path), text.as_bytes())?;
+    }
+    Ok(())
+}
+
+impl MethodArgs {
+    /// The method's configuration; loads the mixture file of `--method mixture`.
+    fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+        if self.generators.is_some() && self.method != Method::Mixture {
+            bail!("--generators is only used with --method mixture");
+        }
+        let mixture = match (&self.generators, self.method) {
+            (Some(file), Method::Mixture) => Some(mixture_file::load(
+                file,
+                scene,
+                max_bounces,
+                self.srt_absorption,
+            )?),
+            (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
+            _ => None,
+        };
+        let (ga, plan) = self.ga.configs(self.srt_absorption)?;
+        Ok(MethodConfig {
+            method: self.method,
+            srt_absorption: self.srt_absorption,
+            mixture,
+            ga,
+            plan,
+        })
+    }
+}
+
 fn run_render(args: RenderArgs) -> Result<()> {
     for output in &args.outputs {
         check_output(output)?;
     }
     if let Some(explain) = &args.explain {
-        if args.method != Method::Ga {
+        if args.method.method != Method::Ga {
             bail!("--explain is only used with --method ga");
         }
         check_output(explain)?;
     }
-    let (ga_config, plan_config) = args.ga.configs(args.srt_absorption)?;
-    let t_load = Instant::now();
-    let mut scene = Scene::load(&args.scene)?;
-    if args.width.is_some() || args.height.is_some() {
-        scene.resize(
-            args.width.unwrap_or(scene.camera.width),
-            args.height.unwrap_or(scene.camera.height),
-        );
-    }
-    if !args.quiet {
-        for warning in &scene.warnings {
-            eprintln!("genpath: warning: {warning}");
-        }
-    }
-    let load_s = t_load.elapsed().as_secs_f64();
-
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0) as usize)
-        .build()
-        .context("cannot start the worker threads")?;
-    let t_accel = Instant::now();
-    let accel = accel::build(args.accel, &scene.mesh)?;
-    let accel_s = t_accel.elapsed().as_secs_f64();
-
-    let settings = RenderSettings {
-        method: args.method,
-        spp: args.spp,
-        max_bounces: args.max_bounces.unwrap_or(scene.render.max_bounces),
-        seed: args.seed,
-        progress: !args.quiet,
-    };
-    let mixture = match settings.method {
-        Method::Pt | Method::Ga => None,
-        Method::Srt => Some(Mixture::new(
-            vec![PathGenerator::srt(
-                settings.max_bounces,
-                args.srt_absorption,
-                mixture_file::uniform_light(&scene),
-            )],
-            vec![1.0],
-        )),
-        Method::Mixture => {
-            let Some(file) = &args.generators else {
-                bail!("--method mixture needs --generators FILE");
-            };
-            Some(mixture_file::load(
-                file,
-                &scene,
-                settings.max_bounces,
-                args.srt_absorption,
-            )?)
-        }
-    };
-    if args.generators.is_some() && settings.method != Method::Mixture {
-        bail!("--generators is only used with --method mixture");
-    }
-    let view = SceneView::new(&scene, accel.as_ref());
-    let plan = if settings.method == Method::Ga {
-        Some(pool.install(|| {
-            Plan::build(
-                &view,
-                &ga_config,
-                &plan_config,
-                settings.max_bounces,
-                settings.seed,
-                settings.progress,
-            )
-        })?)
-    } else {
-        None
-    };
-    let estimator = match (&plan, &mixture) {
-        (Some(plan), _) => Estimator::Ga(plan),
-        (None, Some(mixture)) => Estimator::Mixture(mixture),
-        (None, None) => Estimator::Pt,
-    };
-    let film = pool.install(|| render::render(&view, &settings, estimator));
+    // Flag ranges first, before any loading.
+    args.method.ga.configs(args.method.srt_absorption)?;
+    let session = Session::open(&args.scene)?;
+    let settings = session.settings(&args.scene, args.method.method, args.spp);
+    let config = args.method.config(&session.scene, settings.max_bounces)?;
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let prepared = session
+        .pool
+        .install(|| Prepared::new(&view, &config, &settings))?;
+    let plan = prepared.plan();
+    let film = session
+        .pool
+        .install(|| render::render(&view, &settings, prepared.estimator()));
     let render_s = film.elapsed.as_secs_f64();
-    let plan_s = plan.as_ref().map_or(0.0, |p| p.elapsed().as_secs_f64());
+    let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
 
     let t_write = Instant::now();
     for output in &args.outputs {
         genpath::image::write(output, &film.image)?;
     }
-    if let (Some(file), Some(plan)) = (&args.explain, &plan) {
+    if let (Some(file), Some(plan)) = (&args.explain, plan) {
         let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
         genpath::image::write(file, &picture)?;
     }
     let write_s = t_write.elapsed().as_secs_f64();
 
-    let stats = serde_json::json!({
-        "genpath_version": env!("CARGO_PKG_VERSION"),
-        "command_line": std::env::args().collect::<Vec<_>>(),
-        "scene": scene.path,
-        "settings": settings,
-        "threads": pool.current_num_threads(),
-        "accel": accel.name(),
-        "mixture": mixture,
-        "width": scene.camera.width,
-        "height": scene.camera.height,
-        "ga": plan.as_ref().map(|p| ga_stats(p, &ga_config, &plan_config)),
-        "times_s": {
-            "load": load_s,
-            "accel_build": accel_s,
-            "baseline": plan.as_ref().map(|p| p.stats.baseline_seconds),
-            "ga": plan.as_ref().map(|p| p.stats.ga_seconds),
+    let mut stats = session.stats(&settings);
+    stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
+    stats.insert(
+        "ga".into(),
+        serde_json::json!(plan.map(|p| ga_stats(p, &config.ga, &config.plan))),
+    );
+    stats.insert(
+        "times_s".into(),
+        serde_json::json!({
+            "load": session.load_s,
+            "accel_build": session.accel_s,
+            "baseline": plan.map(|p| p.stats.baseline_seconds),
+            "ga": plan.map(|p| p.stats.ga_seconds),
             "render": render_s,
             "write": write_s,
             "total_render": plan_s + render_s,
-        },
-        "rays": { "closest": film.rays.closest, "shadow": film.rays.shadow, "total": film.rays.total() },
-        "rays_per_s": film.rays.total() as f64 / render_s.max(1e-9),
-        "warnings": scene.warnings,
-    });
-    let text = serde_json::to_string_pretty(&stats)?;
-    for output in &args.outputs {
-        let mut json_path = output.clone().into_os_string();
-        json_path.push(".json");
-        genpath::image::write_bytes_atomic(Path::new(&json_path), text.as_bytes())?;
-    }
-    if !args.quiet {
-        if let Some(plan) = &plan {
+        }),
+    );
+    stats.insert("rays".into(), rays_json(film.rays));
+    stats.insert(
+        "rays_per_s".into(),
+        serde_json::json!(film.rays.total() as f64 / render_s.max(1e-9)),
+    );
+    write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
+    if !args.scene.quiet {
+        if let Some(plan) = plan {
             let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
             eprintln!(
                 "genpath: GA on {} pixels ({improved} improved on srt) in {plan_s:.2} s",
@@ -362,8 +433,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         }
         eprintln!(
             "genpath: {}×{} {} spp in {render_s:.2} s ({:.2} Mrays/s) → {}",
-            scene.camera.width,
-            scene.camera.height,
+            session.scene.camera.width,
+            session.scene.camera.height,
             settings.spp,
             film.rays.total() as f64 / render_s.max(1e-9) / 1e6,
             args.outputs
@@ -371,6 +442,78 @@ fn run_render(args: RenderArgs) -> Result<()> {
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// Two independent `pt` halves, averaged; their relMSE against each other is about four
+/// times the average's own relMSE (each half has twice its variance, and both count).
+fn run_reference(args: ReferenceArgs) -> Result<()> {
+    let is_exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        bail!(
+            "{}: a reference must be an EXR (float) image",
+            args.output.display()
+        );
+    }
+    check_output(&args.output)?;
+    let session = Session::open(&args.scene)?;
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let half = |seed: u64| {
+        let settings = RenderSettings {
+            seed,
+            ..session.settings(&args.scene, Method::Pt, args.spp / 2)
+        };
+        session
+            .pool
+            .install(|| render::render(&view, &settings, Estimator::Pt))
+    };
+    // The halves use the seed and a stream derived from it: disjoint random numbers.
+    let seeds = [args.scene.seed, args.scene.seed ^ 0x05ee_d0f5_ec00_da1f];
+    let (a, b) = (half(seeds[0]), half(seeds[1]));
+    let Some(between) = genpath::image::metrics::compare(&a.image, &b.image) else {
+        unreachable!("both halves have the scene's size");
+    };
+    let mut image = a.image.clone();
+    for (p, q) in image.pixels.iter_mut().zip(&b.image.pixels) {
+        *p = std::array::from_fn(|c| 0.5 * (p[c] + q[c]));
+    }
+    genpath::image::write(&args.output, &image)?;
+    let settings = session.settings(&args.scene, Method::Pt, args.spp / 2 * 2);
+    let seconds = a.elapsed.as_secs_f64() + b.elapsed.as_secs_f64();
+    let mut stats = session.stats(&settings);
+    stats.insert(
+        "reference".into(),
+        serde_json::json!({
+            "half_seeds": seeds,
+            "spp_per_half": args.spp / 2,
+            "relmse_between_halves": between.relmse,
+            "relmse_estimate": between.relmse / 4.0,
+            "mse_estimate": between.mse / 4.0,
+            "bad_fraction": between.bad_fraction,
+        }),
+    );
+    stats.insert(
+        "times_s".into(),
+        serde_json::json!({ "load": session.load_s, "accel_build": session.accel_s, "render": seconds }),
+    );
+    let mut rays = a.rays;
+    rays.add(b.rays);
+    stats.insert("rays".into(), rays_json(rays));
+    write_stats(
+        std::slice::from_ref(&args.output),
+        &serde_json::Value::Object(stats),
+    )?;
+    if !args.scene.quiet {
+        eprintln!(
+            "genpath: reference {} spp in {seconds:.1} s, estimated relMSE {:.3e} → {}",
+            args.spp / 2 * 2,
+            between.relmse / 4.0,
+            args.output.display()
         );
     }
     Ok(())

@@ -537,3 +537,58 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
     assert_eq!(ga["config"]["population"], 12);
     assert_eq!(ga["plan"]["grid"], 16);
 }
+
+/// `genpath reference`: an EXR, two halves with different seeds, and a noise estimate that
+/// matches an independent check (a second reference with another seed).
+#[test]
+fn reference_has_its_own_noise_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let make = |name: &str, seed: &str| {
+        let out = dir.path().join(name);
+        let output = genpath(&[
+            "reference",
+            fig5().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            "64",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--seed",
+            seed,
+            "--quiet",
+        ]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let mut json = out.clone().into_os_string();
+        json.push(".json");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        (out, stats["reference"]["relmse_estimate"].as_f64().unwrap())
+    };
+    let (a, estimate_a) = make("a.exr", "1");
+    let (b, estimate_b) = make("b.exr", "2");
+    // Two independent references differ by about the sum of their own errors.
+    let a = genpath::image::read_exr(&a).unwrap();
+    let b = genpath::image::read_exr(&b).unwrap();
+    let between = genpath::image::metrics::compare(&a, &b).unwrap().relmse;
+    let ratio = between / (estimate_a + estimate_b);
+    assert!(
+        (0.6..1.6).contains(&ratio),
+        "between {between:.3e}, estimates {estimate_a:.3e} + {estimate_b:.3e}"
+    );
+    // References are float images.
+    let output = genpath(&[
+        "reference",
+        fig5().to_str().unwrap(),
+        "-o",
+        dir.path().join("r.png").to_str().unwrap(),
+    ]);
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("must be an EXR"));
+}

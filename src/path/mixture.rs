@@ -177,4 +177,21 @@ mod tests {
         assert!((c.weights.iter().sum::<f64>() - 1.0).abs() < 1e-15);
         assert_eq!(c.generators[2], b.generators[0]);
     }
+
+    #[test]
+    fn union_merges_shared_generators() {
+        let srt = generator(0.5);
+        let a = Mixture::new(vec![srt.clone(), generator(0.1)], vec![0.2, 0.8]);
+        let b = Mixture::new(vec![srt.clone(), generator(0.3)], vec![0.5, 0.5]);
+        let u = Mixture::union(&[(0.25, &a), (0.75, &b)]);
+        assert_eq!(u.generators.len(), 3);
+        assert_eq!(u.generators[0], srt);
+        let expected = [0.25 * 0.2 + 0.75 * 0.5, 0.25 * 0.8, 0.75 * 0.5];
+        for (w, e) in u.weights.iter().zip(expected) {
+            assert!((w - e).abs() < 1e-15, "{:?}", u.weights);
+        }
+        // Weights are taken as given: unnormalised parts give an unnormalised union.
+        let v = Mixture::union(&[(0.5, &a), (0.75, &b)]);
+        assert!((v.weights.iter().sum::<f64>() - 1.25).abs() < 1e-15);
+    }
 }

@@ -1,9 +1,12 @@
 //! Image rendering: tiles in parallel (rayon), one deterministic random stream per pixel
 //! sample, a progress bar with ETA on stderr.
 
-use crate::genetic::plan::Plan;
+use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::{GaConfig, GaConfigError};
 use crate::image::Image;
+use crate::path::generator::PathGenerator;
 use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::mixture_file;
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{sample_rng, uniform};
 use glam::DVec3;
@@ -35,6 +38,96 @@ pub enum Estimator<'a> {
     Mixture(&'a Mixture),
     /// Per pixel, the mixture the GA plan gives it (`ga`): eq. 8.
     Ga(&'a Plan),
+}
+
+/// Everything a method needs besides the render settings.
+#[derive(Clone, Debug)]
+pub struct MethodConfig {
+    pub method: Method,
+    /// Absorption of the `srt` generator (`srt`, and the defensive component of `ga`).
+    pub srt_absorption: f64,
+    /// The mixture of `--method mixture`, already loaded.
+    pub mixture: Option<Mixture>,
+    pub ga: GaConfig,
+    pub plan: PlanConfig,
+}
+
+/// Why a method cannot be prepared.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error(transparent)]
+    Ga(#[from] GaConfigError),
+    #[error("--method mixture needs --generators FILE")]
+    NoMixture,
+}
+
+/// A method made ready to render: the mixture or the GA plan it renders with.
+pub enum Prepared {
+    Pt,
+    Mixture(Mixture),
+    Ga(Plan),
+}
+
+impl Prepared {
+    /// Builds what `config.method` needs: the `srt` mixture, the given mixture, or a GA plan
+    /// (baseline, test paths and evolution, with progress bars when `settings.progress`).
+    pub fn new(
+        view: &SceneView,
+        config: &MethodConfig,
+        settings: &RenderSettings,
+    ) -> Result<Self, PrepareError> {
+        Ok(match config.method {
+            Method::Pt => Prepared::Pt,
+            Method::Srt => Prepared::Mixture(Mixture::new(
+                vec![PathGenerator::srt(
+                    settings.max_bounces,
+                    config.srt_absorption,
+                    mixture_file::uniform_light(view.scene),
+                )],
+                vec![1.0],
+            )),
+            Method::Mixture => match &config.mixture {
+                Some(m) => Prepared::Mixture(m.clone()),
+                None => return Err(PrepareError::NoMixture),
+            },
+            Method::Ga => {
+                let ga = GaConfig {
+                    srt_absorption: config.srt_absorption,
+                    ..config.ga.clone()
+                };
+                Prepared::Ga(Plan::build(
+                    view,
+                    &ga,
+                    &config.plan,
+                    settings.max_bounces,
+                    settings.seed,
+                    settings.progress,
+                )?)
+            }
+        })
+    }
+
+    pub fn estimator(&self) -> Estimator<'_> {
+        match self {
+            Prepared::Pt => Estimator::Pt,
+            Prepared::Mixture(m) => Estimator::Mixture(m),
+            Prepared::Ga(plan) => Estimator::Ga(plan),
+        }
+    }
+
+    pub fn plan(&self) -> Option<&Plan> {
+        match self {
+            Prepared::Ga(plan) => Some(plan),
+            _ => None,
+        }
+    }
+
+    pub fn mixture(&self) -> Option<&Mixture> {
+        match self {
+            Prepared::Mixture(m) => Some(m),
+            _ => None,
+        }
+    }
 }
 
 /// A rendered image with the per-pixel statistics of its estimator.
