@@ -114,7 +114,7 @@ impl<'a> SceneView<'a> {
     }
 
     /// Closest surfaces along up to [`PACKET_SIZE`] rays as one packet query: what
-    /// [`SceneView::trace`] gives for each ray, counted the same way.
+    /// [`SceneView::trace`] gives for each ray, counted the same way (no query for none).
     pub fn trace_packet(
         &self,
         rays: &[Ray],
@@ -122,6 +122,9 @@ impl<'a> SceneView<'a> {
         counts: &mut RayCounts,
     ) {
         assert_eq!(rays.len(), points.len());
+        if rays.is_empty() {
+            return;
+        }
         counts.closest += rays.len() as u64;
         let mut hits = [None; PACKET_SIZE];
         let hits = &mut hits[..rays.len()];
@@ -131,8 +134,12 @@ impl<'a> SceneView<'a> {
         }
     }
 
-    /// [`SceneView::unblocked`] for up to [`PACKET_SIZE`] shadow rays as one packet query.
+    /// [`SceneView::unblocked`] for up to [`PACKET_SIZE`] shadow rays as one packet query
+    /// (no query for none).
     pub fn unblocked_packet(&self, rays: &[Ray], free: &mut [bool], counts: &mut RayCounts) {
+        if rays.is_empty() {
+            return;
+        }
         counts.shadow += rays.len() as u64;
         self.accel.occluded_packet(rays, free);
         free.iter_mut().for_each(|f| *f = !*f);
