@@ -7,17 +7,24 @@
 //! per-vertex arrays indexed through `offsets`. The BRDF density of each scattering vertex is
 //! the same for every generator that uses a BRDF sampler there, so it is computed once here.
 //!
-//! Paths are traced one at a time (not yet in 16-wide packets).
+//! Paths are traced in packets of 16 ([`TestPaths::sample`]): each path is a
+//! [`Walk`](crate::path::generator::Walk) with its own random stream, and the walks of a
+//! packet advance in lockstep, their pending rays traced together (Embree's `rtcIntersect16`
+//! and `rtcOccluded16`; a loop on obvhs). A path's result does not depend on how its rays
+//! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]).
 
 use super::luminance;
-use crate::path::generator::{Contribution, DirectionSampler, PathGenerator, PathVertices};
+use crate::accel::{Ray, PACKET_SIZE};
+use crate::path::generator::{
+    Contribution, DirectionSampler, PathGenerator, PathVertices, Query, Walk,
+};
 use crate::path::mixture::Mixture;
-use crate::path::{RayCounts, SceneView};
+use crate::path::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{brdf, sample_rng, uniform, Rng};
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 /// Test paths of one pixel.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TestPaths {
     /// Number of sampled paths, zero-contribution ones included (`M` of eq. 10).
     pub sampled: usize,
@@ -48,6 +55,148 @@ fn absorption(g: &PathGenerator, k: usize, bounce: usize, max_bounces: u32) -> f
         1.0
     } else {
         g.steps[k].absorption
+    }
+}
+
+/// Index of pixel `(x, y)` in its random streams `sample_rng(seed, pixel, j)`.
+fn pixel_index(view: &SceneView, (x, y): (u32, u32)) -> u64 {
+    y as u64 * view.scene.camera.width as u64 + x as u64
+}
+
+/// The jittered camera ray through pixel `(x, y)` (two random numbers).
+fn camera_ray(view: &SceneView, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
+    view.scene
+        .camera
+        .ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
+}
+
+/// One path of a packet: its random stream, walk, pending query, and buffers reused from
+/// packet to packet.
+struct Lane {
+    rng: Rng,
+    /// The component of `q` the walk samples.
+    generator: usize,
+    walk: Walk,
+    query: Option<Query>,
+    path: PathVertices,
+    contributions: Vec<Contribution>,
+}
+
+impl Default for Lane {
+    fn default() -> Self {
+        Self {
+            rng: sample_rng(0, 0, 0),
+            generator: 0,
+            walk: Walk::default(),
+            query: None,
+            path: PathVertices::default(),
+            contributions: Vec::new(),
+        }
+    }
+}
+
+/// Up to 16 paths traced together: their lanes and the buffers of their packet queries,
+/// reused from packet to packet.
+struct Packet {
+    lanes: [Lane; PACKET_SIZE],
+    /// Count of lanes in use (the first ones).
+    n: usize,
+    rays: [Ray; PACKET_SIZE],
+    points: [Option<SurfacePoint>; PACKET_SIZE],
+    free: [bool; PACKET_SIZE],
+    /// The lane of each ray of the packet query.
+    owner: [usize; PACKET_SIZE],
+}
+
+impl Packet {
+    fn new() -> Self {
+        Self {
+            lanes: std::array::from_fn(|_| Lane::default()),
+            n: 0,
+            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); PACKET_SIZE],
+            points: [None; PACKET_SIZE],
+            free: [false; PACKET_SIZE],
+            owner: [0; PACKET_SIZE],
+        }
+    }
+
+    /// Starts paths `js` (at most 16) through `pixel`: their camera rays as one packet, then
+    /// each walk up to its first query.
+    #[allow(clippy::too_many_arguments)]
+    fn start(
+        &mut self,
+        view: &SceneView,
+        q: &Mixture,
+        pixel: (u32, u32),
+        seed: u64,
+        js: std::ops::Range<usize>,
+        max_bounces: u32,
+        counts: &mut RayCounts,
+    ) {
+        self.n = js.len();
+        let index = pixel_index(view, pixel);
+        let lanes = &mut self.lanes[..self.n];
+        for ((lane, ray), j) in lanes.iter_mut().zip(&mut self.rays).zip(js) {
+            lane.rng = sample_rng(seed, index, j as u64);
+            *ray = camera_ray(view, pixel, &mut lane.rng);
+        }
+        let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
+        view.trace_packet(rays, points, counts);
+        for ((lane, ray), x1) in lanes.iter_mut().zip(rays).zip(points.iter()) {
+            lane.contributions.clear();
+            lane.query = None;
+            if let Some(x1) = *x1 {
+                lane.generator = choose(q, uniform(&mut lane.rng) as f64);
+                let g = &q.generators[lane.generator];
+                let rng = &mut lane.rng;
+                (lane.walk, lane.query) =
+                    Walk::start(g, view, ray.origin, x1, max_bounces, rng, &mut lane.path);
+            }
+        }
+    }
+
+    /// Collects the pending rays of one kind into `rays`, their lanes into `owner`; returns
+    /// how many.
+    fn gather(&mut self, shadow: bool) -> usize {
+        let mut count = 0;
+        for (i, lane) in self.lanes[..self.n].iter().enumerate() {
+            let ray = match lane.query {
+                Some(Query::Closest(ray)) if !shadow => ray,
+                Some(Query::Shadow(ray)) if shadow => ray,
+                _ => continue,
+            };
+            (self.rays[count], self.owner[count]) = (ray, i);
+            count += 1;
+        }
+        count
+    }
+
+    /// Traces the pending closest-hit rays as one packet and hands each walk its hit;
+    /// returns how many rays.
+    fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
+        let count = self.gather(false);
+        view.trace_packet(&self.rays[..count], &mut self.points[..count], counts);
+        for (&i, y) in self.owner[..count].iter().zip(&self.points) {
+            let lane = &mut self.lanes[i];
+            let g = &q.generators[lane.generator];
+            let (rng, path) = (&mut lane.rng, &mut lane.path);
+            lane.query = lane
+                .walk
+                .hit(g, view, rng, path, &mut lane.contributions, *y);
+        }
+        count
+    }
+
+    /// Traces the pending shadow rays as one packet and ends their walks; returns how many.
+    fn trace_shadows(&mut self, view: &SceneView, counts: &mut RayCounts) -> usize {
+        let count = self.gather(true);
+        view.unblocked_packet(&self.rays[..count], &mut self.free[..count], counts);
+        for (&i, &free) in self.owner[..count].iter().zip(&self.free) {
+            let lane = &mut self.lanes[i];
+            lane.walk.shadow(free, &mut lane.contributions);
+            lane.query = None;
+        }
+        count
     }
 }
 
@@ -83,7 +232,10 @@ impl TestPaths {
     }
 
     /// Samples `m` paths from `q` through pixel `(x, y)` (box filter: a uniformly jittered
-    /// camera ray), path `j` with the random stream `sample_rng(seed, pixel, j)`.
+    /// camera ray), path `j` with the random stream `sample_rng(seed, pixel, j)`, traced in
+    /// packets of 16 paths: their camera rays, then at each step the closest-hit rays of the
+    /// paths still going and the shadow rays of those that absorbed. The result is
+    /// [`TestPaths::sample_single`]'s.
     pub fn sample(
         view: &SceneView,
         q: &Mixture,
@@ -92,40 +244,89 @@ impl TestPaths {
         max_bounces: u32,
         seed: u64,
     ) -> (Self, RayCounts) {
-        let camera = &view.scene.camera;
-        let pixel = y as u64 * camera.width as u64 + x as u64;
+        let mut paths = Self::new(max_bounces);
+        let mut counts = RayCounts::default();
+        let mut packet = Packet::new();
+        for first in (0..m).step_by(PACKET_SIZE) {
+            let n = PACKET_SIZE.min(m - first);
+            packet.start(
+                view,
+                q,
+                (x, y),
+                seed,
+                first..first + n,
+                max_bounces,
+                &mut counts,
+            );
+            // Until every walk is done. Shadow rays are gathered after the closest-hit
+            // answers, so that those just issued go along.
+            loop {
+                let closest = packet.trace_closest(view, q, &mut counts);
+                if closest + packet.trace_shadows(view, &mut counts) == 0 {
+                    break;
+                }
+            }
+            for lane in &packet.lanes[..n] {
+                paths.store(view, q, &lane.path, &lane.contributions);
+            }
+        }
+        (paths, counts)
+    }
+
+    /// [`TestPaths::sample`] with every ray traced on its own
+    /// ([`PathGenerator::sample_path`]): the reference the packets must reproduce.
+    pub fn sample_single(
+        view: &SceneView,
+        q: &Mixture,
+        (x, y): (u32, u32),
+        m: usize,
+        max_bounces: u32,
+        seed: u64,
+    ) -> (Self, RayCounts) {
+        let pixel = pixel_index(view, (x, y));
         let mut paths = Self::new(max_bounces);
         let mut counts = RayCounts::default();
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
         for j in 0..m {
-            paths.sampled += 1;
             let mut rng: Rng = sample_rng(seed, pixel, j as u64);
-            let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-            let Some(x1) = view.trace(&ray, &mut counts) else {
-                continue;
-            };
-            let g = choose(q, uniform(&mut rng) as f64);
+            let ray = camera_ray(view, (x, y), &mut rng);
             contributions.clear();
-            q.generators[g].sample_path(
-                view,
-                ray.origin,
-                x1,
-                max_bounces,
-                &mut rng,
-                &mut counts,
-                &mut path,
-                &mut contributions,
-            );
-            for c in &contributions {
-                let pdf = q.pdf_path(view, &path, c, max_bounces);
-                let f = luminance(c.f);
-                if pdf > 0.0 && f > 0.0 {
-                    paths.push(view, &path, c, f * f / pdf);
-                }
+            if let Some(x1) = view.trace(&ray, &mut counts) {
+                let g = choose(q, uniform(&mut rng) as f64);
+                q.generators[g].sample_path(
+                    view,
+                    ray.origin,
+                    x1,
+                    max_bounces,
+                    &mut rng,
+                    &mut counts,
+                    &mut path,
+                    &mut contributions,
+                );
             }
+            paths.store(view, q, &path, &contributions);
         }
         (paths, counts)
+    }
+
+    /// Counts one sampled path and stores its light-carrying sub-paths, `F²/q` with `q`'s
+    /// density.
+    fn store(
+        &mut self,
+        view: &SceneView,
+        q: &Mixture,
+        path: &PathVertices,
+        contributions: &[Contribution],
+    ) {
+        self.sampled += 1;
+        for c in contributions {
+            let pdf = q.pdf_path(view, path, c, self.max_bounces);
+            let f = luminance(c.f);
+            if pdf > 0.0 && f > 0.0 {
+                self.push(view, path, c, f * f / pdf);
+            }
+        }
     }
 
     /// Stores the part of `path` that contribution `c` uses, with its `F²/q` (`sampled`,

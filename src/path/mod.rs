@@ -5,7 +5,7 @@ pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
 
-use crate::accel::{Accel, Hit, Ray};
+use crate::accel::{Accel, Hit, Ray, PACKET_SIZE};
 use crate::scene::{Material, Scene};
 use glam::Vec3;
 
@@ -27,7 +27,7 @@ pub enum Method {
 }
 
 /// A surface point reached by a ray.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct SurfacePoint {
     pub p: Vec3,
     /// Unit geometric normal as stored (`cross(v1 − v0, v2 − v0)`): emission leaves on its side.
@@ -98,11 +98,54 @@ impl<'a> SceneView<'a> {
 
     /// Whether the segment between surface points `x` and `y` is free of occluders.
     pub fn unoccluded(&self, x: &SurfacePoint, y: &SurfacePoint, counts: &mut RayCounts) -> bool {
-        counts.shadow += 1;
+        self.unblocked(&self.shadow_ray(x, y), counts)
+    }
+
+    /// The segment between surface points `x` and `y` as a shadow ray (`t ∈ [0, 1]`), both
+    /// ends pushed off their surfaces towards each other.
+    pub fn shadow_ray(&self, x: &SurfacePoint, y: &SurfacePoint) -> Ray {
         let d = y.p - x.p;
         let from = x.p + x.ng * self.epsilon.copysign(x.ng.dot(d));
         let to = y.p + y.ng * self.epsilon.copysign(-y.ng.dot(d));
-        !self.accel.occluded(&Ray::new(from, to - from, 0.0, 1.0))
+        Ray::new(from, to - from, 0.0, 1.0)
+    }
+
+    /// Whether nothing blocks a shadow ray (from [`SceneView::shadow_ray`]).
+    pub fn unblocked(&self, ray: &Ray, counts: &mut RayCounts) -> bool {
+        counts.shadow += 1;
+        !self.accel.occluded(ray)
+    }
+
+    /// Closest surfaces along up to [`PACKET_SIZE`] rays as one packet query: what
+    /// [`SceneView::trace`] gives for each ray, counted the same way (no query for none).
+    pub fn trace_packet(
+        &self,
+        rays: &[Ray],
+        points: &mut [Option<SurfacePoint>],
+        counts: &mut RayCounts,
+    ) {
+        assert_eq!(rays.len(), points.len());
+        if rays.is_empty() {
+            return;
+        }
+        counts.closest += rays.len() as u64;
+        let mut hits = [None; PACKET_SIZE];
+        let hits = &mut hits[..rays.len()];
+        self.accel.intersect_packet(rays, hits);
+        for ((point, ray), hit) in points.iter_mut().zip(rays).zip(hits.iter()) {
+            *point = hit.map(|hit| self.surface_point(ray, &hit));
+        }
+    }
+
+    /// [`SceneView::unblocked`] for up to [`PACKET_SIZE`] shadow rays as one packet query
+    /// (no query for none).
+    pub fn unblocked_packet(&self, rays: &[Ray], free: &mut [bool], counts: &mut RayCounts) {
+        if rays.is_empty() {
+            return;
+        }
+        counts.shadow += rays.len() as u64;
+        self.accel.occluded_packet(rays, free);
+        free.iter_mut().for_each(|f| *f = !*f);
     }
 }
 
