@@ -48,16 +48,6 @@ pub struct TestPaths {
     delta: Vec<bool>,
 }
 
-/// Absorption of `g` at its `k`-th non-delta vertex, scattering event `bounce` (the rule of
-/// `PathGenerator::pdf_path`): 1 after the last sampler and at `max_bounces`.
-fn absorption(g: &PathGenerator, k: usize, bounce: usize, max_bounces: u32) -> f64 {
-    if bounce >= max_bounces as usize || k >= g.steps.len() {
-        1.0
-    } else {
-        g.steps[k].absorption
-    }
-}
-
 /// Index of pixel `(x, y)` in its random streams `sample_rng(seed, pixel, j)`.
 fn pixel_index(view: &SceneView, (x, y): (u32, u32)) -> u64 {
     y as u64 * view.scene.camera.width as u64 + x as u64
@@ -146,7 +136,7 @@ impl Packet {
             lane.contributions.clear();
             lane.query = None;
             if let Some(x1) = *x1 {
-                lane.generator = choose(q, uniform(&mut lane.rng) as f64);
+                lane.generator = q.choose(uniform(&mut lane.rng) as f64);
                 let g = &q.generators[lane.generator];
                 let rng = &mut lane.rng;
                 (lane.walk, lane.query) =
@@ -198,18 +188,6 @@ impl Packet {
         }
         count
     }
-}
-
-/// Picks a component of `q` by its weight.
-fn choose(q: &Mixture, u: f64) -> usize {
-    let mut acc = 0.0;
-    for (i, w) in q.weights.iter().enumerate() {
-        acc += w;
-        if u < acc {
-            return i;
-        }
-    }
-    q.weights.len() - 1
 }
 
 impl TestPaths {
@@ -293,7 +271,7 @@ impl TestPaths {
             let ray = camera_ray(view, (x, y), &mut rng);
             contributions.clear();
             if let Some(x1) = view.trace(&ray, &mut counts) {
-                let g = choose(q, uniform(&mut rng) as f64);
+                let g = q.choose(uniform(&mut rng) as f64);
                 q.generators[g].sample_path(
                     view,
                     ray.origin,
@@ -378,7 +356,7 @@ impl TestPaths {
                 if self.delta[j] {
                     continue;
                 }
-                let a = absorption(g, k, j - start + 1, self.max_bounces);
+                let a = g.absorption(k, j - start + 1, self.max_bounces);
                 if a >= 1.0 {
                     pdf = 0.0;
                     break;
@@ -392,7 +370,7 @@ impl TestPaths {
             }
             if self.nee[i] && pdf > 0.0 {
                 let len = self.len[i] as usize;
-                pdf *= absorption(g, k, len, self.max_bounces)
+                pdf *= g.absorption(k, len, self.max_bounces)
                     * g.light.pdf_area(
                         &scene.mesh,
                         &scene.emitters,

@@ -107,8 +107,9 @@ impl PathGenerator {
         Self { steps, light }
     }
 
-    /// Absorption at the `k`-th non-delta vertex, which is scattering event `bounce`.
-    fn absorption(&self, k: usize, bounce: usize, max_bounces: u32) -> f64 {
+    /// Absorption at the `k`-th non-delta vertex, which is scattering event `bounce`: 1 after
+    /// the last step and at `max_bounces`.
+    pub fn absorption(&self, k: usize, bounce: usize, max_bounces: u32) -> f64 {
         if bounce >= max_bounces as usize || k >= self.steps.len() {
             1.0
         } else {

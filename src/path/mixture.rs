@@ -98,8 +98,8 @@ impl Mixture {
         pdf
     }
 
-    /// Picks a component by its weight.
-    fn choose(&self, u: f64) -> usize {
+    /// Picks a component by its weight, `u` uniform in [0, 1).
+    pub fn choose(&self, u: f64) -> usize {
         let mut acc = 0.0;
         for (i, w) in self.weights.iter().enumerate() {
             acc += w;
