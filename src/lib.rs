@@ -8,5 +8,6 @@ pub mod genetic;
 pub mod image;
 pub mod path;
 pub mod render;
+pub mod report;
 pub mod sampling;
 pub mod scene;

@@ -33,6 +33,9 @@ enum Command {
     /// Render a long path-tracing reference in two independent halves, with its own noise
     /// estimate (relMSE between the halves / 4) in the JSON.
     Reference(ReferenceArgs),
+    /// Error against run time: render methods at increasing budgets, compare each render with
+    /// a reference, write PREFIX.csv and PREFIX.svg (relMSE against seconds, log-log).
+    Sweep(SweepArgs),
 }
 
 #[derive(Args)]
@@ -118,6 +121,39 @@ struct ReferenceArgs {
     /// Path-tracing samples per pixel, split into two independent halves.
     #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(2..=1 << 24))]
     spp: u32,
+}
+
+#[derive(Args)]
+struct SweepArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// The reference (EXR), e.g. from `genpath reference`, of the size rendered.
+    #[arg(long = "ref", value_name = "REF.exr")]
+    reference: PathBuf,
+    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, or
+    /// ga:key=value:… with keys m, pop, gen, s, e, grid, extra, neighbours (e.g. ga:m=10000:grid=32).
+    #[arg(long, value_delimiter = ',', default_value = "pt,srt,ga")]
+    methods: Vec<String>,
+    /// Budgets, comma-separated: samples per pixel, or seconds per image with --time.
+    #[arg(long, value_delimiter = ',', default_value = "4,16,64,256")]
+    budgets: Vec<f64>,
+    /// Budgets are wall-clock seconds per image, every phase included.
+    #[arg(long)]
+    time: bool,
+    /// Repetitions of every render, with seeds seed, seed + 1, …
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    reps: u32,
+    /// Writes PREFIX.csv and PREFIX.svg.
+    #[arg(short, long = "output", value_name = "PREFIX")]
+    output: PathBuf,
+    /// Mixture for the `mixture` method (TOML or JSON).
+    #[arg(long, value_name = "FILE")]
+    generators: Option<PathBuf>,
+    /// Absorption of the `srt` generator at each vertex.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
+    srt_absorption: f64,
+    #[command(flatten)]
+    ga: GaArgs,
 }
 
 /// Settings of `--method ga` (paper §4–5, design §6–7); defaults from `GaConfig::default()`.
@@ -227,6 +263,7 @@ fn main() {
         Command::Render(args) => run_render(args),
         Command::Compare(args) => run_compare(args),
         Command::Reference(args) => run_reference(args),
+        Command::Sweep(args) => run_sweep(args),
     };
     if let Err(error) = result {
         eprintln!("genpath: error: {error:#}");
@@ -516,6 +553,114 @@ fn run_reference(args: ReferenceArgs) -> Result<()> {
             args.output.display()
         );
     }
+    Ok(())
+}
+
+fn run_sweep(args: SweepArgs) -> Result<()> {
+    use genpath::report::{self, Budgets, MethodSpec, Sweep};
+    let with_ext = |ext: &str| {
+        let mut p = args.output.clone().into_os_string();
+        p.push(ext);
+        PathBuf::from(p)
+    };
+    let (csv_path, svg_path) = (with_ext(".csv"), with_ext(".svg"));
+    for p in [&csv_path, &svg_path] {
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if !dir.is_dir() {
+            bail!(
+                "{}: directory {} does not exist",
+                p.display(),
+                dir.display()
+            );
+        }
+    }
+    let budgets = if args.time {
+        if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0)) {
+            bail!("--budgets: {b} is not a positive number of seconds");
+        }
+        Budgets::Seconds(args.budgets.clone())
+    } else {
+        let spp = args
+            .budgets
+            .iter()
+            .map(|&b| {
+                if b.fract() == 0.0 && (1.0..=f64::from(1u32 << 24)).contains(&b) {
+                    Ok(b as u32)
+                } else {
+                    Err(anyhow::anyhow!(
+                        "--budgets: {b} is not a whole number of samples per pixel in [1, 2^24] (use --time for seconds)"
+                    ))
+                }
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Budgets::Spp(spp)
+    };
+    let (ga, plan) = args.ga.configs(args.srt_absorption)?;
+    let reference = genpath::image::read_exr(&args.reference)?;
+    let session = Session::open(&args.scene)?;
+    let settings = session.settings(&args.scene, Method::Pt, 1);
+    let mixture = match &args.generators {
+        Some(file) => Some(mixture_file::load(
+            file,
+            &session.scene,
+            settings.max_bounces,
+            args.srt_absorption,
+        )?),
+        None => None,
+    };
+    let base = MethodConfig {
+        method: Method::Pt,
+        srt_absorption: args.srt_absorption,
+        mixture,
+        ga,
+        plan,
+    };
+    let methods = args
+        .methods
+        .iter()
+        .map(|m| MethodSpec::parse(m.trim(), &base).map_err(|e| anyhow::anyhow!("--methods: {e}")))
+        .collect::<Result<Vec<_>>>()?;
+    if methods.iter().any(|m| m.config.method == Method::Mixture) && base.mixture.is_none() {
+        bail!("--methods mixture needs --generators FILE");
+    }
+    let scene_name = args
+        .scene
+        .scene
+        .parent()
+        .and_then(|d| d.file_name())
+        .map_or_else(|| "scene".to_string(), |n| n.to_string_lossy().into_owned());
+    let sweep = Sweep {
+        scene_name: scene_name.clone(),
+        reference: &reference,
+        methods,
+        budgets,
+        reps: args.reps,
+        settings,
+        progress: !args.scene.quiet,
+    };
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let quiet = args.scene.quiet;
+    let rows = session.pool.install(|| {
+        sweep.run(&view, |r| {
+            if !quiet {
+                eprintln!(
+                    "genpath: {:<24} {:>6} spp {:>8.2} s (GA {:>6.2} s)  relMSE {:.4e}",
+                    r.method, r.spp, r.seconds, r.ga_seconds, r.relmse
+                );
+            }
+        })
+    })?;
+    genpath::image::write_bytes_atomic(&csv_path, report::csv(&rows).as_bytes())?;
+    let title = format!(
+        "{scene_name}: relMSE against time ({}×{}, max bounces {})",
+        session.scene.camera.width, session.scene.camera.height, sweep.settings.max_bounces
+    );
+    let svg = report::plot::svg(&title, &rows).map_err(|e| anyhow::anyhow!(e))?;
+    genpath::image::write_bytes_atomic(&svg_path, svg.as_bytes())?;
+    println!("{}", report::summary(&rows));
     Ok(())
 }
 

@@ -592,3 +592,115 @@ fn reference_has_its_own_noise_estimate() {
     assert!(!output.status.success());
     assert!(String::from_utf8_lossy(&output.stderr).contains("must be an EXR"));
 }
+
+/// `genpath sweep`: a CSV row per method × budget × repetition and an SVG plot; clear errors
+/// for unknown methods and keys, a reference of the wrong size, and impossible budgets.
+#[test]
+fn sweep_writes_csv_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("ref.exr");
+    let size = ["--width", "16", "--height", "12", "--quiet"];
+    let run = |args: &[&str]| genpath(&[args, &size[..]].concat());
+    let out = run(&[
+        "reference",
+        fig5().to_str().unwrap(),
+        "-o",
+        reference.to_str().unwrap(),
+        "--spp",
+        "64",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let prefix = dir.path().join("sweep");
+    let scene = fig5();
+    let sweep = |extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            scene.to_str().unwrap(),
+            "--ref",
+            reference.to_str().unwrap(),
+            "-o",
+            prefix.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let out = sweep(&[
+        "--methods",
+        "pt,srt,ga:m=500:pop=6:gen=3:grid=8",
+        "--budgets",
+        "1,4",
+        "--reps",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency"
+    );
+    assert_eq!(lines.len(), 1 + 3 * 2 * 2, "{csv}");
+    for line in &lines[1..] {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields.len(), 9, "{line}");
+        assert_eq!(fields[0], "fig5");
+        let relmse: f64 = fields[5].parse().unwrap();
+        assert!(relmse.is_finite() && relmse > 0.0, "{line}");
+        let (seconds, ga): (f64, f64) = (fields[3].parse().unwrap(), fields[4].parse().unwrap());
+        assert!(seconds >= ga, "{line}");
+        if fields[1].starts_with("ga") {
+            assert!(ga > 0.0, "GA time left out: {line}");
+        }
+    }
+    let svg = std::fs::read_to_string(dir.path().join("sweep.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("relMSE"),
+        "{svg:.200}"
+    );
+
+    for (extra, needle) in [
+        (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
+        (vec!["--methods", "ga:q=3"], "unknown key `q`"),
+        (vec!["--methods", "pt:m=3"], "only ga takes settings"),
+        (vec!["--methods", "ga:pop=0"], "population"),
+        (vec!["--budgets", "0"], "--budgets"),
+        (vec!["--budgets", "1.5"], "--budgets"),
+        (vec!["--budgets=-1", "--time"], "--budgets"),
+        (vec!["--methods", "mixture"], "--generators"),
+    ] {
+        let out = sweep(&extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(needle),
+            "{extra:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    // A reference of another size.
+    let out = genpath(&[
+        "sweep",
+        fig5().to_str().unwrap(),
+        "--ref",
+        reference.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("16×12"),
+        "{stderr}"
+    );
+}

@@ -1,0 +1,270 @@
+//! Error against run time (design §11): `genpath sweep` renders each method at increasing
+//! budgets, measures relMSE and MSE against a reference, and writes a CSV and an SVG plot.
+//!
+//! The time of a row is everything the method spends on the image: for `ga` the baseline,
+//! test paths and evolution plus the render. Within one repetition the GA runs once and its
+//! time is added to every budget's render (the plan depends on the seed, not on the budget).
+
+pub mod plot;
+
+use crate::genetic::plan::PlanConfig;
+use crate::genetic::GaConfig;
+use crate::image::{metrics, Image};
+use crate::path::{Method, SceneView};
+use crate::render::{progress_bar, render, MethodConfig, PrepareError, Prepared, RenderSettings};
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// A method to sweep, with a label for the CSV and the plot.
+#[derive(Clone, Debug)]
+pub struct MethodSpec {
+    pub label: String,
+    pub config: MethodConfig,
+}
+
+/// Keys of `ga:key=value:…` specs.
+pub const GA_KEYS: &str = "m (test paths), pop (population), gen (generations), s (generators), \
+    grid, extra, e (elitism), neighbours";
+
+impl MethodSpec {
+    /// `pt`, `srt`, `mixture`, `ga`, or `ga:key=value:…` overriding the GA settings of
+    /// `base` (keys in [`GA_KEYS`]); e.g. `ga:m=10000:grid=32`.
+    pub fn parse(text: &str, base: &MethodConfig) -> Result<Self, String> {
+        let mut parts = text.split(':');
+        let name = parts.next().unwrap_or_default();
+        let method = match name {
+            "pt" => Method::Pt,
+            "srt" => Method::Srt,
+            "mixture" => Method::Mixture,
+            "ga" => Method::Ga,
+            _ => return Err(format!("unknown method `{name}` in `{text}`")),
+        };
+        let mut config = MethodConfig {
+            method,
+            ..base.clone()
+        };
+        for part in parts {
+            if method != Method::Ga {
+                return Err(format!("`{text}`: only ga takes settings"));
+            }
+            let Some((key, value)) = part.split_once('=') else {
+                return Err(format!("`{text}`: `{part}` is not key=value"));
+            };
+            let bad = |e: &dyn std::fmt::Display| format!("`{text}`: {key}={value}: {e}");
+            let int = || value.parse::<usize>().map_err(|e| bad(&e));
+            let (ga, plan): (&mut GaConfig, &mut PlanConfig) = (&mut config.ga, &mut config.plan);
+            match key {
+                "m" => ga.test_paths = int()?,
+                "pop" => ga.population = int()?,
+                "gen" => ga.generations = int()?,
+                "s" => ga.generators = int()?,
+                "e" => ga.elitism = int()?,
+                "grid" => plan.grid = u32::try_from(int()?).map_err(|e| bad(&e))?,
+                "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
+                "neighbours" => plan.neighbours = int()?,
+                _ => return Err(format!("`{text}`: unknown key `{key}` (keys: {GA_KEYS})")),
+            }
+        }
+        config.ga.validate().map_err(|e| format!("`{text}`: {e}"))?;
+        config
+            .plan
+            .validate()
+            .map_err(|e| format!("`{text}`: {e}"))?;
+        Ok(Self {
+            label: text.to_string(),
+            config,
+        })
+    }
+}
+
+/// What a budget counts.
+#[derive(Clone, Debug)]
+pub enum Budgets {
+    /// Samples per pixel.
+    Spp(Vec<u32>),
+    /// Wall-clock seconds per image, all phases included.
+    Seconds(Vec<f64>),
+}
+
+impl Budgets {
+    fn len(&self) -> usize {
+        match self {
+            Budgets::Spp(b) => b.len(),
+            Budgets::Seconds(b) => b.len(),
+        }
+    }
+}
+
+/// One render of a sweep.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub method: String,
+    pub spp: u32,
+    /// Everything: GA phases (if any) and the render.
+    pub seconds: f64,
+    pub ga_seconds: f64,
+    pub relmse: f64,
+    pub mse: f64,
+    pub seed: u64,
+}
+
+impl Row {
+    /// `1 / (relMSE × seconds)`: higher is better, independent of the budget for an
+    /// estimator whose error falls as 1/time.
+    pub fn efficiency(&self) -> f64 {
+        1.0 / (self.relmse * self.seconds)
+    }
+}
+
+/// Header of the CSV that [`csv`] writes.
+pub const CSV_HEADER: &str = "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency";
+
+/// The rows as CSV, with [`CSV_HEADER`].
+pub fn csv(rows: &[Row]) -> String {
+    let mut out = String::from(CSV_HEADER);
+    out.push('\n');
+    for r in rows {
+        let _ = writeln!(
+            out,
+            "{},{},{},{:.6},{:.6},{:.6e},{:.6e},{},{:.6e}",
+            r.scene,
+            r.method,
+            r.spp,
+            r.seconds,
+            r.ga_seconds,
+            r.relmse,
+            r.mse,
+            r.seed,
+            r.efficiency()
+        );
+    }
+    out
+}
+
+/// Everything a sweep needs besides the scene.
+pub struct Sweep<'a> {
+    pub scene_name: String,
+    pub reference: &'a Image,
+    pub methods: Vec<MethodSpec>,
+    pub budgets: Budgets,
+    /// Repetitions with seeds `seed, seed + 1, …`.
+    pub reps: u32,
+    /// `spp` and `method` are set per row; `seed` is the first repetition's.
+    pub settings: RenderSettings,
+    pub progress: bool,
+}
+
+/// Why a sweep cannot run.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    Prepare(#[from] PrepareError),
+    #[error("the reference is {}×{} but the renders are {}×{} (use --width/--height)", reference.0, reference.1, image.0, image.1)]
+    Size {
+        reference: (u32, u32),
+        image: (u32, u32),
+    },
+}
+
+/// Samples per pixel when calibrating a time budget.
+const CALIBRATION_SPP: u32 = 2;
+
+impl Sweep<'_> {
+    /// Runs every method × repetition × budget; `on_row` sees each row as it is done.
+    pub fn run(
+        &self,
+        view: &SceneView,
+        mut on_row: impl FnMut(&Row),
+    ) -> Result<Vec<Row>, SweepError> {
+        let camera = &view.scene.camera;
+        if (self.reference.width, self.reference.height) != (camera.width, camera.height) {
+            return Err(SweepError::Size {
+                reference: (self.reference.width, self.reference.height),
+                image: (camera.width, camera.height),
+            });
+        }
+        let total = self.methods.len() * self.reps as usize * self.budgets.len();
+        let bar = progress_bar(total as u64, "sweep", self.progress);
+        let mut rows = Vec::with_capacity(total);
+        for spec in &self.methods {
+            for rep in 0..self.reps {
+                let settings = RenderSettings {
+                    method: spec.config.method,
+                    seed: self.settings.seed.wrapping_add(rep as u64),
+                    progress: false,
+                    ..self.settings.clone()
+                };
+                let t0 = Instant::now();
+                let prepared = Prepared::new(view, &spec.config, &settings)?;
+                let prepare_s = t0.elapsed().as_secs_f64();
+                let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
+                let spp_list: Vec<u32> = match &self.budgets {
+                    Budgets::Spp(b) => b.clone(),
+                    Budgets::Seconds(b) => {
+                        // Seconds per sample per pixel, from a short render of its own.
+                        let calibration = RenderSettings {
+                            spp: CALIBRATION_SPP,
+                            ..settings.clone()
+                        };
+                        let film = render(view, &calibration, prepared.estimator());
+                        let per_spp = film.elapsed.as_secs_f64() / CALIBRATION_SPP as f64;
+                        b.iter()
+                            .map(|&t| ((t - prepare_s) / per_spp.max(1e-9)).floor().max(1.0) as u32)
+                            .collect()
+                    }
+                };
+                for spp in spp_list {
+                    let settings = RenderSettings {
+                        spp,
+                        ..settings.clone()
+                    };
+                    let film = render(view, &settings, prepared.estimator());
+                    let Some(m) = metrics::compare(&film.image, self.reference) else {
+                        unreachable!("sizes checked above");
+                    };
+                    let row = Row {
+                        scene: self.scene_name.clone(),
+                        method: spec.label.clone(),
+                        spp,
+                        seconds: prepare_s + film.elapsed.as_secs_f64(),
+                        ga_seconds,
+                        relmse: m.relmse,
+                        mse: m.mse,
+                        seed: settings.seed,
+                    };
+                    on_row(&row);
+                    rows.push(row);
+                    bar.inc(1);
+                }
+            }
+        }
+        bar.finish_and_clear();
+        Ok(rows)
+    }
+}
+
+/// Per method and budget: the mean seconds, relMSE and efficiency over repetitions, as a
+/// Markdown table.
+pub fn summary(rows: &[Row]) -> String {
+    let mut out = String::from(
+        "| method | budget (spp) | seconds | relMSE | efficiency |\n|---|---|---|---|---|\n",
+    );
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    for m in methods {
+        let of: Vec<&Row> = rows.iter().filter(|r| r.method == m).collect();
+        for (spp, seconds, relmse) in plot::means(&of) {
+            let _ = writeln!(
+                out,
+                "| {m} | {spp} | {seconds:.2} | {relmse:.4e} | {:.4} |",
+                1.0 / (relmse * seconds)
+            );
+        }
+    }
+    out
+}
