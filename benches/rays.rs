@@ -3,18 +3,19 @@
 //!
 //! `cargo bench --features embree,obvhs --bench rays [-- scenes/cbox/scene.toml]`: a scene's
 //! camera gives the coherent rays; without a scene, the generated 106 800-triangle stress mesh
-//! of the cross-check test is seen by a camera placed outside its bounds.
+//! of the cross-check test is seen by a camera placed outside its bounds. `genpath bench`
+//! measures the same on a scene, with fitness evaluations and thread scaling.
 
 #[path = "../tests/stress/mod.rs"]
 mod stress;
 
-use genpath::accel::{self, Accel, AccelError, AccelKind, Hit, Ray, PACKET_SIZE};
+use genpath::accel::{self, AccelError, AccelKind};
+use genpath::report::bench::{bounds, camera_rays, random_rays, ray_rates};
 use genpath::scene::Scene;
 use glam::Vec3;
 use std::error::Error;
-use std::hint::black_box;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Rays per set (a 1024² camera image); every timing covers a whole set.
 const RAYS: u32 = 1024;
@@ -27,27 +28,24 @@ fn main() -> Result<(), Box<dyn Error>> {
     let (mesh, coherent, label) = match &path {
         Some(path) => {
             let scene = Scene::load(Path::new(path))?;
-            let camera = scene.camera.resized(RAYS, RAYS);
-            let rays = stress::tiled_pixels(RAYS, RAYS)
-                .map(|(x, y)| camera.ray(x as f32 + 0.5, y as f32 + 0.5))
-                .collect();
+            let rays = camera_rays(&scene.camera, RAYS, RAYS);
             (scene.mesh, rays, path.clone())
         }
         None => {
             let mesh = stress::stress_mesh(7);
-            let (lo, hi) = stress::bounds(&mesh);
+            let (lo, hi) = bounds(&mesh);
             let center = (lo + hi) / 2.0;
             let eye = center + Vec3::new(0.07, 0.18, 1.0).normalize() * 0.65 * (hi - lo).length();
             let rays = stress::camera_rays(eye, center, 50.0, RAYS, RAYS);
             (mesh, rays, "generated stress mesh".to_string())
         }
     };
-    let (lo, hi) = stress::bounds(&mesh);
+    let (lo, hi) = bounds(&mesh);
     let sets = [
         ("coherent", coherent),
         (
             "incoherent",
-            stress::random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
+            random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
         ),
     ];
 
@@ -72,28 +70,17 @@ fn main() -> Result<(), Box<dyn Error>> {
         };
         let build = start.elapsed();
         for (set, rays) in &sets {
-            let (single, hits) = best(|| intersect_single(&*accel, rays));
-            let (packet, _) = best(|| intersect_packets(&*accel, rays));
-            row(
-                accel.name(),
-                set,
-                "intersect",
-                rays.len(),
-                single,
-                packet,
-                hits,
-            );
-            let (single, blocked) = best(|| occluded_single(&*accel, rays));
-            let (packet, _) = best(|| occluded_packets(&*accel, rays));
-            row(
-                accel.name(),
-                set,
-                "occluded",
-                rays.len(),
-                single,
-                packet,
-                blocked,
-            );
+            let r = ray_rates(&*accel, rays, PASSES);
+            for (query, single, packet) in [
+                ("intersect", r.closest_single, r.closest_packet),
+                ("occluded", r.occluded_single, r.occluded_packet),
+            ] {
+                println!(
+                    "{:<8} {set:<11} {query:<10} {single:>13.2} {packet:>15.2} {:>7.1}",
+                    accel.name(),
+                    100.0 * r.hit_fraction
+                );
+            }
         }
         println!(
             "{:<8} build {:.0} ms",
@@ -102,66 +89,4 @@ fn main() -> Result<(), Box<dyn Error>> {
         );
     }
     Ok(())
-}
-
-fn row(
-    name: &str,
-    set: &str,
-    query: &str,
-    n: usize,
-    single: Duration,
-    packet: Duration,
-    hits: usize,
-) {
-    let mrays = |d: Duration| n as f64 / d.as_secs_f64() / 1e6;
-    let hit_percent = 100.0 * hits as f64 / n as f64;
-    println!(
-        "{name:<8} {set:<11} {query:<10} {:>13.2} {:>15.2} {hit_percent:>7.1}",
-        mrays(single),
-        mrays(packet)
-    );
-}
-
-/// Shortest time of `PASSES` runs of `f`, and what `f` counted.
-fn best(mut f: impl FnMut() -> usize) -> (Duration, usize) {
-    let mut fastest = Duration::MAX;
-    let mut count = 0;
-    for _ in 0..PASSES {
-        let start = Instant::now();
-        count = black_box(f());
-        fastest = fastest.min(start.elapsed());
-    }
-    (fastest, count)
-}
-
-fn intersect_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
-    rays.iter()
-        .filter(|r| accel.intersect(black_box(r)).is_some())
-        .count()
-}
-
-fn intersect_packets(accel: &dyn Accel, rays: &[Ray]) -> usize {
-    let mut hits = [None::<Hit>; PACKET_SIZE];
-    rays.chunks(PACKET_SIZE)
-        .map(|packet| {
-            let hits = &mut hits[..packet.len()];
-            accel.intersect_packet(black_box(packet), hits);
-            hits.iter().filter(|h| h.is_some()).count()
-        })
-        .sum()
-}
-
-fn occluded_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
-    rays.iter().filter(|r| accel.occluded(black_box(r))).count()
-}
-
-fn occluded_packets(accel: &dyn Accel, rays: &[Ray]) -> usize {
-    let mut blocked = [false; PACKET_SIZE];
-    rays.chunks(PACKET_SIZE)
-        .map(|packet| {
-            let blocked = &mut blocked[..packet.len()];
-            accel.occluded_packet(black_box(packet), blocked);
-            blocked.iter().filter(|&&b| b).count()
-        })
-        .sum()
 }

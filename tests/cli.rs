@@ -704,3 +704,51 @@ fn sweep_writes_csv_and_plot() {
         "{stderr}"
     );
 }
+
+/// `genpath bench` prints its tables and writes every figure to JSON.
+#[test]
+fn bench_reports_rates_and_scaling() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let out = genpath(&[
+        "bench",
+        fig5().to_str().unwrap(),
+        "--rays",
+        "32",
+        "--passes",
+        "1",
+        "--threads",
+        "1,2",
+        "--spp",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("individual evaluations/s"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let rays = v["rays"].as_array().unwrap();
+    // Two ray sets per built back-end.
+    assert!(rays.len() == 2 || rays.len() == 4, "{rays:?}");
+    for r in rays {
+        for q in [
+            "closest_single",
+            "closest_packet",
+            "occluded_single",
+            "occluded_packet",
+        ] {
+            assert!(r["mrays_per_s"][q].as_f64().unwrap() > 0.0, "{r}");
+        }
+    }
+    assert!(v["fitness_evaluations_per_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["scaling"]["runs"].as_array().unwrap().len(), 2);
+    let out = genpath(&["bench", "/nonexistent/scene.toml"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
+}

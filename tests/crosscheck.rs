@@ -13,6 +13,7 @@
 mod stress;
 
 use genpath::accel::{Accel, BvhAccel, EmbreeAccel, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use genpath::report::bench;
 use genpath::scene::Scene;
 use glam::Vec3;
 use std::fmt;
@@ -332,8 +333,8 @@ fn stress_scene() -> TriangleMesh {
 #[test]
 fn incoherent_rays_agree() {
     let mesh = stress_scene();
-    let (lo, hi) = stress::bounds(&mesh);
-    let rays = stress::random_rays(lo, hi, 100_000, 11);
+    let (lo, hi) = bench::bounds(&mesh);
+    let rays = bench::random_rays(lo, hi, 100_000, 11);
     let report = crosscheck(&mesh, &rays);
     println!("incoherent: {report}");
     report.assert_clean();
@@ -347,8 +348,8 @@ fn tiny_and_huge_scenes_agree() {
     for scale in [1e-4f32, 1e5] {
         let mut mesh = stress_scene();
         mesh.positions.iter_mut().for_each(|p| *p *= scale);
-        let (lo, hi) = stress::bounds(&mesh);
-        let rays = stress::random_rays(lo, hi, 20_000, 5);
+        let (lo, hi) = bench::bounds(&mesh);
+        let rays = bench::random_rays(lo, hi, 20_000, 5);
         let report = crosscheck(&mesh, &rays);
         println!("scale {scale:e}: {report}");
         report.assert_clean();
@@ -382,8 +383,8 @@ fn shipped_scene_agrees(name: &str) {
     let mut rays: Vec<Ray> = (0..320 * 320)
         .map(|i| camera.ray((i % 320) as f32 + 0.5, (i / 320) as f32 + 0.5))
         .collect();
-    let (lo, hi) = stress::bounds(&scene.mesh);
-    rays.extend(stress::random_rays(lo, hi, 100_000, 13));
+    let (lo, hi) = bench::bounds(&scene.mesh);
+    rays.extend(bench::random_rays(lo, hi, 100_000, 13));
     let report = crosscheck(&scene.mesh, &rays);
     println!("{name}: {report}");
     report.assert_clean();
@@ -530,8 +531,8 @@ impl Accel for Corrupted<'_> {
 #[test]
 fn crosscheck_catches_a_corrupted_back_end() {
     let mesh = stress_scene();
-    let (lo, hi) = stress::bounds(&mesh);
-    let rays = stress::random_rays(lo, hi, 5_000, 3);
+    let (lo, hi) = bench::bounds(&mesh);
+    let rays = bench::random_rays(lo, hi, 5_000, 3);
     let embree = EmbreeAccel::new(&mesh).expect("Embree builds the scene");
     let bvh = BvhAccel::new(&mesh);
     let clean = crosscheck_accels(&mesh, &embree, &bvh, &rays);

@@ -5,6 +5,7 @@
 //! test paths and evolution plus the render. Within one repetition the GA runs once and its
 //! time is added to every budget's render (the plan depends on the seed, not on the budget).
 
+pub mod bench;
 pub mod plot;
 
 use crate::genetic::plan::PlanConfig;

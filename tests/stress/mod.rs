@@ -1,7 +1,7 @@
 //! Generated geometry and rays shared by the cross-check test and the ray benchmark
 //! (`benches/rays.rs` includes this file by path).
 
-use genpath::accel::{Ray, TriangleMesh, PACKET_SIZE};
+use genpath::accel::{Ray, TriangleMesh};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -88,47 +88,7 @@ fn triangle_soup(
     }
 }
 
-/// Axis-aligned bounds of the mesh's vertices.
-pub fn bounds(mesh: &TriangleMesh) -> (Vec3, Vec3) {
-    mesh.positions
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        })
-}
-
-/// Incoherent rays: origins uniform in `(lo, hi)`, unit directions uniform on the sphere.
-pub fn random_rays(lo: Vec3, hi: Vec3, count: usize, seed: u64) -> Vec<Ray> {
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    (0..count)
-        .map(|_| {
-            let origin = lo + (hi - lo) * Vec3::from_array(std::array::from_fn(|_| rng.random()));
-            // Uniform on the sphere: z uniform in [-1, 1], azimuth uniform.
-            let z: f32 = rng.random_range(-1.0..1.0);
-            let phi: f32 = rng.random_range(0.0..std::f32::consts::TAU);
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Ray::new(
-                origin,
-                Vec3::new(r * phi.cos(), r * phi.sin(), z),
-                0.0,
-                f32::INFINITY,
-            )
-        })
-        .collect()
-}
-
-/// Pixel coordinates of a `width × height` image in 4×4 tiles, so that each packet of
-/// [`PACKET_SIZE`] consecutive pixels covers one tile.
-pub fn tiled_pixels(width: u32, height: u32) -> impl Iterator<Item = (u32, u32)> {
-    const TILE: u32 = 4;
-    const _: () = assert!((TILE * TILE) as usize == PACKET_SIZE);
-    (0..height).step_by(TILE as usize).flat_map(move |ty| {
-        (0..width).step_by(TILE as usize).flat_map(move |tx| {
-            (ty..(ty + TILE).min(height))
-                .flat_map(move |y| (tx..(tx + TILE).min(width)).map(move |x| (x, y)))
-        })
-    })
-}
+use genpath::report::bench::tiled_pixels;
 
 /// Coherent rays: a pinhole camera's `width × height` pixel centres in [`tiled_pixels`] order.
 pub fn camera_rays(eye: Vec3, target: Vec3, fov_x_deg: f32, width: u32, height: u32) -> Vec<Ray> {
