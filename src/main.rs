@@ -431,8 +431,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         check_output(output)?;
     }
     if let Some(explain) = &args.explain {
-        if args.method.method != Method::Ga {
-            bail!("--explain is only used with --method ga");
+        if !matches!(args.method.method, Method::Ga | Method::GaPt) {
+            bail!("--explain is only used with --method ga or ga-pt");
         }
         check_output(explain)?;
     }

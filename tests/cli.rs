@@ -441,7 +441,7 @@ fn impossible_ga_flags() {
         &scene,
         &["--explain", explain],
         &out,
-        &["--explain is only used with --method ga"],
+        &["--explain is only used with --method ga or ga-pt"],
     );
     assert!(!Path::new(explain).exists());
     assert_fails(
@@ -669,7 +669,10 @@ fn sweep_writes_csv_and_plot() {
     for (extra, needle) in [
         (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
         (vec!["--methods", "ga:q=3"], "unknown key `q`"),
-        (vec!["--methods", "pt:m=3"], "only ga takes settings"),
+        (
+            vec!["--methods", "pt:m=3"],
+            "only ga and ga-pt take settings",
+        ),
         (vec!["--methods", "ga:pop=0"], "population"),
         (vec!["--budgets", "0"], "--budgets"),
         (vec!["--budgets", "1.5"], "--budgets"),

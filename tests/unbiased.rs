@@ -1,4 +1,5 @@
-//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga` and `pt` estimate the same image. Per
+//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga`, `ga-pt` and `pt` estimate the same
+//! image. Per
 //! block of pixels, the difference of two methods' means must lie inside a 99.9 % interval
 //! (Šidák-corrected over all blocks and channels) computed from their sample variances; and
 //! the same comparison must reject a mixture whose one component's density is off by 10 %,
@@ -37,6 +38,8 @@ enum Which {
     Ga {
         unnormalised: bool,
     },
+    /// Path tracing guided by the same small GA's mixtures (`ga-pt`).
+    GaPt,
 }
 
 fn small_ga() -> (GaConfig, PlanConfig) {
@@ -60,8 +63,15 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
     let mut plan = None;
+    let mut guided = false;
     let mixture = match which {
         Which::Pt => None,
+        Which::GaPt => {
+            let (ga, config) = small_ga();
+            plan = Some(Plan::build(&view, &ga, &config, max_bounces, seed, false).unwrap());
+            guided = true;
+            None
+        }
         Which::Ga { unnormalised } => {
             let (ga, config) = small_ga();
             let p = Plan::build(&view, &ga, &config, max_bounces, seed, false).unwrap();
@@ -106,6 +116,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         progress: false,
     };
     let estimator = match (&plan, &mixture) {
+        (Some(plan), _) if guided => Estimator::GaPt(plan),
         (Some(plan), _) => Estimator::Ga(plan),
         (None, Some(mixture)) => Estimator::Mixture(mixture),
         (None, None) => Estimator::Pt,
@@ -171,6 +182,7 @@ fn check_agree(name: &str, max_bounces: u32) {
             },
             SPP,
         ),
+        ("ga-pt", Which::GaPt, SPP / 2),
     ] {
         let film = render_with(name, which, max_bounces, spp, 23);
         let (z, rel, n) = compare(&film, &pt);

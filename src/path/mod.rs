@@ -1,6 +1,7 @@
 //! Light transport: the scene as the estimators see it, and the rendering methods.
 
 pub mod generator;
+pub mod guide;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
@@ -24,6 +25,9 @@ pub enum Method {
     /// Genetic path generation: per GA pixel, a mixture evolved to minimise the variance
     /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
     Ga,
+    /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
+    /// evolved anchor samplers, with next-event estimation at every vertex.
+    GaPt,
 }
 
 /// A surface point reached by a ray.

@@ -1,7 +1,12 @@
 //! `pt`: unidirectional path tracing with next-event estimation at every vertex and BSDF
 //! sampling, combined by the power heuristic (Veach & Guibas 1995), Russian roulette from
 //! depth 5. The baseline users compare genpath against.
+//!
+//! With a [`Guide`] (`--method ga-pt`), directions out of non-delta vertices come from the
+//! guide's per-vertex mixture of BRDF and anchor samplers instead of the BSDF alone, and the
+//! power heuristic weighs light sampling against that mixture's density.
 
+use super::guide::Guide;
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::{brdf, uniform, Rng};
@@ -34,6 +39,19 @@ pub fn radiance(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
+    radiance_guided(view, ray, max_bounces, rng, counts, None)
+}
+
+/// [`radiance`], with directions drawn from `guide` where it has samplers (see the module
+/// documentation); `None` is plain path tracing, with the same random numbers.
+pub fn radiance_guided(
+    view: &SceneView,
+    ray: &Ray,
+    max_bounces: u32,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+    guide: Option<&Guide>,
+) -> Vec3 {
     let scene = view.scene;
     let Some(mut x) = view.trace(ray, counts) else {
         return Vec3::ZERO;
@@ -41,12 +59,15 @@ pub fn radiance(
     let mut wo = -ray.dir;
     let mut radiance = emitted(view.material(x.prim), &x, wo);
     let mut beta = Vec3::ONE;
+    // Non-delta vertices so far: the guide's level.
+    let mut k = 0;
     for bounce in 1..=max_bounces {
         let material = view.material(x.prim);
         if !material.scatters() {
             break;
         }
         let n = brdf::facing_normal(x.ng, wo);
+        let guide = guide.filter(|g| !material.mirror && g.guides(k));
 
         // Next-event estimation (impossible through a mirror's delta).
         if !material.mirror {
@@ -69,22 +90,43 @@ pub fn radiance(
                     && view.unoccluded(&x, &y, counts)
                 {
                     let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
-                    let pdf_brdf = brdf::pdf(material, n, wo, wi) as f32;
+                    let pdf_brdf = match guide {
+                        Some(g) => g.pdf(k, material, x.p, n, wo, wi),
+                        None => brdf::pdf(material, n, wo, wi),
+                    } as f32;
                     let weight = power_heuristic(pdf_light, pdf_brdf);
                     radiance += beta * f * le * (cos_x * weight / pdf_light);
                 }
             }
         }
 
-        // BRDF sampling.
-        let u = [
-            uniform(rng) as f64,
-            uniform(rng) as f64,
-            uniform(rng) as f64,
-        ];
-        let Some(bs) = brdf::sample(material, n, wo, u) else {
+        // BRDF (or guide) sampling.
+        let bs = match guide {
+            Some(g) => {
+                let u = std::array::from_fn(|_| uniform(rng) as f64);
+                g.sample(k, material, x.p, n, wo, u)
+                    .map(|s| brdf::BrdfSample {
+                        wi: s.wi,
+                        pdf: s.pdf,
+                        weight: s.weight,
+                        delta: false,
+                    })
+            }
+            None => {
+                let u = [
+                    uniform(rng) as f64,
+                    uniform(rng) as f64,
+                    uniform(rng) as f64,
+                ];
+                brdf::sample(material, n, wo, u)
+            }
+        };
+        let Some(bs) = bs else {
             break;
         };
+        if !material.mirror {
+            k += 1;
+        }
         beta *= bs.weight;
         let wi = bs.wi;
         let next_ray = view.spawn(&x, wi);

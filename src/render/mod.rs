@@ -5,6 +5,7 @@ use crate::genetic::plan::{Plan, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::image::Image;
 use crate::path::generator::PathGenerator;
+use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
@@ -38,6 +39,8 @@ pub enum Estimator<'a> {
     Mixture(&'a Mixture),
     /// Per pixel, the mixture the GA plan gives it (`ga`): eq. 8.
     Ga(&'a Plan),
+    /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt`).
+    GaPt(&'a Plan),
 }
 
 /// Everything a method needs besides the render settings.
@@ -66,6 +69,7 @@ pub enum Prepared {
     Pt,
     Mixture(Mixture),
     Ga(Plan),
+    GaPt(Plan),
 }
 
 impl Prepared {
@@ -90,19 +94,24 @@ impl Prepared {
                 Some(m) => Prepared::Mixture(m.clone()),
                 None => return Err(PrepareError::NoMixture),
             },
-            Method::Ga => {
+            Method::Ga | Method::GaPt => {
                 let ga = GaConfig {
                     srt_absorption: config.srt_absorption,
                     ..config.ga.clone()
                 };
-                Prepared::Ga(Plan::build(
+                let plan = Plan::build(
                     view,
                     &ga,
                     &config.plan,
                     settings.max_bounces,
                     settings.seed,
                     settings.progress,
-                )?)
+                )?;
+                if config.method == Method::Ga {
+                    Prepared::Ga(plan)
+                } else {
+                    Prepared::GaPt(plan)
+                }
             }
         })
     }
@@ -112,12 +121,13 @@ impl Prepared {
             Prepared::Pt => Estimator::Pt,
             Prepared::Mixture(m) => Estimator::Mixture(m),
             Prepared::Ga(plan) => Estimator::Ga(plan),
+            Prepared::GaPt(plan) => Estimator::GaPt(plan),
         }
     }
 
     pub fn plan(&self) -> Option<&Plan> {
         match self {
-            Prepared::Ga(plan) => Some(plan),
+            Prepared::Ga(plan) | Prepared::GaPt(plan) => Some(plan),
             _ => None,
         }
     }
@@ -240,11 +250,15 @@ fn render_tile(
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
             let local = match estimator {
-                Estimator::Ga(plan) => Some(plan.mixture_at(x, y)),
+                Estimator::Ga(plan) | Estimator::GaPt(plan) => Some(plan.mixture_at(x, y)),
+                _ => None,
+            };
+            let guide = match estimator {
+                Estimator::GaPt(_) => local.as_ref().map(Guide::new),
                 _ => None,
             };
             let mixture = match estimator {
-                Estimator::Pt => None,
+                Estimator::Pt | Estimator::GaPt(_) => None,
                 Estimator::Mixture(m) => Some(m),
                 Estimator::Ga(_) => local.as_ref(),
             };
@@ -254,8 +268,15 @@ fn render_tile(
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
                 let value = match mixture {
-                    None => pt::radiance(view, &ray, settings.max_bounces, &mut rng, &mut rays)
-                        .as_dvec3(),
+                    None => pt::radiance_guided(
+                        view,
+                        &ray,
+                        settings.max_bounces,
+                        &mut rng,
+                        &mut rays,
+                        guide.as_ref(),
+                    )
+                    .as_dvec3(),
                     Some(mixture) => match view.trace(&ray, &mut rays) {
                         None => DVec3::ZERO,
                         Some(x1) => {

@@ -28,7 +28,8 @@ pub const GA_KEYS: &str = "m (test paths), pop (population), gen (generations), 
     grid, extra, e (elitism), neighbours";
 
 impl MethodSpec {
-    /// `pt`, `srt`, `mixture`, `ga`, or `ga:key=value:…` overriding the GA settings of
+    /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
+    /// GA settings of
     /// `base` (keys in [`GA_KEYS`]); e.g. `ga:m=10000:grid=32`.
     pub fn parse(text: &str, base: &MethodConfig) -> Result<Self, String> {
         let mut parts = text.split(':');
@@ -38,6 +39,7 @@ impl MethodSpec {
             "srt" => Method::Srt,
             "mixture" => Method::Mixture,
             "ga" => Method::Ga,
+            "ga-pt" => Method::GaPt,
             _ => return Err(format!("unknown method `{name}` in `{text}`")),
         };
         let mut config = MethodConfig {
@@ -45,8 +47,8 @@ impl MethodSpec {
             ..base.clone()
         };
         for part in parts {
-            if method != Method::Ga {
-                return Err(format!("`{text}`: only ga takes settings"));
+            if !matches!(method, Method::Ga | Method::GaPt) {
+                return Err(format!("`{text}`: only ga and ga-pt take settings"));
             }
             let Some((key, value)) = part.split_once('=') else {
                 return Err(format!("`{text}`: `{part}` is not key=value"));

@@ -1,0 +1,250 @@
+//! The directional part of an evolved mixture as a guide for path tracing (`--method ga-pt`,
+//! beyond the paper).
+//!
+//! The paper's estimator (eq. 8) samples whole paths and connects to a light only at the
+//! path's end. Path tracing connects at every vertex and weights light sampling against
+//! direction sampling by multiple importance sampling; what the genetic algorithm learned —
+//! where light arrives from, as anchor cones per vertex — can replace its BSDF sampling.
+//! At the `k`-th non-delta vertex the guide samples a direction from
+//!
+//! ```text
+//! p_k(ω) = w_brdf,k · p_brdf(ω) + Σ_j w_j,k · p_anchor_j(ω)
+//! ```
+//!
+//! the `k`-th directional samplers of the mixture's generators, each with its generator's
+//! weight (a generator without a `k`-th step, and the defensive `srt` one, count as BRDF
+//! sampling). The weights sum to 1 and every anchor cone covers the whole sphere, so `p_k`
+//! is a density wherever the BSDF is non-zero: the estimator stays unbiased. Absorptions and
+//! light samplers of the generators are not used: path length is path tracing's (Russian
+//! roulette), light points are sampled by area.
+
+use super::generator::DirectionSampler;
+use super::mixture::Mixture;
+use crate::sampling::anchor::AnchorSampler;
+use crate::sampling::brdf;
+use crate::scene::Material;
+use glam::{DVec3, Vec3};
+
+/// The samplers of one vertex index.
+#[derive(Clone, Debug, Default)]
+struct Level {
+    /// Summed weight of BRDF sampling.
+    brdf: f64,
+    /// Anchor cones and their weights.
+    anchors: Vec<(f64, AnchorSampler)>,
+}
+
+/// Per vertex index, the weighted directional samplers of a mixture.
+#[derive(Clone, Debug, Default)]
+pub struct Guide {
+    levels: Vec<Level>,
+    /// Fault injection for statistical tests: scales the anchors' densities when evaluated.
+    pdf_error: Option<f64>,
+}
+
+/// A direction drawn from a guide.
+pub struct GuideSample {
+    pub wi: Vec3,
+    /// `p_k(wi)`, solid angle.
+    pub pdf: f64,
+    /// BRDF × cos / pdf.
+    pub weight: Vec3,
+}
+
+impl Guide {
+    /// The guide of `mixture`, whose weights are taken as they are.
+    pub fn new(mixture: &Mixture) -> Self {
+        let depth = mixture
+            .generators
+            .iter()
+            .map(|g| g.steps.len())
+            .max()
+            .unwrap_or(0);
+        let mut levels = vec![Level::default(); depth];
+        for (k, level) in levels.iter_mut().enumerate() {
+            for (g, &w) in mixture.generators.iter().zip(&mixture.weights) {
+                match g.steps.get(k).map(|s| &s.sampler) {
+                    Some(DirectionSampler::Anchor(a)) => level.anchors.push((w, *a)),
+                    _ => level.brdf += w,
+                }
+            }
+        }
+        // Levels where everything samples the BRDF are left out: beyond them, `level` is
+        // `None` and the guide is BRDF sampling.
+        while levels.last().is_some_and(|l| l.anchors.is_empty()) {
+            levels.pop();
+        }
+        Self {
+            levels,
+            pdf_error: None,
+        }
+    }
+
+    /// This guide with every anchor density scaled by `factor` when evaluated (not when
+    /// sampled): a wrong input that unbiasedness tests must reject.
+    pub fn with_pdf_error(mut self, factor: f64) -> Self {
+        self.pdf_error = Some(factor);
+        self
+    }
+
+    /// Whether vertex `k` samples anything but the BRDF.
+    pub fn guides(&self, k: usize) -> bool {
+        k < self.levels.len()
+    }
+
+    /// `p_k(wi)` at `x` for the material's BRDF pdf `brdf_pdf` there.
+    fn pdf_with(&self, k: usize, x: DVec3, wi: DVec3, brdf_pdf: f64) -> f64 {
+        let Some(level) = self.levels.get(k) else {
+            return brdf_pdf;
+        };
+        let scale = self.pdf_error.unwrap_or(1.0);
+        let anchors: f64 = level.anchors.iter().map(|(w, a)| w * a.pdf(x, wi)).sum();
+        level.brdf * brdf_pdf + scale * anchors
+    }
+
+    /// `p_k(wi)` at the surface point `x` of `material` (normal `n` facing `wo`).
+    pub fn pdf(&self, k: usize, material: &Material, x: Vec3, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
+        let brdf_pdf = brdf::pdf(material, n, wo, wi);
+        self.pdf_with(k, x.as_dvec3(), wi.as_dvec3(), brdf_pdf)
+    }
+
+    /// A direction out of the `k`-th non-delta vertex `x`, from four uniform numbers: `u[0]`
+    /// picks the sampler, the rest drive it. `None` where the direction carries nothing.
+    pub fn sample(
+        &self,
+        k: usize,
+        material: &Material,
+        x: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        u: [f64; 4],
+    ) -> Option<GuideSample> {
+        let rest = [u[1], u[2], u[3]];
+        let Some(level) = self.levels.get(k) else {
+            let s = brdf::sample(material, n, wo, rest)?;
+            return Some(GuideSample {
+                wi: s.wi,
+                pdf: s.pdf,
+                weight: s.weight,
+            });
+        };
+        let xd = x.as_dvec3();
+        let mut target = u[0] - level.brdf;
+        let wi = if target < 0.0 {
+            brdf::sample(material, n, wo, rest)?.wi
+        } else {
+            let mut chosen = &level.anchors[level.anchors.len() - 1].1;
+            for (w, a) in &level.anchors {
+                if target < *w {
+                    chosen = a;
+                    break;
+                }
+                target -= w;
+            }
+            chosen.sample(xd, rest).as_vec3().normalize()
+        };
+        let cos = n.dot(wi);
+        let f = brdf::eval(material, n, wo, wi);
+        if cos <= 0.0 || f.max_element() <= 0.0 {
+            return None;
+        }
+        let pdf = self.pdf_with(k, xd, wi.as_dvec3(), brdf::pdf(material, n, wo, wi));
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(GuideSample {
+            wi,
+            pdf,
+            weight: f * (cos as f64 / pdf) as f32,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::path::generator::{PathGenerator, Step};
+    use crate::sampling::light_point::{LightPointSampler, LightRegion};
+    use crate::sampling::{sample_rng, uniform};
+
+    fn mixture() -> Mixture {
+        let light = LightPointSampler {
+            region: LightRegion {
+                prim: 0,
+                level: 0,
+                cell: 0,
+            },
+            beta: 0.0,
+        };
+        let anchor = |p: DVec3, theta_c| Step {
+            sampler: DirectionSampler::Anchor(AnchorSampler::new(p, theta_c, 0.8).unwrap()),
+            absorption: 0.5,
+        };
+        let guided = PathGenerator {
+            steps: vec![
+                anchor(DVec3::new(1.0, 2.0, 0.0), 0.2),
+                anchor(DVec3::Y, 0.5),
+            ],
+            light,
+        };
+        Mixture::new(
+            vec![PathGenerator::srt(3, 0.5, light), guided],
+            vec![0.3, 0.7],
+        )
+    }
+
+    /// Monte Carlo ∫ p_0(ω) dω over the sphere, uniform directions: 1 for a density.
+    fn integral(guide: &Guide, material: &Material) -> f64 {
+        let n = Vec3::Y;
+        let wo = Vec3::new(0.3, 1.0, 0.1).normalize();
+        let mut rng = sample_rng(5, 0, 0);
+        let count = 400_000;
+        let mut sum = 0.0;
+        for _ in 0..count {
+            let z = 1.0 - 2.0 * uniform(&mut rng);
+            let phi = std::f32::consts::TAU * uniform(&mut rng);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let wi = Vec3::new(r * phi.cos(), z, r * phi.sin());
+            sum += guide.pdf(0, material, Vec3::ZERO, n, wo, wi);
+        }
+        sum / count as f64 * 4.0 * std::f64::consts::PI
+    }
+
+    #[test]
+    fn guide_is_a_density_and_sampling_agrees_with_pdf() {
+        let material = Material {
+            name: "white".into(),
+            kd: Vec3::splat(0.5),
+            ks: Vec3::ZERO,
+            ns: 0.0,
+            mirror: false,
+            ke: Vec3::ZERO,
+        };
+        let guide = Guide::new(&mixture());
+        assert!(guide.guides(0) && guide.guides(1) && !guide.guides(2));
+        let total = integral(&guide, &material);
+        assert!((total - 1.0).abs() < 0.01, "∫ p = {total}");
+        // The same check rejects anchor densities off by 10 % (weight 0.7: ∫ p ≈ 1.07).
+        let wrong = integral(&guide.clone().with_pdf_error(1.1), &material);
+        assert!(
+            (wrong - 1.0).abs() > 0.03,
+            "∫ p = {wrong} with a wrong density"
+        );
+        // Every sample carries the density `pdf` reports for its direction.
+        let (n, wo) = (Vec3::Y, Vec3::new(0.3, 1.0, 0.1).normalize());
+        let mut rng = sample_rng(6, 0, 0);
+        let mut anchored = 0;
+        for _ in 0..10_000 {
+            let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
+            if let Some(s) = guide.sample(0, &material, Vec3::ZERO, n, wo, u) {
+                let p = guide.pdf(0, &material, Vec3::ZERO, n, wo, s.wi);
+                assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
+                let expected = brdf::eval(&material, n, wo, s.wi) * (n.dot(s.wi) / p as f32);
+                assert!((s.weight - expected).length() <= 1e-5 * expected.length());
+                anchored += usize::from(s.wi.dot(Vec3::new(1.0, 2.0, 0.0).normalize()) > 0.98);
+            }
+        }
+        // About 0.7 · 0.8 of the samples go into the 0.2-rad cone.
+        assert!(anchored > 4_500, "{anchored} samples in the anchor cone");
+    }
+}
