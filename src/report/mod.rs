@@ -103,6 +103,8 @@ impl Budgets {
 pub struct Row {
     pub scene: String,
     pub method: String,
+    /// The budget asked for: samples per pixel, or seconds with time budgets.
+    pub budget: f64,
     pub spp: u32,
     /// Everything: GA phases (if any) and the render.
     pub seconds: f64,
@@ -121,7 +123,8 @@ impl Row {
 }
 
 /// Header of the CSV that [`csv`] writes.
-pub const CSV_HEADER: &str = "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency";
+pub const CSV_HEADER: &str =
+    "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget";
 
 /// The rows as CSV, with [`CSV_HEADER`].
 pub fn csv(rows: &[Row]) -> String {
@@ -130,7 +133,7 @@ pub fn csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{:.6},{:.6},{:.6e},{:.6e},{},{:.6e}",
+            "{},{},{},{:.6},{:.6},{:.6e},{:.6e},{},{:.6e},{}",
             r.scene,
             r.method,
             r.spp,
@@ -139,7 +142,8 @@ pub fn csv(rows: &[Row]) -> String {
             r.relmse,
             r.mse,
             r.seed,
-            r.efficiency()
+            r.efficiency(),
+            r.budget
         );
     }
     out
@@ -170,8 +174,8 @@ pub enum SweepError {
     },
 }
 
-/// Samples per pixel when calibrating a time budget.
-const CALIBRATION_SPP: u32 = 2;
+/// Samples per pixel of the two renders that calibrate a time budget.
+const CALIBRATION_SPP: [u32; 2] = [1, 4];
 
 impl Sweep<'_> {
     /// Runs every method × repetition × budget; `on_row` sees each row as it is done.
@@ -202,22 +206,35 @@ impl Sweep<'_> {
                 let prepared = Prepared::new(view, &spec.config, &settings)?;
                 let prepare_s = t0.elapsed().as_secs_f64();
                 let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
-                let spp_list: Vec<u32> = match &self.budgets {
-                    Budgets::Spp(b) => b.clone(),
+                let spp_list: Vec<(f64, u32)> = match &self.budgets {
+                    Budgets::Spp(b) => b.iter().map(|&spp| (f64::from(spp), spp)).collect(),
                     Budgets::Seconds(b) => {
-                        // Seconds per sample per pixel, from a short render of its own.
-                        let calibration = RenderSettings {
-                            spp: CALIBRATION_SPP,
-                            ..settings.clone()
+                        // Render time = fixed + per-spp cost (per-pixel mixtures are built
+                        // once per pixel whatever the spp), from two short renders.
+                        let time = |spp: u32| {
+                            let calibration = RenderSettings {
+                                spp,
+                                ..settings.clone()
+                            };
+                            render(view, &calibration, prepared.estimator())
+                                .elapsed
+                                .as_secs_f64()
                         };
-                        let film = render(view, &calibration, prepared.estimator());
-                        let per_spp = film.elapsed.as_secs_f64() / CALIBRATION_SPP as f64;
+                        let (t1, t2) = (time(CALIBRATION_SPP[0]), time(CALIBRATION_SPP[1]));
+                        let per_spp = ((t2 - t1)
+                            / f64::from(CALIBRATION_SPP[1] - CALIBRATION_SPP[0]))
+                        .max(t2 / f64::from(CALIBRATION_SPP[1]) * 0.1)
+                        .max(1e-9);
+                        let fixed = (t1 - per_spp * f64::from(CALIBRATION_SPP[0])).max(0.0);
                         b.iter()
-                            .map(|&t| ((t - prepare_s) / per_spp.max(1e-9)).floor().max(1.0) as u32)
+                            .map(|&t| {
+                                let spp = ((t - prepare_s - fixed) / per_spp).floor();
+                                (t, spp.clamp(1.0, f64::from(1u32 << 24)) as u32)
+                            })
                             .collect()
                     }
                 };
-                for spp in spp_list {
+                for (budget, spp) in spp_list {
                     let settings = RenderSettings {
                         spp,
                         ..settings.clone()
@@ -229,6 +246,7 @@ impl Sweep<'_> {
                     let row = Row {
                         scene: self.scene_name.clone(),
                         method: spec.label.clone(),
+                        budget,
                         spp,
                         seconds: prepare_s + film.elapsed.as_secs_f64(),
                         ga_seconds,
@@ -247,11 +265,12 @@ impl Sweep<'_> {
     }
 }
 
-/// Per method and budget: the mean seconds, relMSE and efficiency over repetitions, as a
-/// Markdown table.
+/// Per method and budget: the mean samples per pixel, seconds, relMSE and efficiency over
+/// repetitions, and the relMSE relative to `pt`'s at the same budget (at equal time when the
+/// budgets are seconds), as a Markdown table.
 pub fn summary(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| method | budget (spp) | seconds | relMSE | efficiency |\n|---|---|---|---|---|\n",
+        "| method | budget | spp | seconds | relMSE | efficiency | relMSE / pt |\n|---|---|---|---|---|---|---|\n",
     );
     let mut methods: Vec<&str> = Vec::new();
     for r in rows {
@@ -259,13 +278,25 @@ pub fn summary(rows: &[Row]) -> String {
             methods.push(&r.method);
         }
     }
+    let pt: Vec<&Row> = rows.iter().filter(|r| r.method == "pt").collect();
+    let pt = plot::means(&pt);
     for m in methods {
         let of: Vec<&Row> = rows.iter().filter(|r| r.method == m).collect();
-        for (spp, seconds, relmse) in plot::means(&of) {
+        for mean in plot::means(&of) {
+            let ratio = pt
+                .iter()
+                .find(|p| p.budget == mean.budget)
+                .map_or("–".to_string(), |p| {
+                    format!("{:.3}", mean.relmse / p.relmse)
+                });
             let _ = writeln!(
                 out,
-                "| {m} | {spp} | {seconds:.2} | {relmse:.4e} | {:.4} |",
-                1.0 / (relmse * seconds)
+                "| {m} | {} | {:.0} | {:.2} | {:.4e} | {:.4} | {ratio} |",
+                mean.budget,
+                mean.spp,
+                mean.seconds,
+                mean.relmse,
+                1.0 / (mean.relmse * mean.seconds)
             );
         }
     }

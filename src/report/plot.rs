@@ -32,20 +32,32 @@ pub fn median(values: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-/// Per method: (spp, mean seconds, mean relMSE) over repetitions, by increasing spp.
-pub fn means(rows: &[&Row]) -> Vec<(u32, f64, f64)> {
-    let mut spps: Vec<u32> = rows.iter().map(|r| r.spp).collect();
-    spps.sort_unstable();
-    spps.dedup();
-    spps.iter()
-        .map(|&spp| {
-            let at: Vec<_> = rows.iter().filter(|r| r.spp == spp).collect();
+/// Means over the repetitions at one budget.
+#[derive(Clone, Copy, Debug)]
+pub struct Mean {
+    pub budget: f64,
+    pub spp: f64,
+    pub seconds: f64,
+    pub relmse: f64,
+}
+
+/// Per budget, by increasing budget: the means of `rows` (one method's).
+pub fn means(rows: &[&Row]) -> Vec<Mean> {
+    let mut budgets: Vec<f64> = rows.iter().map(|r| r.budget).collect();
+    budgets.sort_by(f64::total_cmp);
+    budgets.dedup();
+    budgets
+        .iter()
+        .map(|&budget| {
+            let at: Vec<_> = rows.iter().filter(|r| r.budget == budget).collect();
             let n = at.len() as f64;
-            (
-                spp,
-                at.iter().map(|r| r.seconds).sum::<f64>() / n,
-                at.iter().map(|r| r.relmse).sum::<f64>() / n,
-            )
+            let mean = |f: fn(&Row) -> f64| at.iter().map(|r| f(r)).sum::<f64>() / n;
+            Mean {
+                budget,
+                spp: mean(|r| f64::from(r.spp)),
+                seconds: mean(|r| r.seconds),
+                relmse: mean(|r| r.relmse),
+            }
         })
         .collect()
 }
@@ -103,8 +115,8 @@ fn draw<DB: DrawingBackend>(
         let efficiency = median(rows.iter().map(|r| r.efficiency()));
         let line: Vec<(f64, f64)> = means(&rows)
             .into_iter()
-            .filter(|(_, s, e)| *s > 0.0 && *e > 0.0 && e.is_finite())
-            .map(|(_, s, e)| (s, e))
+            .filter(|m| m.seconds > 0.0 && m.relmse > 0.0 && m.relmse.is_finite())
+            .map(|m| (m.seconds, m.relmse))
             .collect();
         chart
             .draw_series(LineSeries::new(line, colour.stroke_width(2)))?
