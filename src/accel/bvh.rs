@@ -66,6 +66,9 @@ fn obvhs_ray(ray: &Ray) -> obvhs::ray::Ray {
 
 impl Accel for BvhAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
         let bvh = self.bvh.as_ref()?;
         let ray = obvhs_ray(ray);
         let mut hit = RayHit::none();
@@ -87,6 +90,9 @@ impl Accel for BvhAccel {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
+        if !ray.is_valid() {
+            return true;
+        }
         self.bvh.as_ref().is_some_and(|bvh| {
             !bvh.ray_traverse_miss(obvhs_ray(ray), |r, i| self.tris[i].intersect(r))
         })

@@ -191,11 +191,21 @@ fn rtc_ray16(rays: &[Ray]) -> (sys::RTCValid16, sys::RTCRay16) {
         packet.tfar[i] = ray.tmax;
         packet.mask[i] = u32::MAX;
     }
-    (sys::RTCValid16::first(rays.len()), packet)
+    // Invalid rays are masked off too (Embree asserts on them): they miss and are blocked.
+    let mut valid = sys::RTCValid16::first(rays.len());
+    for (lane, ray) in valid.0.iter_mut().zip(rays) {
+        if !ray.is_valid() {
+            *lane = 0;
+        }
+    }
+    (valid, packet)
 }
 
 impl Accel for EmbreeAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
         let mut rayhit = sys::RTCRayHit {
             ray: rtc_ray(ray),
             hit: sys::RTCHit::default(),
@@ -210,6 +220,9 @@ impl Accel for EmbreeAccel {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
+        if !ray.is_valid() {
+            return true;
+        }
         let mut shadow = rtc_ray(ray);
         // SAFETY: as in `intersect`.
         unsafe { sys::rtcOccluded1(self.scene, &mut shadow, None) };
@@ -241,7 +254,7 @@ impl Accel for EmbreeAccel {
         // SAFETY: as in `intersect_packet`.
         unsafe { sys::rtcOccluded16(&valid, self.scene, &mut ray, None) };
         for (i, out) in blocked.iter_mut().enumerate() {
-            *out = ray.tfar[i] == f32::NEG_INFINITY;
+            *out = valid.0[i] == 0 || ray.tfar[i] == f32::NEG_INFINITY;
         }
     }
 

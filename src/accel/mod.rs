@@ -40,6 +40,17 @@ impl Ray {
             tmax,
         }
     }
+
+    /// A query both back-ends answer: finite origin and direction, `0 ≤ tmin ≤ tmax` (`tmax`
+    /// may be infinite). Embree asserts on anything else, so every back-end answers an invalid
+    /// ray the same conservative way instead: no hit, and blocked.
+    pub fn is_valid(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && self.tmin.is_finite()
+            && self.tmin >= 0.0
+            && self.tmax >= self.tmin
+    }
 }
 
 /// The closest intersection of a ray with the scene.

@@ -250,6 +250,17 @@ fn build_camera(path: &Path, c: &CameraFile) -> Result<Camera, SceneError> {
                 format!("{v:?} has a non-finite component"),
             ));
         }
+        if v.iter()
+            .any(|x| f64::from(x.abs()) > validate::MAX_COORDINATE)
+        {
+            return Err(field_error(
+                field,
+                format!(
+                    "{v:?} is beyond ±{:e}, genpath's coordinate limit",
+                    validate::MAX_COORDINATE
+                ),
+            ));
+        }
     }
     if !(c.fov_x_deg.is_finite() && c.fov_x_deg > 0.0 && c.fov_x_deg < 180.0) {
         return Err(field_error(

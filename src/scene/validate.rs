@@ -20,6 +20,10 @@ fn parse_error(path: &Path, line: usize, message: String) -> SceneError {
     }
 }
 
+/// Largest vertex or camera coordinate accepted: squared distances of such points stay
+/// finite in `f32`.
+pub const MAX_COORDINATE: f64 = 1e15;
+
 /// Parses `count` finite numbers from `words`; `what` names the statement for errors.
 fn finite_numbers(
     path: &Path,
@@ -82,7 +86,16 @@ pub fn check_obj(
     for (line, keyword, args) in statements(text) {
         match keyword {
             "v" => {
-                finite_numbers(path, line, "v", &args, &[3, 4, 6])?;
+                let v = finite_numbers(path, line, "v", &args, &[3, 4, 6])?;
+                if let Some(x) = v[..3].iter().find(|x| x.abs() > MAX_COORDINATE) {
+                    return Err(parse_error(
+                        path,
+                        line,
+                        format!(
+                            "`v`: coordinate {x} is beyond ±{MAX_COORDINATE:e} (squared distances must stay finite in single precision)"
+                        ),
+                    ));
+                }
                 vertices += 1;
             }
             "vn" => {

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Regenerates reports/: for each scene, relMSE against wall-clock time (every phase included)
+# for pt, srt and GA variants, at 256×256 and max bounces 5, against the committed references
+# in reports/refs/ (made with `genpath reference … --spp 16384/8192`, see reports/README.md).
+#
+#   bash scripts/reports.sh [BUDGETS]        # default BUDGETS: 2,8,30 (seconds)
+#
+# Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
+# and reports/bench.json (`genpath bench`). Takes about 4 × 5 × (sum of budgets) seconds.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$here"
+budgets=${1:-2,8,30}
+cargo build --release
+bin=target/release/genpath
+cheap=m=10000:pop=30:gen=20:grid=32
+methods="pt,srt,ga,ga:$cheap,ga-pt:$cheap"
+for scene in fig5 fig1 cbox glossy; do
+    "$bin" sweep "scenes/$scene/scene.toml" --ref "reports/refs/${scene}_ref.exr" \
+        --time --budgets "$budgets" --methods "$methods" --max-bounces 5 --quiet \
+        -o "reports/$scene" > "reports/$scene.md"
+    echo "reports/$scene: done"
+done
+"$bin" bench scenes/cbox/scene.toml --json reports/bench.json > reports/bench.txt
