@@ -548,3 +548,48 @@ fn crosscheck_catches_a_corrupted_back_end() {
     );
     assert!(report.any_hit_failures >= report.disagree, "{report}");
 }
+
+/// Rays Embree would assert on (non-finite origin or direction, `tmin > tmax`, negative
+/// `tmin`): both back-ends answer no hit and blocked, alone and inside packets of valid rays.
+#[test]
+fn invalid_rays_miss_and_are_blocked_on_both_back_ends() {
+    let mesh = quad();
+    let embree = EmbreeAccel::new(&mesh).unwrap();
+    let bvh = BvhAccel::new(&mesh);
+    let good = down_at(0.3, 0.3);
+    let bad = [
+        Ray::new(Vec3::new(f32::NAN, 1.0, 0.0), good.dir, 0.0, f32::INFINITY),
+        Ray::new(
+            good.origin,
+            Vec3::new(0.0, f32::NEG_INFINITY, 0.0),
+            0.0,
+            f32::INFINITY,
+        ),
+        Ray::new(good.origin, good.dir, 2.0, 1.0),
+        Ray::new(good.origin, good.dir, -1.0, f32::INFINITY),
+        Ray::new(good.origin, good.dir, f32::NAN, f32::INFINITY),
+    ];
+    for accel in [&embree as &dyn Accel, &bvh] {
+        assert!(accel.intersect(&good).is_some() && !accel.occluded(&Ray { tmax: 0.5, ..good }));
+        for ray in &bad {
+            assert!(!ray.is_valid());
+            assert_eq!(accel.intersect(ray), None, "{}: {ray:?}", accel.name());
+            assert!(accel.occluded(ray), "{}: {ray:?}", accel.name());
+        }
+        let mut packet = vec![good; 3];
+        packet.extend_from_slice(&bad);
+        let mut hits = vec![None; packet.len()];
+        let mut blocked = vec![false; packet.len()];
+        accel.intersect_packet(&packet, &mut hits);
+        accel.occluded_packet(&packet, &mut blocked);
+        for (i, ray) in packet.iter().enumerate() {
+            assert_eq!(hits[i], accel.intersect(ray), "{}: lane {i}", accel.name());
+            assert_eq!(
+                blocked[i],
+                accel.occluded(ray),
+                "{}: lane {i}",
+                accel.name()
+            );
+        }
+    }
+}

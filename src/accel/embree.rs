@@ -191,11 +191,20 @@ fn rtc_ray16(rays: &[Ray]) -> (sys::RTCValid16, sys::RTCRay16) {
         packet.tfar[i] = ray.tmax;
         packet.mask[i] = u32::MAX;
     }
-    // Invalid rays are masked off too (Embree asserts on them): they miss and are blocked.
+    // Invalid rays are masked off too, and their lanes hold a harmless ray instead (Embree
+    // asserts on invalid data): they miss and are blocked.
     let mut valid = sys::RTCValid16::first(rays.len());
-    for (lane, ray) in valid.0.iter_mut().zip(rays) {
+    for (i, ray) in rays.iter().enumerate() {
         if !ray.is_valid() {
-            *lane = 0;
+            valid.0[i] = 0;
+            packet.org_x[i] = 0.0;
+            packet.org_y[i] = 0.0;
+            packet.org_z[i] = 0.0;
+            packet.tnear[i] = 0.0;
+            packet.dir_x[i] = 0.0;
+            packet.dir_y[i] = 0.0;
+            packet.dir_z[i] = 1.0;
+            packet.tfar[i] = 0.0;
         }
     }
     (valid, packet)
@@ -243,7 +252,7 @@ impl Accel for EmbreeAccel {
         unsafe { sys::rtcIntersect16(&valid, self.scene, &mut rayhit, None) };
         let (r, h) = (&rayhit.ray, &rayhit.hit);
         for (i, out) in hits.iter_mut().enumerate() {
-            *out = (h.geomID[i] != sys::RTC_INVALID_GEOMETRY_ID)
+            *out = (valid.0[i] != 0 && h.geomID[i] != sys::RTC_INVALID_GEOMETRY_ID)
                 .then(|| self.hit(r.tfar[i], h.primID[i], h.u[i], h.v[i]));
         }
     }
