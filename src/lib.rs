@@ -4,6 +4,7 @@
 #![deny(unsafe_code)]
 
 pub mod accel;
+pub mod check;
 pub mod genetic;
 pub mod image;
 pub mod path;

@@ -39,6 +39,10 @@ enum Command {
     /// Throughput: rays/s per back-end (coherent/incoherent, single/packet), test paths and
     /// fitness evaluations per second, and render time against the number of threads.
     Bench(BenchArgs),
+    /// Check the numerical invariants on a scene at a small size: no NaN/Inf/negative pixel
+    /// with any method, finite positive sampled densities, finite fitness values, and image
+    /// means that agree with pt's. Exits with status 1 when one fails.
+    Check(CheckArgs),
 }
 
 #[derive(Args)]
@@ -157,6 +161,19 @@ struct SweepArgs {
     srt_absorption: f64,
     #[command(flatten)]
     ga: GaArgs,
+}
+
+#[derive(Args)]
+struct CheckArgs {
+    /// The scene is rendered 32 pixels wide (aspect kept) unless --width/--height are given.
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Samples per pixel of each method's render.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(2..=1 << 20))]
+    spp: u32,
+    /// Also write the report as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -290,6 +307,7 @@ fn main() {
         Command::Reference(args) => run_reference(args),
         Command::Sweep(args) => run_sweep(args),
         Command::Bench(args) => run_bench(args),
+        Command::Check(args) => run_check(args),
     };
     if let Err(error) = result {
         eprintln!("genpath: error: {error:#}");
@@ -859,6 +877,69 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         });
         genpath::image::write_bytes_atomic(json, serde_json::to_string_pretty(&value)?.as_bytes())?;
     }
+    Ok(())
+}
+
+fn run_check(mut args: CheckArgs) -> Result<()> {
+    if let Some(json) = &args.json {
+        let dir = match json.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if !dir.is_dir() {
+            bail!(
+                "{}: directory {} does not exist",
+                json.display(),
+                dir.display()
+            );
+        }
+    }
+    if args.scene.width.is_none() && args.scene.height.is_none() {
+        args.scene.width = Some(32);
+    }
+    let session = Session::open(&args.scene)?;
+    let max_bounces = args
+        .scene
+        .max_bounces
+        .unwrap_or(session.scene.render.max_bounces);
+    let config = genpath::check::CheckConfig::new(args.spp, max_bounces, args.scene.seed);
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let report = session
+        .pool
+        .install(|| genpath::check::check(&view, &config))?;
+    println!(
+        "{}: {}×{}, {} spp, max bounces {max_bounces}",
+        session.scene.path.display(),
+        session.scene.camera.width,
+        session.scene.camera.height,
+        args.spp
+    );
+    println!("| method | bad pixels | mean (R, G, B) | |z| vs pt | seconds |");
+    println!("|---|---|---|---|---|");
+    for m in &report.methods {
+        println!(
+            "| {:?} | {} | {:.4e}, {:.4e}, {:.4e} | {:.2} | {:.2} |",
+            m.method, m.bad_pixels, m.mean[0], m.mean[1], m.mean[2], m.z_vs_pt, m.seconds
+        );
+    }
+    println!(
+        "densities: {} sampled, min {:.3e}, max {:.3e}, {} not finite and positive",
+        report.pdf_samples, report.pdf_min, report.pdf_max, report.pdf_bad
+    );
+    println!(
+        "fitness: {} values, {} not finite; critical |z| {:.2}",
+        report.fitness_values, report.fitness_bad, report.z_critical
+    );
+    if let Some(json) = &args.json {
+        genpath::image::write_bytes_atomic(
+            json,
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )?;
+    }
+    if !report.passed() {
+        bail!("check failed:\n  {}", report.failures.join("\n  "));
+    }
+    println!("check passed");
     Ok(())
 }
 

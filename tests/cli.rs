@@ -755,3 +755,38 @@ fn bench_reports_rates_and_scaling() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
 }
+
+/// `genpath check` passes on a shipped scene and writes its report; a missing scene is an
+/// error.
+#[test]
+fn check_passes_on_fig5() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("check.json");
+    let out = genpath(&[
+        "check",
+        fig5().to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "16",
+        "--json",
+        json.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("check passed"), "{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    assert_eq!(report["methods"].as_array().unwrap().len(), 4);
+    assert_eq!(report["pdf_bad"], 0);
+    let out = genpath(&["check", "/nonexistent/scene.toml"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
+}

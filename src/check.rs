@@ -1,0 +1,350 @@
+//! `genpath check SCENE`: the numerical invariants of design §8 on any scene, at a small
+//! size.
+//!
+//! * Every method (`pt`, `srt`, `ga`, `ga-pt`) renders without a NaN, infinite or negative
+//!   pixel.
+//! * Every density a generator samples with — the `srt` generator and every generator the GA
+//!   evolved — is finite and positive, and so is the mixture density of every light-carrying
+//!   path (the estimator divides by it).
+//! * Every fitness value (eq. 10) the GA computed is finite.
+//! * The image means of `srt`, `ga` and `ga-pt` agree with `pt`'s per channel, inside a
+//!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
+//!   count can tell).
+
+use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::{GaConfig, GaConfigError};
+use crate::path::generator::{Contribution, PathGenerator, PathVertices};
+use crate::path::mixture::Mixture;
+use crate::path::{mixture_file, Method, RayCounts, SceneView};
+use crate::render::{render, Estimator, Film, RenderSettings};
+use crate::sampling::{sample_rng, uniform};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// What `check` renders and samples.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CheckConfig {
+    pub spp: u32,
+    pub max_bounces: u32,
+    pub seed: u64,
+    /// Paths sampled per generator for the density survey.
+    pub paths_per_generator: usize,
+    pub ga: GaConfig,
+    pub plan: PlanConfig,
+    /// Fault injection for tests: scales the `srt` estimator's density when evaluated, which
+    /// biases its image; the check must then fail.
+    #[serde(skip)]
+    pub srt_pdf_error: Option<f64>,
+}
+
+impl CheckConfig {
+    /// A small GA (the invariants do not depend on how well it converges).
+    pub fn new(spp: u32, max_bounces: u32, seed: u64) -> Self {
+        Self {
+            spp,
+            max_bounces,
+            seed,
+            paths_per_generator: 200,
+            ga: GaConfig {
+                population: 12,
+                generations: 6,
+                test_paths: 4000,
+                ..GaConfig::default()
+            },
+            plan: PlanConfig {
+                grid: 8,
+                ..PlanConfig::default()
+            },
+            srt_pdf_error: None,
+        }
+    }
+}
+
+/// One method's render.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct MethodCheck {
+    pub method: Method,
+    /// Pixels with a NaN, infinite or negative channel.
+    pub bad_pixels: usize,
+    /// Image mean per channel and its standard error.
+    pub mean: [f64; 3],
+    pub standard_error: [f64; 3],
+    /// Largest |z| of the mean against `pt`'s, over the channels (0 for `pt`).
+    pub z_vs_pt: f64,
+    pub seconds: f64,
+}
+
+/// Everything `check` measured, and what failed.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CheckReport {
+    pub methods: Vec<MethodCheck>,
+    /// Densities seen while sampling (directions in solid angle, light points by area,
+    /// and mixture densities of whole paths): count, smallest, largest, and how many were
+    /// not finite and positive.
+    pub pdf_samples: usize,
+    pub pdf_min: f64,
+    pub pdf_max: f64,
+    pub pdf_bad: usize,
+    /// Fitness values computed by the GA, and how many were not finite.
+    pub fitness_values: usize,
+    pub fitness_bad: usize,
+    /// Critical |z| for the unbiasedness comparisons.
+    pub z_critical: f64,
+    pub failures: Vec<String>,
+}
+
+impl CheckReport {
+    pub fn passed(&self) -> bool {
+        self.failures.is_empty()
+    }
+}
+
+fn image_mean(film: &Film) -> ([f64; 3], [f64; 3]) {
+    let n = film.image.pixels.len().max(1) as f64;
+    let mut mean = [0.0; 3];
+    let mut var = [0.0; 3];
+    for (p, v) in film.image.pixels.iter().zip(&film.variance_of_mean) {
+        for c in 0..3 {
+            mean[c] += p[c] as f64 / n;
+            var[c] += v[c] / (n * n);
+        }
+    }
+    (mean, var.map(f64::sqrt))
+}
+
+#[derive(Default)]
+struct PdfSurvey {
+    count: usize,
+    min: f64,
+    max: f64,
+    bad: usize,
+}
+
+impl PdfSurvey {
+    fn see(&mut self, pdf: f64) {
+        if self.count == 0 {
+            (self.min, self.max) = (f64::INFINITY, 0.0);
+        }
+        self.count += 1;
+        if pdf.is_finite() && pdf > 0.0 {
+            self.min = self.min.min(pdf);
+            self.max = self.max.max(pdf);
+        } else {
+            self.bad += 1;
+        }
+    }
+
+    /// Samples `n` paths with `g` from pixel `(x, y)`, recording every sampled density and
+    /// the density `mixture` gives each light-carrying path.
+    #[allow(clippy::too_many_arguments)]
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        g: &PathGenerator,
+        mixture: &Mixture,
+        (x, y): (u32, u32),
+        n: usize,
+        max_bounces: u32,
+        seed: u64,
+    ) {
+        let camera = &view.scene.camera;
+        let mut path = PathVertices::default();
+        let mut contributions: Vec<Contribution> = Vec::new();
+        let mut counts = RayCounts::default();
+        for j in 0..n {
+            let mut rng = sample_rng(
+                seed,
+                u64::from(y) * u64::from(camera.width) + u64::from(x),
+                j as u64,
+            );
+            let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+            let Some(x1) = view.trace(&ray, &mut counts) else {
+                continue;
+            };
+            contributions.clear();
+            g.sample_path(
+                view,
+                ray.origin,
+                x1,
+                max_bounces,
+                &mut rng,
+                &mut counts,
+                &mut path,
+                &mut contributions,
+            );
+            for v in path
+                .vertices
+                .iter()
+                .filter(|v| !v.delta && v.wi != glam::Vec3::ZERO)
+            {
+                self.see(v.pdf_sampled);
+            }
+            if let Some(light) = path.light {
+                self.see(light.pdf_sampled);
+            }
+            for c in &contributions {
+                self.see(mixture.pdf_path(view, &path, c, max_bounces));
+            }
+        }
+    }
+}
+
+/// Runs every check on `view`'s scene at its camera's size.
+pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaConfigError> {
+    let mut failures = Vec::new();
+    let settings = |method| RenderSettings {
+        method,
+        spp: config.spp,
+        max_bounces: config.max_bounces,
+        seed: config.seed,
+        progress: false,
+    };
+    let srt = Mixture::new(
+        vec![PathGenerator::srt(
+            config.max_bounces,
+            config.ga.srt_absorption,
+            mixture_file::uniform_light(view.scene),
+        )],
+        vec![1.0],
+    );
+    let srt_rendered = match config.srt_pdf_error {
+        Some(factor) => srt.clone().with_pdf_error(0, factor),
+        None => srt.clone(),
+    };
+    let plan = Plan::build(
+        view,
+        &config.ga,
+        &config.plan,
+        config.max_bounces,
+        config.seed,
+        false,
+    )?;
+    let films: Vec<(Method, Film)> = vec![
+        (
+            Method::Pt,
+            render(view, &settings(Method::Pt), Estimator::Pt),
+        ),
+        (
+            Method::Srt,
+            render(
+                view,
+                &settings(Method::Srt),
+                Estimator::Mixture(&srt_rendered),
+            ),
+        ),
+        (
+            Method::Ga,
+            render(view, &settings(Method::Ga), Estimator::Ga(&plan)),
+        ),
+        (
+            Method::GaPt,
+            render(view, &settings(Method::GaPt), Estimator::GaPt(&plan)),
+        ),
+    ];
+    let comparisons = 3 * (films.len() - 1);
+    let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
+    let z_critical = Normal::new(0.0, 1.0)
+        .map(|n| n.inverse_cdf(1.0 - alpha / 2.0))
+        .unwrap_or(4.0);
+    let (pt_mean, pt_se) = image_mean(&films[0].1);
+    let mut methods = Vec::new();
+    for (method, film) in &films {
+        let bad_pixels = film
+            .image
+            .pixels
+            .iter()
+            .filter(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+            .count();
+        if bad_pixels > 0 {
+            failures.push(format!(
+                "{method:?}: {bad_pixels} NaN, infinite or negative pixels"
+            ));
+        }
+        let (mean, se) = image_mean(film);
+        let mut z: f64 = 0.0;
+        if *method != Method::Pt {
+            for c in 0..3 {
+                let s = (se[c] * se[c] + pt_se[c] * pt_se[c]).sqrt();
+                if s > 0.0 {
+                    z = z.max((mean[c] - pt_mean[c]).abs() / s);
+                } else if mean[c] != pt_mean[c] {
+                    z = f64::INFINITY;
+                }
+            }
+            if z.is_nan() || z > z_critical {
+                failures.push(format!(
+                    "{method:?}: image mean differs from pt's by |z| = {z:.2} > {z_critical:.2}"
+                ));
+            }
+        }
+        methods.push(MethodCheck {
+            method: *method,
+            bad_pixels,
+            mean,
+            standard_error: se,
+            z_vs_pt: z,
+            seconds: film.elapsed.as_secs_f64(),
+        });
+    }
+
+    // Densities: srt and every evolved generator, from their GA pixels.
+    let mut survey = PdfSurvey::default();
+    let camera = &view.scene.camera;
+    let centre = (camera.width / 2, camera.height / 2);
+    survey.sample(
+        view,
+        &srt.generators[0],
+        &srt,
+        centre,
+        config.paths_per_generator,
+        config.max_bounces,
+        config.seed,
+    );
+    for p in &plan.pixels {
+        for g in &p.mixture.generators {
+            survey.sample(
+                view,
+                g,
+                &p.mixture,
+                (p.x, p.y),
+                config.paths_per_generator / 4,
+                config.max_bounces,
+                config.seed,
+            );
+        }
+    }
+    if survey.bad > 0 {
+        failures.push(format!(
+            "{} of {} sampled densities are not finite and positive",
+            survey.bad, survey.count
+        ));
+    }
+
+    // Fitness values.
+    let values: Vec<f64> = plan
+        .pixels
+        .iter()
+        .flat_map(|p| {
+            [p.v_srt, p.v_best]
+                .into_iter()
+                .chain(p.history.iter().flat_map(|h| [h.best, h.mean]))
+        })
+        .collect();
+    let fitness_bad = values.iter().filter(|v| !v.is_finite()).count();
+    if fitness_bad > 0 {
+        failures.push(format!(
+            "{fitness_bad} of {} fitness values are not finite",
+            values.len()
+        ));
+    }
+    Ok(CheckReport {
+        methods,
+        pdf_samples: survey.count,
+        pdf_min: survey.min,
+        pdf_max: survey.max,
+        pdf_bad: survey.bad,
+        fitness_values: values.len(),
+        fitness_bad,
+        z_critical,
+        failures,
+    })
+}

@@ -1,0 +1,201 @@
+//! The stiff and extreme catalogue (design §8, `scenes/stiff/`, made by
+//! `scripts/make_stiff_scenes.py`): on every scene, every method renders without a NaN,
+//! infinite or negative pixel, every sampled density is finite and positive, every fitness
+//! value is finite, and the image means agree with `pt`'s (`genpath check`). The check must
+//! fail on a biased estimator. Unit cases push generator parameters to their bounds.
+
+use genpath::accel::{self, Accel, AccelKind};
+use genpath::check::{check, CheckConfig};
+use genpath::path::generator::{
+    DirectionSampler, PathGenerator, PathVertices, Step, ABSORPTION_MAX, ABSORPTION_MIN,
+};
+use genpath::path::mixture::Mixture;
+use genpath::path::{mixture_file, Method, RayCounts, SceneView};
+use genpath::render::{render, Estimator, RenderSettings};
+use genpath::sampling::anchor::AnchorSampler;
+use genpath::sampling::light_point::{LightPointSampler, LightRegion};
+use genpath::sampling::{sample_rng, uniform};
+use genpath::scene::Scene;
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+const SCENES: [&str; 9] = [
+    "tiny_light",
+    "grazing_light",
+    "phong_1e4",
+    "scale_1e-4",
+    "scale_1e5",
+    "slivers",
+    "coincident",
+    "long_room",
+    "mirror",
+];
+
+fn stiff(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes/stiff")
+        .join(name)
+        .join("scene.toml")
+}
+
+fn load(name: &str, size: u32) -> (Scene, Box<dyn Accel>) {
+    let mut scene = Scene::load(&stiff(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    scene.resize(size, size);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    (scene, accel)
+}
+
+#[test]
+fn every_stiff_scene_passes_the_check() {
+    let mut failed = Vec::new();
+    for name in SCENES {
+        let (scene, accel) = load(name, 24);
+        let view = SceneView::new(&scene, accel.as_ref());
+        let report = check(&view, &CheckConfig::new(64, 5, 1)).unwrap();
+        eprintln!(
+            "{name:<14} bad pixels {:?}  max |z| {:.2}  pdf [{:.2e}, {:.2e}] bad {}  fitness bad {}",
+            report.methods.iter().map(|m| m.bad_pixels).collect::<Vec<_>>(),
+            report.methods.iter().map(|m| m.z_vs_pt).fold(0.0, f64::max),
+            report.pdf_min,
+            report.pdf_max,
+            report.pdf_bad,
+            report.fitness_bad
+        );
+        assert!(report.pdf_samples > 1000, "{name}: too few densities seen");
+        if !report.passed() {
+            failed.push(format!("{name}: {}", report.failures.join("; ")));
+        }
+    }
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+fn the_check_rejects_a_biased_estimator() {
+    let (scene, accel) = load("coincident", 24);
+    let view = SceneView::new(&scene, accel.as_ref());
+    let config = CheckConfig {
+        srt_pdf_error: Some(1.5),
+        ..CheckConfig::new(64, 5, 1)
+    };
+    let report = check(&view, &config).unwrap();
+    assert!(!report.passed(), "a density off by 50 % went unnoticed");
+    assert!(
+        report.failures.iter().any(|f| f.contains("Srt")),
+        "{:?}",
+        report.failures
+    );
+}
+
+/// Generators at the bounds of every parameter: cones of 1e-7 rad and π − 1e-7, α and β
+/// next to 0 and 1, absorptions at their limits, weights of 1e-12. No bad pixel, and every
+/// sampled density finite and positive.
+#[test]
+fn generators_at_their_bounds_stay_finite() {
+    let (scene, accel) = load("tiny_light", 16);
+    let view = SceneView::new(&scene, accel.as_ref());
+    let light_prim = scene.emitters.prims[0];
+    let light = |beta| LightPointSampler {
+        region: LightRegion {
+            prim: light_prim,
+            level: 16,
+            cell: 7,
+        },
+        beta,
+    };
+    let anchor = |theta, alpha, a| Step {
+        sampler: DirectionSampler::Anchor(
+            AnchorSampler::new(DVec3::new(0.0, 1.9, 0.0), theta, alpha).unwrap(),
+        ),
+        absorption: a,
+    };
+    let extremes = vec![
+        PathGenerator {
+            steps: vec![
+                anchor(1e-7, 1.0 - 1e-12, ABSORPTION_MIN),
+                anchor(std::f64::consts::PI - 1e-7, 1e-12, ABSORPTION_MAX),
+            ],
+            light: light(1.0 - 1e-12),
+        },
+        PathGenerator {
+            steps: vec![
+                anchor(1e-7, 1e-12, ABSORPTION_MAX),
+                Step {
+                    sampler: DirectionSampler::Brdf,
+                    absorption: ABSORPTION_MIN,
+                },
+            ],
+            light: light(0.0),
+        },
+    ];
+    let srt = PathGenerator::srt(5, 0.5, mixture_file::uniform_light(&scene));
+    let mut generators = vec![srt];
+    generators.extend(extremes);
+    for weights in [
+        vec![0.5, 0.25, 0.25],
+        vec![1.0, 1e-12, 1e-12],
+        vec![0.01, 0.99 - 1e-12, 1e-12],
+    ] {
+        let mixture = Mixture::new(generators.clone(), weights.clone());
+        let settings = RenderSettings {
+            method: Method::Mixture,
+            spp: 32,
+            max_bounces: 5,
+            seed: 2,
+            progress: false,
+        };
+        let film = render(&view, &settings, Estimator::Mixture(&mixture));
+        let bad = film
+            .image
+            .pixels
+            .iter()
+            .flatten()
+            .filter(|c| !c.is_finite() || **c < 0.0)
+            .count();
+        assert_eq!(bad, 0, "weights {weights:?}");
+        // Sampled densities of each generator, and the mixture density of each path.
+        let mut path = PathVertices::default();
+        let mut contributions = Vec::new();
+        let mut counts = RayCounts::default();
+        let mut seen = 0;
+        for (gi, g) in mixture.generators.iter().enumerate() {
+            for j in 0..2000u64 {
+                let mut rng = sample_rng(9, gi as u64, j);
+                let ray = scene
+                    .camera
+                    .ray(8.0 + uniform(&mut rng), 8.0 + uniform(&mut rng));
+                let Some(x1) = view.trace(&ray, &mut counts) else {
+                    continue;
+                };
+                contributions.clear();
+                g.sample_path(
+                    &view,
+                    ray.origin,
+                    x1,
+                    5,
+                    &mut rng,
+                    &mut counts,
+                    &mut path,
+                    &mut contributions,
+                );
+                let sampled = path
+                    .vertices
+                    .iter()
+                    .filter(|v| !v.delta && v.wi != glam::Vec3::ZERO)
+                    .map(|v| v.pdf_sampled)
+                    .chain(path.light.map(|l| l.pdf_sampled));
+                for pdf in sampled.chain(
+                    contributions
+                        .iter()
+                        .map(|c| mixture.pdf_path(&view, &path, c, 5)),
+                ) {
+                    assert!(
+                        pdf.is_finite() && pdf > 0.0,
+                        "generator {gi}: density {pdf}"
+                    );
+                    seen += 1;
+                }
+            }
+        }
+        assert!(seen > 1000, "{seen} densities");
+    }
+}
