@@ -250,6 +250,14 @@ struct GaArgs {
     /// Nearest GA pixels whose mixtures each pixel combines.
     #[arg(long, default_value_t = PlanConfig::default().neighbours)]
     ga_neighbours: usize,
+    /// Run the GA everywhere and with every step: no cells left out for low baseline
+    /// variance, no generator steps cut at the depth the test paths need.
+    #[arg(long)]
+    no_prune: bool,
+    /// Grid cells whose pooled baseline relative variance (of one srt sample, Var/(mean² +
+    /// 0.01)) is below this get no GA pixel.
+    #[arg(long, default_value_t = PlanConfig::default().prune_variance)]
+    prune_variance: f64,
 }
 
 impl GaArgs {
@@ -268,12 +276,15 @@ impl GaArgs {
             defensive_weight: self.defensive_weight,
             srt_absorption,
             anchor_shift: self.anchor_shift,
+            max_steps: None,
         };
         let plan = PlanConfig {
             grid: self.ga_grid,
             extra: self.ga_extra,
             baseline_spp: self.baseline_spp,
             neighbours: self.ga_neighbours,
+            prune: !self.no_prune,
+            prune_variance: self.prune_variance,
         };
         ga.validate()?;
         plan.validate()?;
@@ -943,6 +954,50 @@ fn run_check(mut args: CheckArgs) -> Result<()> {
     Ok(())
 }
 
+/// What the GA plan and the renderer left out for this scene, and why (design §8).
+fn left_out(
+    plan: &Plan,
+    config: &PlanConfig,
+    analysis: &genpath::scene::SceneAnalysis,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    if analysis.glossy_triangles == 0 {
+        out.push("Phong-lobe evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
+    }
+    if analysis.mirror_triangles == 0 {
+        out.push("delta (mirror) vertices: no mirror material".to_string());
+    }
+    let s = &plan.stats;
+    out.push(format!(
+        "GA at {} pixels that see only background or emitters ({} grid cells without a scattering pixel)",
+        s.skipped_pixels, s.empty_cells
+    ));
+    if !config.prune {
+        out.push("nothing else: pruning is off (--no-prune)".to_string());
+        return out;
+    }
+    out.push(format!(
+        "GA in {} grid cells whose pooled baseline relative variance is below {} (cells: min {:.3}, median {:.3}, max {:.3})",
+        s.low_variance_cells, config.prune_variance, s.cell_variance[0], s.cell_variance[1], s.cell_variance[2]
+    ));
+    let max_steps = plan.pixels.iter().map(|p| p.steps).max().unwrap_or(0);
+    let cut = plan.pixels.iter().filter(|p| p.steps < max_steps).count();
+    out.push(format!(
+        "generator steps past the depth the test paths need (all but {} of Σ F²/q): {} of {} GA pixels evolve fewer steps than the deepest ({max_steps}); steps per pixel {:?}",
+        genpath::genetic::plan::PRUNE_SHARE,
+        cut,
+        plan.pixels.len(),
+        {
+            let mut h = std::collections::BTreeMap::new();
+            for p in &plan.pixels {
+                *h.entry(p.steps).or_insert(0usize) += 1;
+            }
+            h
+        }
+    ));
+    out
+}
+
 /// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
 /// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list.
 fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Value {
@@ -961,16 +1016,19 @@ fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Valu
             serde_json::json!({
                 "x": p.x, "y": p.y, "origin": p.origin,
                 "v_srt": p.v_srt, "v_best": p.v_best, "kept_srt": p.kept_srt,
-                "test_paths": p.test_paths, "light_paths": p.light_paths,
+                "test_paths": p.test_paths, "light_paths": p.light_paths, "steps": p.steps,
                 "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
                 "mixture": p.mixture,
             })
         })
         .collect();
     let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
+    let analysis = plan.analysis.clone();
     serde_json::json!({
         "config": ga,
         "plan": config,
+        "left_out": left_out(plan, config, &analysis),
+        "scene_analysis": analysis,
         "stats": plan.stats,
         "ga_pixels": n,
         "improved_pixels": plan.pixels.iter().filter(|p| !p.kept_srt).count(),

@@ -790,3 +790,84 @@ fn check_passes_on_fig5() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
 }
+
+/// Pruning: by default the JSON lists what was left out (low-variance cells, generator steps
+/// past the needed depth); `--no-prune` runs the GA in every cell with every step.
+#[test]
+fn pruning_is_listed_and_can_be_turned_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str]| {
+        let out = dir.path().join(format!("p{}.exr", extra.len()));
+        let mut args = vec![
+            "render",
+            "scenes/cbox/scene.toml",
+            "-o",
+            out.to_str().unwrap(),
+            "--method",
+            "ga",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--ga-grid",
+            "8",
+            "--test-paths",
+            "2000",
+            "--population",
+            "8",
+            "--generations",
+            "3",
+            "--spp",
+            "2",
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        let output = Command::new(env!("CARGO_BIN_EXE_genpath"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let mut json = out.into_os_string();
+        json.push(".json");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        v["ga"].clone()
+    };
+    let pruned = run(&[]);
+    let full = run(&["--no-prune"]);
+    let text = |v: &serde_json::Value| v["left_out"].to_string();
+    assert!(
+        text(&pruned).contains("grid cells whose pooled baseline relative variance"),
+        "{}",
+        text(&pruned)
+    );
+    assert!(text(&full).contains("pruning is off"), "{}", text(&full));
+    assert_eq!(full["stats"]["low_variance_cells"], 0);
+    // cbox at 32×32 has low-variance cells (its walls are well lit): fewer GA pixels.
+    assert!(pruned["stats"]["low_variance_cells"].as_u64().unwrap() > 0);
+    assert!(pruned["ga_pixels"].as_u64() < full["ga_pixels"].as_u64());
+    // Without pruning every generator has max_bounces − 1 steps.
+    let max_steps = |v: &serde_json::Value| -> Vec<u64> {
+        v["pixels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["steps"].as_u64().unwrap())
+            .collect()
+    };
+    assert!(
+        max_steps(&full).iter().all(|&s| s == 4),
+        "{:?}",
+        max_steps(&full)
+    );
+    assert!(
+        max_steps(&pruned).iter().any(|&s| s < 4),
+        "{:?}",
+        max_steps(&pruned)
+    );
+}

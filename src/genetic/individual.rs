@@ -82,6 +82,8 @@ impl Individual {
 pub struct GenePool<'a> {
     pub scene: &'a Scene,
     pub max_bounces: u32,
+    /// Steps of a random generator.
+    steps: usize,
     srt: PathGenerator,
     /// Running sum of triangle areas, for anchors uniform by area on all surfaces.
     area_cdf: Vec<f64>,
@@ -105,6 +107,10 @@ impl<'a> GenePool<'a> {
         Self {
             scene,
             max_bounces,
+            steps: config
+                .max_steps
+                .unwrap_or(usize::MAX)
+                .min(max_bounces.saturating_sub(1).max(1) as usize),
             srt: PathGenerator::srt(
                 max_bounces,
                 config.srt_absorption,
@@ -185,10 +191,11 @@ impl<'a> GenePool<'a> {
         }
     }
 
-    /// A random generator: one step per vertex that can scatter before `max_bounces` (the
+    /// A random generator: one step per vertex that can scatter before `max_bounces`, or
+    /// `GaConfig::max_steps` of them (the
     /// absorption there is 1 anyway), each of a random type and absorption.
     pub fn random_gene(&mut self, rng: &mut crate::sampling::Rng) -> Gene {
-        let n = self.max_bounces.saturating_sub(1).max(1) as usize;
+        let n = self.steps;
         let mut steps = Vec::with_capacity(n);
         let mut anchor_prims = Vec::with_capacity(n);
         for _ in 0..n {

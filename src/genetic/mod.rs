@@ -51,6 +51,9 @@ pub struct GaConfig {
     pub srt_absorption: f64,
     /// Standard deviation of an anchor shift along its triangle, relative to the scene size.
     pub anchor_shift: f64,
+    /// Steps per evolved generator; `None`: one per vertex that can scatter before
+    /// `max_bounces`. The pixel plan sets it to the depth the test paths need (pruning).
+    pub max_steps: Option<usize>,
 }
 
 impl Default for GaConfig {
@@ -77,6 +80,7 @@ impl Default for GaConfig {
             defensive_weight: 0.05,
             srt_absorption: 0.5,
             anchor_shift: 0.05,
+            max_steps: None,
         }
     }
 }
@@ -132,6 +136,9 @@ impl GaConfig {
                 "anchor_shift {} must be finite and ≥ 0",
                 self.anchor_shift
             ));
+        }
+        if self.max_steps == Some(0) {
+            return fail("max_steps must be at least 1".into());
         }
         Ok(())
     }

@@ -27,6 +27,7 @@ use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, mixture_file, RayCounts, SceneView};
 use crate::render::progress_bar;
 use crate::sampling::{sample_rng, uniform};
+use crate::scene::SceneAnalysis;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -35,6 +36,10 @@ use std::time::{Duration, Instant};
 const BASELINE_STREAM: u64 = 0x6261_7365_6c69_6e65;
 const TEST_PATH_STREAM: u64 = 0x7465_7374_7061_7468;
 const GA_STREAM: u64 = 0x6765_6e65_7469_6373;
+
+/// With pruning, generators get the steps that carry all but this share of the test paths'
+/// `Σ F²/q`.
+pub const PRUNE_SHARE: f64 = 1e-3;
 
 /// Where the genetic algorithm runs and how its results spread over the image.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -48,6 +53,11 @@ pub struct PlanConfig {
     pub baseline_spp: u32,
     /// GA pixels whose mixtures each pixel combines.
     pub neighbours: usize,
+    /// Leave out what the scene does not need: cells whose baseline relative variance is
+    /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
+    /// test paths need (`TestPaths::steps_needed`).
+    pub prune: bool,
+    pub prune_variance: f64,
 }
 
 impl Default for PlanConfig {
@@ -57,6 +67,8 @@ impl Default for PlanConfig {
             extra: 0.25,
             baseline_spp: 4,
             neighbours: 4,
+            prune: true,
+            prune_variance: 0.5,
         }
     }
 }
@@ -72,6 +84,12 @@ impl PlanConfig {
         }
         if self.baseline_spp == 0 {
             return fail("the baseline needs at least 1 sample per pixel".into());
+        }
+        if !(self.prune_variance.is_finite() && self.prune_variance >= 0.0) {
+            return fail(format!(
+                "prune variance {} must be finite and ≥ 0",
+                self.prune_variance
+            ));
         }
         if !(1..=64).contains(&self.neighbours) {
             return fail(format!(
@@ -108,6 +126,8 @@ pub struct GaPixel {
     /// Test paths sampled (`M`) and those that carry light (stored).
     pub test_paths: usize,
     pub light_paths: usize,
+    /// Steps of the evolved generators (fewer than `max_bounces − 1` when pruned).
+    pub steps: usize,
     /// Best and mean `V` per generation.
     pub history: Vec<GenerationStats>,
     pub individual_evaluations: u64,
@@ -129,6 +149,11 @@ pub struct PlanStats {
     pub skipped_pixels: usize,
     /// Grid cells without a scattering pixel, hence without a GA pixel.
     pub empty_cells: usize,
+    /// Grid cells left without a GA pixel because their baseline variance is low (pruning).
+    pub low_variance_cells: usize,
+    /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
+    /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
+    pub cell_variance: [f64; 3],
     pub individual_evaluations: u64,
     pub generator_evaluations: u64,
     pub rays: RayCounts,
@@ -143,6 +168,8 @@ pub struct Plan {
     /// The defensive density alone: the mixture of an image without any GA pixel.
     pub srt: Mixture,
     neighbours: usize,
+    /// What the scene contains.
+    pub analysis: SceneAnalysis,
     /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
     unnormalised: bool,
     pub stats: PlanStats,
@@ -153,6 +180,9 @@ pub struct Plan {
 struct Baseline {
     /// Relative variance of one `srt` sample: `Var[L] / (E[L]² + 0.01)` (luminance).
     rel_variance: f64,
+    /// Sum and sum of squares of the samples' luminance.
+    sum: f64,
+    sum_sq: f64,
     /// Some baseline ray hit a scattering surface.
     scatters: bool,
 }
@@ -214,6 +244,8 @@ fn baseline(
                     };
                     Baseline {
                         rel_variance: var / (mean * mean + 0.01),
+                        sum,
+                        sum_sq,
                         scatters,
                     }
                 })
@@ -230,23 +262,30 @@ fn baseline(
     (out, counts)
 }
 
-/// The GA pixels: one per grid cell, then extras in the noisiest cells.
-fn choose_pixels(
-    base: &[Baseline],
-    width: u32,
-    height: u32,
-    config: &PlanConfig,
-) -> (Vec<(u32, u32, Origin)>, usize) {
+/// What [`choose_pixels`] chose and left out.
+struct Choice {
+    pixels: Vec<(u32, u32, Origin)>,
+    empty_cells: usize,
+    low_variance_cells: usize,
+    /// Pooled baseline relative variance of every cell with a scattering pixel.
+    cell_variance: Vec<f64>,
+}
+
+/// The GA pixels: one per grid cell, then extras in the noisiest cells; with pruning, none
+/// in cells whose pooled baseline relative variance is below `config.prune_variance`.
+fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig) -> Choice {
     let g = config.grid;
     let mut chosen = Vec::new();
     let mut cells = Vec::new();
-    let mut empty = 0;
+    let (mut empty, mut low) = (0, 0);
+    let mut cell_variance = Vec::new();
     for cy in (0..height).step_by(g as usize) {
         for cx in (0..width).step_by(g as usize) {
             let (x1, y1) = ((cx + g).min(width), (cy + g).min(height));
             let centre = ((cx + x1 - 1) as f64 / 2.0, (cy + y1 - 1) as f64 / 2.0);
             let mut best: Option<(f64, u32, u32)> = None;
-            let (mut noise, mut noisiest) = (0.0, None::<(f64, u32, u32)>);
+            let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0usize);
+            let mut noisiest = None::<(f64, u32, u32)>;
             for y in cy..y1 {
                 for x in cx..x1 {
                     let b = base[(y * width + x) as usize];
@@ -257,18 +296,34 @@ fn choose_pixels(
                     if best.is_none_or(|(bd, ..)| d < bd) {
                         best = Some((d, x, y));
                     }
-                    noise += b.rel_variance;
+                    sum += b.sum;
+                    sum_sq += b.sum_sq;
+                    n += config.baseline_spp as usize;
                     if noisiest.is_none_or(|(v, ..)| b.rel_variance > v) {
                         noisiest = Some((b.rel_variance, x, y));
                     }
                 }
             }
+            // The cell's samples pooled: rare bright paths, which a few samples per pixel
+            // mostly miss, still show up in the cell's variance.
+            let mean_noise = if n > 1 {
+                let mean = sum / n as f64;
+                let var = ((sum_sq - sum * mean) / (n - 1) as f64).max(0.0);
+                var / (mean * mean + 0.01)
+            } else {
+                0.0
+            };
             match best {
+                Some(_) if config.prune && mean_noise < config.prune_variance => {
+                    cell_variance.push(mean_noise);
+                    low += 1;
+                }
                 Some((_, x, y)) => {
+                    cell_variance.push(mean_noise);
                     chosen.push((x, y, Origin::Grid));
                     if let Some((_, nx, ny)) = noisiest {
                         if (nx, ny) != (x, y) {
-                            cells.push((noise / ((x1 - cx) * (y1 - cy)) as f64, nx, ny));
+                            cells.push((mean_noise, nx, ny));
                         }
                     }
                 }
@@ -284,7 +339,12 @@ fn choose_pixels(
             .take(extra)
             .map(|&(_, x, y)| (x, y, Origin::Extra)),
     );
-    (chosen, empty)
+    Choice {
+        pixels: chosen,
+        empty_cells: empty,
+        low_variance_cells: low,
+        cell_variance,
+    }
 }
 
 /// Test paths and evolution at one pixel.
@@ -295,6 +355,7 @@ fn run_pixel(
     (x, y, origin): (u32, u32, Origin),
     max_bounces: u32,
     seed: u64,
+    prune: bool,
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
     let (paths, counts) = TestPaths::sample(
@@ -310,6 +371,15 @@ fn run_pixel(
     let pixel = y as u64 * view.scene.camera.width as u64 + x as u64;
     let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, 0);
     let v_srt = fitness::second_moment(view, &paths, srt);
+    // Pruning: no generator step past the depth where the test paths carry light.
+    let ga = &GaConfig {
+        max_steps: prune.then(|| paths.steps_needed(PRUNE_SHARE)),
+        ..ga.clone()
+    };
+    let steps = ga
+        .max_steps
+        .unwrap_or(usize::MAX)
+        .min(max_bounces.saturating_sub(1).max(1) as usize);
     let (mixture, v_best, kept_srt, history, evals) = if paths.is_empty() {
         (srt.clone(), v_srt, true, Vec::new(), (0, 0))
     } else {
@@ -334,6 +404,7 @@ fn run_pixel(
         x,
         y,
         origin,
+        steps,
         mixture,
         v_srt,
         v_best,
@@ -378,8 +449,15 @@ impl Plan {
         let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
         stats.rays.add(counts);
         stats.skipped_pixels = base.iter().filter(|b| !b.scatters).count();
-        let (chosen, empty) = choose_pixels(&base, width, height, config);
-        stats.empty_cells = empty;
+        let choice = choose_pixels(&base, width, height, config);
+        stats.empty_cells = choice.empty_cells;
+        stats.low_variance_cells = choice.low_variance_cells;
+        let mut v = choice.cell_variance;
+        v.sort_by(f64::total_cmp);
+        if !v.is_empty() {
+            stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
+        }
+        let chosen = choice.pixels;
         stats.baseline_seconds = t0.elapsed().as_secs_f64();
 
         let t1 = Instant::now();
@@ -387,7 +465,7 @@ impl Plan {
         let results: Vec<(GaPixel, RayCounts)> = chosen
             .par_iter()
             .map(|&c| {
-                let r = run_pixel(view, &srt, ga, c, max_bounces, seed);
+                let r = run_pixel(view, &srt, ga, c, max_bounces, seed, config.prune);
                 bar.inc(1);
                 r
             })
@@ -409,6 +487,7 @@ impl Plan {
             pixels,
             srt,
             neighbours: config.neighbours,
+            analysis: scene.analysis(),
             unnormalised: false,
             stats,
         })

@@ -335,6 +335,33 @@ impl TestPaths {
         self.f2_over_q.push(f2q);
     }
 
+    /// Directional samples that carry all but `share` of the light: the smallest `L` such that
+    /// paths of at most `L` sampled directions hold `(1 − share)` of `Σ F²/q`; at least 1.
+    /// Generator steps past it would be spent where the test paths saw no light.
+    pub fn steps_needed(&self, share: f64) -> usize {
+        let total: f64 = self.f2_over_q.iter().sum();
+        if total <= 0.0 {
+            return 1;
+        }
+        // A path of `len` vertices sampled `len − 1` directions when it ends with a light
+        // point, `len` when it ends on an emitter seen through a mirror.
+        let mut by_steps: Vec<(usize, f64)> = (0..self.len())
+            .map(|i| {
+                let len = self.len[i] as usize;
+                (if self.nee[i] { len - 1 } else { len }, self.f2_over_q[i])
+            })
+            .collect();
+        by_steps.sort_by_key(|&(steps, _)| steps);
+        let mut acc = 0.0;
+        for (steps, f) in by_steps {
+            acc += f;
+            if acc >= (1.0 - share) * total {
+                return steps.max(1);
+            }
+        }
+        1
+    }
+
     /// Number of stored (light-carrying) paths.
     pub fn len(&self) -> usize {
         self.f2_over_q.len()

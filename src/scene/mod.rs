@@ -170,9 +170,48 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// What a scene contains, for deciding what it does not need (design §8).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SceneAnalysis {
+    pub triangles: usize,
+    /// Triangles by material kind: Lambertian only, with a Phong lobe, mirrors, emitters.
+    pub diffuse_triangles: usize,
+    pub glossy_triangles: usize,
+    pub mirror_triangles: usize,
+    pub emitter_triangles: usize,
+    /// Total emitting area and the smallest emitting triangle's area.
+    pub emitter_area: f64,
+    pub smallest_emitter_area: f64,
+    /// Diagonal of the bounding box.
+    pub extent: f32,
+}
+
 impl Scene {
     pub fn material(&self, prim: u32) -> &Material {
         &self.materials[self.material_of[prim as usize] as usize]
+    }
+
+    /// Counts what the scene's triangles use.
+    pub fn analysis(&self) -> SceneAnalysis {
+        let n = self.mesh.triangles.len();
+        let count =
+            |f: &dyn Fn(&Material) -> bool| (0..n as u32).filter(|&p| f(self.material(p))).count();
+        let smallest = self
+            .emitters
+            .prims
+            .iter()
+            .map(|&p| triangle_area(self.mesh.vertices(p)))
+            .fold(f64::INFINITY, f64::min);
+        SceneAnalysis {
+            triangles: n,
+            diffuse_triangles: count(&|m| m.scatters() && !m.mirror && !m.is_glossy()),
+            glossy_triangles: count(&|m| m.is_glossy() && !m.mirror),
+            mirror_triangles: count(&|m| m.mirror),
+            emitter_triangles: self.emitters.prims.len(),
+            emitter_area: self.emitters.total_area,
+            smallest_emitter_area: smallest,
+            extent: self.extent,
+        }
     }
 
     /// Loads and validates a scene from its TOML file.
