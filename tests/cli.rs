@@ -871,3 +871,67 @@ fn pruning_is_listed_and_can_be_turned_off() {
         max_steps(&pruned)
     );
 }
+
+/// `--accel embree` and `--accel bvh` give the same image up to the cross-check's tolerance
+/// (a ray that the two back-ends resolve differently near a shared edge changes one path),
+/// for every method; a different seed does not.
+#[cfg(all(feature = "embree", feature = "obvhs"))]
+#[test]
+fn embree_and_bvh_renders_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |method: &str, accel: &str, seed: &str| {
+        let out = dir.path().join(format!("{method}-{accel}-{seed}.exr"));
+        let output = genpath(&[
+            "render",
+            fig5().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--method",
+            method,
+            "--accel",
+            accel,
+            "--seed",
+            seed,
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--spp",
+            "8",
+            "--test-paths",
+            "2000",
+            "--population",
+            "8",
+            "--generations",
+            "4",
+            "--ga-grid",
+            "8",
+            "--quiet",
+        ]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        genpath::image::read_exr(&out).unwrap()
+    };
+    for method in ["pt", "srt", "ga", "ga-pt"] {
+        let embree = render(method, "embree", "1");
+        let bvh = render(method, "bvh", "1");
+        let same = genpath::image::metrics::compare(&embree, &bvh)
+            .unwrap()
+            .relmse;
+        let other = genpath::image::metrics::compare(&embree, &render(method, "bvh", "2"))
+            .unwrap()
+            .relmse;
+        eprintln!("{method}: embree vs bvh relMSE {same:.2e}, other seed {other:.2e}");
+        assert!(
+            same < 1e-4,
+            "{method}: embree and bvh differ: relMSE {same:.3e}"
+        );
+        assert!(
+            other > 100.0 * same.max(1e-9),
+            "{method}: another seed changes nothing"
+        );
+    }
+}

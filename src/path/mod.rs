@@ -12,7 +12,7 @@ use glam::Vec3;
 
 /// Rendering methods selectable with `--method`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
     /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
