@@ -28,6 +28,12 @@ pub fn sample_rng(seed: u64, pixel: u64, sample: u64) -> Rng {
     Pcg32::new(state, stream)
 }
 
+/// A seed for an independent family of streams: a hash of `seed` and a `tag` naming the
+/// family.
+pub fn derive_seed(seed: u64, tag: u64) -> u64 {
+    mix64(mix64(seed ^ 0x6a09_e667_f3bc_c908) ^ tag)
+}
+
 /// A uniform number in [0, 1).
 #[inline]
 pub fn uniform(rng: &mut Rng) -> f32 {
