@@ -90,6 +90,13 @@ struct MethodArgs {
     /// Rendering method.
     #[arg(long, value_enum, default_value_t = Method::Pt)]
     method: Method,
+    #[command(flatten)]
+    settings: SettingsArgs,
+}
+
+/// What the methods other than `pt` are made of.
+#[derive(Args)]
+struct SettingsArgs {
     /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
     #[arg(long, value_name = "FILE")]
     generators: Option<PathBuf>,
@@ -153,14 +160,8 @@ struct SweepArgs {
     /// Writes PREFIX.csv and PREFIX.svg.
     #[arg(short, long = "output", value_name = "PREFIX")]
     output: PathBuf,
-    /// Mixture for the `mixture` method (TOML or JSON).
-    #[arg(long, value_name = "FILE")]
-    generators: Option<PathBuf>,
-    /// Absorption of the `srt` generator at each vertex.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
-    srt_absorption: f64,
     #[command(flatten)]
-    ga: GaArgs,
+    settings: SettingsArgs,
 }
 
 #[derive(Args)]
@@ -329,6 +330,11 @@ fn main() {
 /// Fails before any work when an output cannot possibly be written.
 fn check_output(path: &Path) -> Result<()> {
     genpath::image::check_format(path)?;
+    check_dir(path)
+}
+
+/// Fails when the directory `path` would be written into does not exist.
+fn check_dir(path: &Path) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -428,30 +434,39 @@ fn write_stats(outputs: &[PathBuf], stats: &serde_json::Value) -> Result<()> {
     Ok(())
 }
 
-impl MethodArgs {
-    /// The method's configuration; loads the mixture file of `--method mixture`.
-    fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
-        if self.generators.is_some() && self.method != Method::Mixture {
-            bail!("--generators is only used with --method mixture");
-        }
-        let mixture = match (&self.generators, self.method) {
-            (Some(file), Method::Mixture) => Some(mixture_file::load(
+impl SettingsArgs {
+    /// `method`'s configuration; loads the mixture file when one is given.
+    fn config(&self, method: Method, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+        let mixture = match &self.generators {
+            Some(file) => Some(mixture_file::load(
                 file,
                 scene,
                 max_bounces,
                 self.srt_absorption,
             )?),
-            (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
-            _ => None,
+            None => None,
         };
         let (ga, plan) = self.ga.configs(self.srt_absorption)?;
         Ok(MethodConfig {
-            method: self.method,
+            method,
             srt_absorption: self.srt_absorption,
             mixture,
             ga,
             plan,
         })
+    }
+}
+
+impl MethodArgs {
+    /// The method's configuration; `--generators` goes with `--method mixture` only.
+    fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+        match (&self.settings.generators, self.method) {
+            (Some(_), m) if m != Method::Mixture => {
+                bail!("--generators is only used with --method mixture")
+            }
+            (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
+            _ => self.settings.config(self.method, scene, max_bounces),
+        }
     }
 }
 
@@ -466,7 +481,10 @@ fn run_render(args: RenderArgs) -> Result<()> {
         check_output(explain)?;
     }
     // Flag ranges first, before any loading.
-    args.method.ga.configs(args.method.srt_absorption)?;
+    args.method
+        .settings
+        .ga
+        .configs(args.method.settings.srt_absorption)?;
     let session = Session::open(&args.scene)?;
     let settings = session.settings(&args.scene, args.method.method, args.spp);
     let config = args.method.config(&session.scene, settings.max_bounces)?;
@@ -623,17 +641,7 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
     };
     let (csv_path, svg_path) = (with_ext(".csv"), with_ext(".svg"));
     for p in [&csv_path, &svg_path] {
-        let dir = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        if !dir.is_dir() {
-            bail!(
-                "{}: directory {} does not exist",
-                p.display(),
-                dir.display()
-            );
-        }
+        check_dir(p)?;
     }
     let budgets = if args.time {
         if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0)) {
@@ -656,26 +664,13 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
             .collect::<Result<Vec<_>>>()?;
         Budgets::Spp(spp)
     };
-    let (ga, plan) = args.ga.configs(args.srt_absorption)?;
+    args.settings.ga.configs(args.settings.srt_absorption)?;
     let reference = genpath::image::read_exr(&args.reference)?;
     let session = Session::open(&args.scene)?;
     let settings = session.settings(&args.scene, Method::Pt, 1);
-    let mixture = match &args.generators {
-        Some(file) => Some(mixture_file::load(
-            file,
-            &session.scene,
-            settings.max_bounces,
-            args.srt_absorption,
-        )?),
-        None => None,
-    };
-    let base = MethodConfig {
-        method: Method::Pt,
-        srt_absorption: args.srt_absorption,
-        mixture,
-        ga,
-        plan,
-    };
+    let base = args
+        .settings
+        .config(Method::Pt, &session.scene, settings.max_bounces)?;
     let methods = args
         .methods
         .iter()
@@ -727,17 +722,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     use genpath::genetic::test_paths::TestPaths;
     use genpath::report::bench::{best, bounds, camera_rays, random_rays, ray_rates};
     if let Some(json) = &args.json {
-        let dir = match json.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        if !dir.is_dir() {
-            bail!(
-                "{}: directory {} does not exist",
-                json.display(),
-                dir.display()
-            );
-        }
+        check_dir(json)?;
     }
     let scene = Scene::load(&args.scene)?;
     let passes = args.passes as usize;
@@ -896,17 +881,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
 
 fn run_check(mut args: CheckArgs) -> Result<()> {
     if let Some(json) = &args.json {
-        let dir = match json.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        if !dir.is_dir() {
-            bail!(
-                "{}: directory {} does not exist",
-                json.display(),
-                dir.display()
-            );
-        }
+        check_dir(json)?;
     }
     if args.scene.width.is_none() && args.scene.height.is_none() {
         args.scene.width = Some(32);
