@@ -198,14 +198,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         seed: config.seed,
         progress: false,
     };
-    let srt = Mixture::new(
-        vec![PathGenerator::srt(
-            config.max_bounces,
-            config.ga.srt_absorption,
-            mixture_file::uniform_light(view.scene),
-        )],
-        vec![1.0],
-    );
+    let srt = mixture_file::srt(view.scene, config.max_bounces, config.ga.srt_absorption);
     let srt_rendered = match config.srt_pdf_error {
         Some(factor) => srt.clone().with_pdf_error(0, factor),
         None => srt.clone(),

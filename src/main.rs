@@ -782,14 +782,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         ..GaConfig::default()
     };
     let max_bounces = scene.render.max_bounces;
-    let q = genpath::path::mixture::Mixture::new(
-        vec![genpath::path::generator::PathGenerator::srt(
-            max_bounces,
-            ga.srt_absorption,
-            mixture_file::uniform_light(&scene),
-        )],
-        vec![1.0],
-    );
+    let q = mixture_file::srt(&scene, max_bounces, ga.srt_absorption);
     let pixel = (scene.camera.width / 2, scene.camera.height / 2);
     let m = ga.test_paths;
     let (packet_t, _) = best(passes, || {

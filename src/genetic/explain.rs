@@ -145,6 +145,10 @@ pub fn draw(view: &SceneView, render: &Image, plan: &Plan) -> Image {
     };
     for p in &plan.pixels {
         let ray = camera.ray(p.x as f32 + 0.5, p.y as f32 + 0.5);
+        // The cones' apex: the pixel centre's first hit, traced once per GA pixel.
+        let from = view
+            .trace(&ray, &mut RayCounts::default())
+            .map_or(ray.origin, |x1| x1.p);
         let centre = ((p.x as f32 + 0.5) * s, (p.y as f32 + 0.5) * s);
         let evolved: f64 = p.mixture.weights[1..].iter().sum();
         for (g, &w) in p.mixture.generators.iter().zip(&p.mixture.weights).skip(1) {
@@ -165,9 +169,6 @@ pub fn draw(view: &SceneView, render: &Image, plan: &Plan) -> Image {
                 canvas.dot((ax, ay), 2, colour, alpha);
                 if k == 0 {
                     canvas.line(centre, (ax, ay), colour, 0.3 * alpha);
-                    let from = view
-                        .trace(&ray, &mut RayCounts::default())
-                        .map_or(ray.origin, |x1| x1.p);
                     let radius = (anchor - from).length() * (a.theta_c.min(1.5) as f32).tan();
                     let radius = radius * camera.pixels_per_unit(depth) * s;
                     canvas.circle((ax, ay), radius, colour, 0.5 * alpha);

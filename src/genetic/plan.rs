@@ -22,7 +22,6 @@
 use super::population::{evolve, GenerationStats};
 use super::test_paths::TestPaths;
 use super::{fitness, luminance, GaConfig, GaConfigError};
-use crate::path::generator::PathGenerator;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, mixture_file, RayCounts, SceneView};
 use crate::render::progress_bar;
@@ -437,14 +436,7 @@ impl Plan {
         config.validate()?;
         let scene = view.scene;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let srt = Mixture::new(
-            vec![PathGenerator::srt(
-                max_bounces,
-                ga.srt_absorption,
-                mixture_file::uniform_light(scene),
-            )],
-            vec![1.0],
-        );
+        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();

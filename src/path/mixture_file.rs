@@ -63,6 +63,18 @@ pub fn uniform_light(scene: &Scene) -> LightPointSampler {
     }
 }
 
+/// The `srt` method as a mixture: the one `srt` generator with uniform light sampling.
+pub fn srt(scene: &Scene, max_bounces: u32, absorption: f64) -> Mixture {
+    Mixture::new(
+        vec![PathGenerator::srt(
+            max_bounces,
+            absorption,
+            uniform_light(scene),
+        )],
+        vec![1.0],
+    )
+}
+
 /// Checks a generator against the invariants that keep the estimator unbiased and finite.
 pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), String> {
     for (k, step) in g.steps.iter().enumerate() {

@@ -4,7 +4,6 @@
 use crate::genetic::plan::{Plan, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::image::Image;
-use crate::path::generator::PathGenerator;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
@@ -82,13 +81,10 @@ impl Prepared {
     ) -> Result<Self, PrepareError> {
         Ok(match config.method {
             Method::Pt => Prepared::Pt,
-            Method::Srt => Prepared::Mixture(Mixture::new(
-                vec![PathGenerator::srt(
-                    settings.max_bounces,
-                    config.srt_absorption,
-                    mixture_file::uniform_light(view.scene),
-                )],
-                vec![1.0],
+            Method::Srt => Prepared::Mixture(mixture_file::srt(
+                view.scene,
+                settings.max_bounces,
+                config.srt_absorption,
             )),
             Method::Mixture => match &config.mixture {
                 Some(m) => Prepared::Mixture(m.clone()),
