@@ -20,10 +20,45 @@
 
 use super::generator::DirectionSampler;
 use super::mixture::Mixture;
-use crate::sampling::anchor::AnchorSampler;
+use crate::sampling::anchor::{inside_cone, AnchorSampler};
 use crate::sampling::brdf;
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
+
+/// One weighted anchor cone of a level, with what its density needs precomputed: the guide
+/// evaluates every cone of a level twice per vertex (light sample and guided sample).
+#[derive(Clone, Copy, Debug)]
+struct GuideAnchor {
+    weight: f64,
+    sampler: AnchorSampler,
+    /// `weight · p1`, `weight · p2` and `tan²(θc/2)` of the sampler.
+    inside: f64,
+    outside: f64,
+    tan2_half: f64,
+}
+
+impl GuideAnchor {
+    fn new(weight: f64, sampler: AnchorSampler) -> Self {
+        let (p1, p2) = sampler.densities();
+        Self {
+            weight,
+            sampler,
+            inside: weight * p1,
+            outside: weight * p2,
+            tan2_half: sampler.tan2_half(),
+        }
+    }
+
+    /// `weight · pdf(wi)` from `x`: [`AnchorSampler::pdf`] without recomputing constants.
+    #[inline]
+    fn weighted_pdf(&self, x: DVec3, wi: DVec3) -> f64 {
+        if inside_cone(self.sampler.axis(x), wi, self.tan2_half) {
+            self.inside
+        } else {
+            self.outside
+        }
+    }
+}
 
 /// The samplers of one vertex index.
 #[derive(Clone, Debug, Default)]
@@ -31,7 +66,7 @@ struct Level {
     /// Summed weight of BRDF sampling.
     brdf: f64,
     /// Anchor cones and their weights.
-    anchors: Vec<(f64, AnchorSampler)>,
+    anchors: Vec<GuideAnchor>,
 }
 
 /// Per vertex index, the weighted directional samplers of a mixture.
@@ -64,7 +99,9 @@ impl Guide {
         for (k, level) in levels.iter_mut().enumerate() {
             for (g, &w) in mixture.generators.iter().zip(&mixture.weights) {
                 match g.steps.get(k).map(|s| &s.sampler) {
-                    Some(DirectionSampler::Anchor(a)) => level.anchors.push((w, *a)),
+                    Some(DirectionSampler::Anchor(a)) => {
+                        level.anchors.push(GuideAnchor::new(w, *a))
+                    }
                     _ => level.brdf += w,
                 }
             }
@@ -98,7 +135,7 @@ impl Guide {
             return brdf_pdf;
         };
         let scale = self.pdf_error.unwrap_or(1.0);
-        let anchors: f64 = level.anchors.iter().map(|(w, a)| w * a.pdf(x, wi)).sum();
+        let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
         level.brdf * brdf_pdf + scale * anchors
     }
 
@@ -133,13 +170,13 @@ impl Guide {
         let wi = if target < 0.0 {
             brdf::sample(material, n, wo, rest)?.wi
         } else {
-            let mut chosen = &level.anchors[level.anchors.len() - 1].1;
-            for (w, a) in &level.anchors {
-                if target < *w {
-                    chosen = a;
+            let mut chosen = &level.anchors[level.anchors.len() - 1].sampler;
+            for a in &level.anchors {
+                if target < a.weight {
+                    chosen = &a.sampler;
                     break;
                 }
-                target -= w;
+                target -= a.weight;
             }
             chosen.sample(xd, rest).as_vec3().normalize()
         };

@@ -108,20 +108,35 @@ impl AnchorSampler {
 
     /// Solid-angle density of [`sample`](Self::sample) for the unit direction `dir`.
     pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
-        let (p1, p2) = self.densities();
-        if self.inside(from, dir) {
-            p1
+        // One sin_cos gives the extents and tan²(θc/2) = h_c / g_c.
+        let (hc, gc) = self.extents();
+        if inside_cone(self.axis(from), dir, hc / gc) {
+            self.alpha / (2.0 * PI * hc)
         } else {
-            p2
+            (1.0 - self.alpha) / (2.0 * PI * gc)
         }
     }
 
-    /// Whether unit `dir` lies strictly inside the cone. The angle `2·atan2(|d−a|, |d+a|)`
-    /// stays accurate near 0 and near π, where `acos(d·a)` does not.
+    /// Whether unit `dir` lies strictly inside the cone: its angle to the axis,
+    /// `2·atan2(|d−a|, |d+a|)`, is below θc, tested as `|d−a|² < tan²(θc/2)·|d+a|²`. Both
+    /// lengths stay accurate near 0 and near π, where `acos(d·a)` does not, and the test
+    /// needs no trigonometry per direction (`tan2_half` is [`Self::tan2_half`]).
     pub fn inside(&self, from: DVec3, dir: DVec3) -> bool {
-        let axis = self.axis(from);
-        2.0 * (dir - axis).length().atan2((dir + axis).length()) < self.theta_c
+        inside_cone(self.axis(from), dir, self.tan2_half())
     }
+
+    /// `tan²(θc/2)`, the constant of [`Self::inside`].
+    pub fn tan2_half(&self) -> f64 {
+        let (hc, gc) = self.extents();
+        hc / gc
+    }
+}
+
+/// Whether unit `dir` is strictly inside the cone of unit `axis` whose half-angle θc has
+/// `tan²(θc/2) = tan2_half` (see [`AnchorSampler::inside`]).
+#[inline]
+pub fn inside_cone(axis: DVec3, dir: DVec3, tan2_half: f64) -> bool {
+    (dir - axis).length_squared() < tan2_half * (dir + axis).length_squared()
 }
 
 #[cfg(test)]
