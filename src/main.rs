@@ -239,6 +239,10 @@ struct GaArgs {
     /// Standard deviation of an anchor shift, relative to the scene's size.
     #[arg(long, default_value_t = GaConfig::default().anchor_shift)]
     anchor_shift: f64,
+    /// After evolution, set each GA pixel's mixture weights to the optimum of eq. 10 for its
+    /// evolved generators (convex optimisation, beyond the paper).
+    #[arg(long, default_value_t = GaConfig::default().convex_weights, action = clap::ArgAction::Set, value_name = "BOOL")]
+    convex_weights: bool,
     /// Distance between GA pixels on the grid, in pixels.
     #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     ga_grid: u32,
@@ -278,6 +282,7 @@ impl GaArgs {
             srt_absorption,
             anchor_shift: self.anchor_shift,
             max_steps: None,
+            convex_weights: self.convex_weights,
         };
         let plan = PlanConfig {
             grid: self.ga_grid,
@@ -986,7 +991,7 @@ fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Valu
         .map(|p| {
             serde_json::json!({
                 "x": p.x, "y": p.y, "origin": p.origin,
-                "v_srt": p.v_srt, "v_best": p.v_best, "kept_srt": p.kept_srt,
+                "v_srt": p.v_srt, "v_best": p.v_best, "v_evolved": p.v_evolved, "kept_srt": p.kept_srt,
                 "test_paths": p.test_paths, "light_paths": p.light_paths, "steps": p.steps,
                 "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
                 "mixture": p.mixture,

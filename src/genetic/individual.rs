@@ -56,26 +56,28 @@ impl Individual {
 
     /// Normalises the weights to sum 1 with the defensive one at least `defensive`.
     pub fn normalise_weights(&mut self, defensive: f64) {
-        let others: f64 = self.weights[1..].iter().sum();
-        let total = self.weights[0] + others;
-        let w0 = if total > 0.0 {
-            self.weights[0] / total
-        } else {
-            1.0
-        };
-        if others <= 0.0 || w0 >= 1.0 {
-            self.weights.iter_mut().for_each(|w| *w = 0.0);
-            self.weights[0] = 1.0;
-            return;
-        }
-        let w0 = w0.max(defensive);
-        let scale = (1.0 - w0) / others;
-        for w in &mut self.weights[1..] {
-            *w *= scale;
-        }
-        // The defensive weight takes the rounding error, so the sum is 1 to an ulp or two.
-        self.weights[0] = 1.0 - self.weights[1..].iter().sum::<f64>();
+        normalise_weights(&mut self.weights, defensive);
     }
+}
+
+/// Normalises non-negative `weights` to sum 1 with `weights[0]` (the defensive component) at
+/// least `defensive`.
+pub fn normalise_weights(weights: &mut [f64], defensive: f64) {
+    let others: f64 = weights[1..].iter().sum();
+    let total = weights[0] + others;
+    let w0 = if total > 0.0 { weights[0] / total } else { 1.0 };
+    if others <= 0.0 || w0 >= 1.0 {
+        weights.iter_mut().for_each(|w| *w = 0.0);
+        weights[0] = 1.0;
+        return;
+    }
+    let w0 = w0.max(defensive);
+    let scale = (1.0 - w0) / others;
+    for w in &mut weights[1..] {
+        *w *= scale;
+    }
+    // The defensive weight takes the rounding error, so the sum is 1 to an ulp or two.
+    weights[0] = 1.0 - weights[1..].iter().sum::<f64>();
 }
 
 /// What random draws need of the scene, and the source of fresh gene ids.

@@ -54,6 +54,9 @@ pub struct GaConfig {
     /// Steps per evolved generator; `None`: one per vertex that can scatter before
     /// `max_bounces`. The pixel plan sets it to the depth the test paths need (pruning).
     pub max_steps: Option<usize>,
+    /// After evolution, replace the best individual's weights by the ones that minimise
+    /// eq. 10 for its generators ([`fitness::optimise_weights`], beyond the paper).
+    pub convex_weights: bool,
 }
 
 impl Default for GaConfig {
@@ -81,6 +84,7 @@ impl Default for GaConfig {
             srt_absorption: 0.5,
             anchor_shift: 0.05,
             max_steps: None,
+            convex_weights: false,
         }
     }
 }

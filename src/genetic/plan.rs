@@ -42,6 +42,11 @@ const GA_STREAM: u64 = 0x6765_6e65_7469_6373;
 /// ~100 test paths carry light, too few to call a depth's share negligible.)
 pub const PRUNE_SHARE: f64 = 0.0;
 
+/// Iterations of [`fitness::optimise_weights`] with `GaConfig::convex_weights` (each costs
+/// two passes over the light-carrying test paths per generator; it stops earlier once `V`
+/// stops falling).
+pub const CONVEX_ITERATIONS: usize = 200;
+
 /// Where the genetic algorithm runs and how its results spread over the image.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -122,6 +127,9 @@ pub struct GaPixel {
     /// Eq. 10 on the test paths: the defensive `srt` density alone, and the best individual.
     pub v_srt: f64,
     pub v_best: f64,
+    /// Eq. 10 of the best individual with its evolved weights, before
+    /// `GaConfig::convex_weights` replaced them (equal to `v_best` without).
+    pub v_evolved: f64,
     /// The GA's best individual was no better than `srt`, which is kept instead.
     pub kept_srt: bool,
     /// Test paths sampled (`M`) and those that carry light (stored).
@@ -381,24 +389,54 @@ fn run_pixel(
         .max_steps
         .unwrap_or(usize::MAX)
         .min(max_bounces.saturating_sub(1).max(1) as usize);
-    let (mixture, v_best, kept_srt, history, evals) = if paths.is_empty() {
-        (srt.clone(), v_srt, true, Vec::new(), (0, 0))
+    let (mixture, v_best, v_evolved, kept_srt, history, evals) = if paths.is_empty() {
+        (srt.clone(), v_srt, v_srt, true, Vec::new(), (0, 0))
     } else {
-        let evolution = evolve(ga, &paths, view, &mut rng);
-        let evals = (
+        let mut evolution = evolve(ga, &paths, view, &mut rng);
+        let v_evolved = evolution.best_v;
+        let mut evals = (
             evolution.individual_evaluations,
             evolution.generator_evaluations,
         );
+        if ga.convex_weights && v_evolved.is_finite() {
+            let best = &mut evolution.best;
+            let densities: Vec<Vec<f64>> = best
+                .genes
+                .iter()
+                .map(|gene| {
+                    let mut d = vec![0.0; paths.len()];
+                    paths.generator_pdfs(view, &gene.generator, &mut d);
+                    d
+                })
+                .collect();
+            evals.1 += densities.len() as u64;
+            let v = fitness::optimise_weights(
+                (&paths.f2_over_q, paths.sampled),
+                &densities,
+                &mut best.weights,
+                ga.defensive_weight,
+                CONVEX_ITERATIONS,
+            );
+            evolution.best_v = v;
+        }
         if evolution.best_v < v_srt {
             (
                 evolution.best.to_mixture(),
                 evolution.best_v,
+                v_evolved,
                 false,
                 evolution.history,
                 evals,
             )
         } else {
-            (srt.clone(), v_srt, true, evolution.history, evals)
+            (
+                srt.clone(),
+                v_srt,
+                v_evolved,
+                true,
+                evolution.history,
+                evals,
+            )
         }
     };
     let pixel = GaPixel {
@@ -409,6 +447,7 @@ fn run_pixel(
         mixture,
         v_srt,
         v_best,
+        v_evolved,
         kept_srt,
         test_paths: paths.sampled,
         light_paths: paths.len(),

@@ -25,7 +25,7 @@ pub struct MethodSpec {
 
 /// Keys of `ga:key=value:…` specs.
 pub const GA_KEYS: &str = "m (test paths), pop (population), gen (generations), s (generators), \
-    grid, extra, e (elitism), neighbours";
+    grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1)";
 
 impl MethodSpec {
     /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
@@ -55,6 +55,11 @@ impl MethodSpec {
             };
             let bad = |e: &dyn std::fmt::Display| format!("`{text}`: {key}={value}: {e}");
             let int = || value.parse::<usize>().map_err(|e| bad(&e));
+            let flag = || match value {
+                "0" => Ok(false),
+                "1" => Ok(true),
+                _ => Err(bad(&"expected 0 or 1")),
+            };
             let (ga, plan): (&mut GaConfig, &mut PlanConfig) = (&mut config.ga, &mut config.plan);
             match key {
                 "m" => ga.test_paths = int()?,
@@ -65,6 +70,7 @@ impl MethodSpec {
                 "grid" => plan.grid = u32::try_from(int()?).map_err(|e| bad(&e))?,
                 "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
                 "neighbours" => plan.neighbours = int()?,
+                "cw" => ga.convex_weights = flag()?,
                 _ => return Err(format!("`{text}`: unknown key `{key}` (keys: {GA_KEYS})")),
             }
         }
