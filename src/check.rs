@@ -11,7 +11,7 @@
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
-use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::plan::{Plan, PlanConfig, Target};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
@@ -50,8 +50,11 @@ impl CheckConfig {
                 test_paths: 4000,
                 ..GaConfig::default()
             },
+            // Without the gate, so that `ga` and `ga-pt` render with evolved mixtures
+            // wherever the GA found one, not with `pt`.
             plan: PlanConfig {
                 grid: 8,
+                gate: false,
                 ..PlanConfig::default()
             },
             srt_pdf_error: None,
@@ -207,7 +210,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         view,
         &config.ga,
         &config.plan,
-        config.max_bounces,
+        (config.max_bounces, Target::Mixture),
         config.seed,
         false,
     )?;

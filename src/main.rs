@@ -243,6 +243,13 @@ struct GaArgs {
     /// evolved generators (convex optimisation, beyond the paper).
     #[arg(long, default_value_t = GaConfig::default().convex_weights, action = clap::ArgAction::Set, value_name = "BOOL")]
     convex_weights: bool,
+    /// Share of random anchor points drawn where light-carrying test paths went (0: the
+    /// paper's, uniform by area on all surfaces).
+    #[arg(long, default_value_t = GaConfig::default().data_anchors, value_parser = parse_probability)]
+    data_anchors: f64,
+    /// Stop sampling a pixel's test paths once this many carry light.
+    #[arg(long, value_name = "L", default_value_t = GaConfig::default().max_light_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    max_light_paths: u32,
     /// Distance between GA pixels on the grid, in pixels.
     #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     ga_grid: u32,
@@ -263,6 +270,14 @@ struct GaArgs {
     /// 0.01)) is below this get no GA pixel.
     #[arg(long, default_value_t = PlanConfig::default().prune_variance)]
     prune_variance: f64,
+    /// The paper's method everywhere: no pilot, and every pixel renders with its evolved
+    /// mixture even where pt is predicted to do better (see the README's "gate").
+    #[arg(long)]
+    no_gate: bool,
+    /// Evolve half the GA pixels (a checkerboard of grid cells) first and the others from
+    /// their evolved neighbours' best individuals, with half the generations.
+    #[arg(long)]
+    warm_start: bool,
 }
 
 impl GaArgs {
@@ -283,6 +298,8 @@ impl GaArgs {
             anchor_shift: self.anchor_shift,
             max_steps: None,
             convex_weights: self.convex_weights,
+            max_light_paths: self.max_light_paths as usize,
+            data_anchors: self.data_anchors,
         };
         let plan = PlanConfig {
             grid: self.ga_grid,
@@ -291,6 +308,8 @@ impl GaArgs {
             neighbours: self.ga_neighbours,
             prune: !self.no_prune,
             prune_variance: self.prune_variance,
+            gate: !self.no_gate,
+            warm_start: self.warm_start,
         };
         ga.validate()?;
         plan.validate()?;
@@ -992,6 +1011,7 @@ fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Valu
             serde_json::json!({
                 "x": p.x, "y": p.y, "origin": p.origin,
                 "v_srt": p.v_srt, "v_best": p.v_best, "v_evolved": p.v_evolved, "kept_srt": p.kept_srt,
+                "trial": p.trial, "warm": p.warm,
                 "test_paths": p.test_paths, "light_paths": p.light_paths, "steps": p.steps,
                 "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
                 "mixture": p.mixture,

@@ -8,7 +8,7 @@
 //! deadline, so a hang fails the test instead of stalling it.
 
 use genpath::accel::{self, AccelKind};
-use genpath::genetic::plan::{Plan, PlanConfig};
+use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
@@ -232,7 +232,8 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
             grid: 2,
             ..PlanConfig::default()
         };
-        let plan = Plan::build(&view, &ga, &config, max_bounces, 3, false)
+        let target = (max_bounces, Target::Mixture);
+        let plan = Plan::build(&view, &ga, &config, target, 3, false)
             .map_err(|e| format!("GA: {e}"))?;
         films.push(render(&view, &settings, Estimator::Ga(&plan)));
         films.push(render(&view, &settings, Estimator::GaPt(&plan)));

@@ -6,7 +6,7 @@
 //! and a `ga` render whose interpolation weights were left unnormalised.
 
 use genpath::accel::{self, AccelKind};
-use genpath::genetic::plan::{Plan, PlanConfig};
+use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
@@ -50,8 +50,10 @@ fn small_ga() -> (GaConfig, PlanConfig) {
         srt_absorption: SRT_ABSORPTION,
         ..GaConfig::default()
     };
+    // No gate: every pixel renders with evolved mixtures, the estimator under test.
     let plan = PlanConfig {
         grid: 16,
+        gate: false,
         ..PlanConfig::default()
     };
     (ga, plan)
@@ -68,13 +70,15 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         Which::Pt => None,
         Which::GaPt => {
             let (ga, config) = small_ga();
-            plan = Some(Plan::build(&view, &ga, &config, max_bounces, seed, false).unwrap());
+            let target = (max_bounces, Target::Guide);
+            plan = Some(Plan::build(&view, &ga, &config, target, seed, false).unwrap());
             guided = true;
             None
         }
         Which::Ga { unnormalised } => {
             let (ga, config) = small_ga();
-            let p = Plan::build(&view, &ga, &config, max_bounces, seed, false).unwrap();
+            let target = (max_bounces, Target::Mixture);
+            let p = Plan::build(&view, &ga, &config, target, seed, false).unwrap();
             assert!(
                 p.pixels.iter().any(|p| !p.kept_srt),
                 "{name}: the GA improved on srt nowhere, so the test would only test srt"

@@ -5,6 +5,7 @@
 //! weight ≥ `GaConfig::defensive_weight`: whatever the evolved components do, the mixture
 //! covers every light-carrying path, so the final estimator stays unbiased (design §5).
 
+use super::test_paths::TestPaths;
 use super::GaConfig;
 use crate::path::generator::{
     DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN,
@@ -90,6 +91,10 @@ pub struct GenePool<'a> {
     /// Running sum of triangle areas, for anchors uniform by area on all surfaces.
     area_cdf: Vec<f64>,
     next_id: u64,
+    /// Light-carrying test paths that anchors may be drawn from, with the running sum of
+    /// their `F²/q`, and the share of anchors drawn from them (`GaConfig::data_anchors`).
+    paths: Option<(&'a TestPaths, Vec<f64>)>,
+    data_anchors: f64,
 }
 
 /// A uniform number in `[lo, hi)`.
@@ -120,7 +125,42 @@ impl<'a> GenePool<'a> {
             ),
             area_cdf,
             next_id: 1,
+            paths: None,
+            data_anchors: config.data_anchors,
         }
+    }
+
+    /// This pool with `paths` as the source of data-driven anchors.
+    pub fn with_test_paths(mut self, paths: &'a TestPaths) -> Self {
+        let mut total = 0.0;
+        let cdf = paths
+            .f2_over_q
+            .iter()
+            .map(|f| {
+                total += f;
+                total
+            })
+            .collect();
+        self.paths = Some((paths, cdf));
+        self
+    }
+
+    /// An anchor point for step `k` and its triangle. With probability `data_anchors` (and
+    /// test paths), where a light-carrying test path's `k`-th direction arrived, the path
+    /// picked with probability ∝ its `F²/q` (beyond the paper: the light's actual routes);
+    /// otherwise, or where that path has no `k`-th step, uniform by area on all surfaces.
+    pub fn random_anchor(&self, k: usize, rng: &mut crate::sampling::Rng) -> (DVec3, u32) {
+        if let Some((paths, cdf)) = &self.paths {
+            let total = cdf.last().copied().unwrap_or(0.0);
+            if total > 0.0 && rng.random::<f64>() < self.data_anchors {
+                let target = rng.random::<f64>() * total;
+                let i = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
+                if let Some(found) = paths.step_target(i, k) {
+                    return found;
+                }
+            }
+        }
+        self.random_surface_point(rng)
     }
 
     /// The defensive component every individual carries.
@@ -164,15 +204,16 @@ impl<'a> GenePool<'a> {
         range(rng, (ABSORPTION_MIN, ABSORPTION_MAX))
     }
 
-    /// A directional sampler of either type and, for an anchor, its triangle.
+    /// A directional sampler of either type for step `k` and, for an anchor, its triangle.
     pub fn random_sampler(
         &self,
+        k: usize,
         rng: &mut crate::sampling::Rng,
     ) -> (DirectionSampler, Option<u32>) {
         if rng.random::<f64>() < 0.5 {
             return (DirectionSampler::Brdf, None);
         }
-        let (anchor, prim) = self.random_surface_point(rng);
+        let (anchor, prim) = self.random_anchor(k, rng);
         let sampler = AnchorSampler {
             anchor,
             theta_c: Self::random_theta_c(rng),
@@ -200,8 +241,8 @@ impl<'a> GenePool<'a> {
         let n = self.steps;
         let mut steps = Vec::with_capacity(n);
         let mut anchor_prims = Vec::with_capacity(n);
-        for _ in 0..n {
-            let (sampler, prim) = self.random_sampler(rng);
+        for k in 0..n {
+            let (sampler, prim) = self.random_sampler(k, rng);
             steps.push(Step {
                 sampler,
                 absorption: Self::random_absorption(rng),
@@ -216,6 +257,32 @@ impl<'a> GenePool<'a> {
             },
             anchor_prims,
         }
+    }
+
+    /// `ind`, evolved with another pool, as a member of this one: fresh gene ids (ids are
+    /// per pool), the defensive component this pool's, and every generator cut or padded
+    /// (with BRDF steps of absorption 0.5) to this pool's number of steps.
+    pub fn adopt(&mut self, ind: &Individual, config: &GaConfig) -> Individual {
+        let mut genes = vec![self.srt()];
+        for gene in &ind.genes[1..] {
+            let mut gene = gene.clone();
+            gene.generator.steps.resize(
+                self.steps,
+                Step {
+                    sampler: DirectionSampler::Brdf,
+                    absorption: 0.5,
+                },
+            );
+            gene.anchor_prims.resize(self.steps, None);
+            gene.id = self.fresh_id();
+            genes.push(gene);
+        }
+        let mut adopted = Individual {
+            genes,
+            weights: ind.weights.clone(),
+        };
+        adopted.normalise_weights(config.defensive_weight);
+        adopted
     }
 
     /// A random individual: the defensive component and `config.generators` random ones,

@@ -57,6 +57,12 @@ pub struct GaConfig {
     /// After evolution, replace the best individual's weights by the ones that minimise
     /// eq. 10 for its generators ([`fitness::optimise_weights`], beyond the paper).
     pub convex_weights: bool,
+    /// Test-path sampling stops once this many carry light (fewer than `test_paths` are
+    /// then sampled): the GA's cost grows with them, its information much less.
+    pub max_light_paths: usize,
+    /// Share of random anchor points drawn where light-carrying test paths went (beyond
+    /// the paper, which draws them uniformly by area on all surfaces: 0).
+    pub data_anchors: f64,
 }
 
 impl Default for GaConfig {
@@ -85,6 +91,8 @@ impl Default for GaConfig {
             anchor_shift: 0.05,
             max_steps: None,
             convex_weights: false,
+            max_light_paths: 2_000,
+            data_anchors: 0.5,
         }
     }
 }
@@ -100,6 +108,12 @@ impl GaConfig {
         let fail = |m: String| Err(GaConfigError(m));
         if self.population == 0 || self.generations == 0 || self.generators == 0 {
             return fail("population, generations and generators must be at least 1".into());
+        }
+        if !(self.data_anchors.is_finite() && (0.0..=1.0).contains(&self.data_anchors)) {
+            return fail(format!("data_anchors {} is not in [0, 1]", self.data_anchors));
+        }
+        if self.max_light_paths == 0 {
+            return fail("max_light_paths must be at least 1".into());
         }
         if self.elitism > self.population {
             return fail(format!(

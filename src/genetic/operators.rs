@@ -68,7 +68,7 @@ fn mutate_sampler(pool: &GenePool, config: &GaConfig, gene: &mut Gene, k: usize,
         (DirectionSampler::Anchor(s), Some(prim)) if choice < 5 => match choice {
             0 | 1 => s.anchor = shift_anchor(pool, prim, s.anchor, config.anchor_shift, rng),
             2 => {
-                let (anchor, prim) = pool.random_surface_point(rng);
+                let (anchor, prim) = pool.random_anchor(k, rng);
                 s.anchor = anchor;
                 gene.anchor_prims[k] = Some(prim);
             }
@@ -76,7 +76,7 @@ fn mutate_sampler(pool: &GenePool, config: &GaConfig, gene: &mut Gene, k: usize,
             _ => s.alpha = perturb_probability(s.alpha, rng, 1e-3, 1.0 - 1e-3),
         },
         _ => {
-            let (sampler, prim) = pool.random_sampler(rng);
+            let (sampler, prim) = pool.random_sampler(k, rng);
             gene.generator.steps[k].sampler = sampler;
             gene.anchor_prims[k] = prim;
         }

@@ -16,14 +16,27 @@
 //!    weights sum to 1, containing the defensive `srt` component, so the estimator stays
 //!    unbiased.
 //!
-//! The test paths and the GA draw from streams disjoint from the final render's, so the
-//! mixtures do not depend on the samples they are used with.
+//! 5. **Gate** (beyond the paper; off with `PlanConfig::gate = false`). The GA pays for
+//!    itself only where its estimator beats path tracing at equal time, so each GA pixel
+//!    measures it: `GATE_SAMPLES` samples of `pt` and of the evolved estimator (the mixture
+//!    for `ga`, the guided path tracer for `ga-pt`), and the predicted gain
+//!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
+//!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
+//!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
+//!    pixels spread over the image; when none of them predicts a gain, the other GA pixels
+//!    are not evolved and the whole image renders with `pt`. Low-variance cells (pruning)
+//!    render with `pt` too.
+//!
+//! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
+//! the mixtures and choices do not depend on the samples they are used with.
 
-use super::population::{evolve, GenerationStats};
+use super::individual::Individual;
+use super::population::{evolve_from, GenerationStats};
 use super::test_paths::TestPaths;
 use super::{fitness, luminance, GaConfig, GaConfigError};
+use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
-use crate::path::{emitted, mixture_file, RayCounts, SceneView};
+use crate::path::{emitted, mixture_file, pt, RayCounts, SceneView};
 use crate::render::progress_bar;
 use crate::sampling::{sample_rng, uniform};
 use crate::scene::SceneAnalysis;
@@ -35,6 +48,21 @@ use std::time::{Duration, Instant};
 const BASELINE_STREAM: u64 = 0x6261_7365_6c69_6e65;
 const TEST_PATH_STREAM: u64 = 0x7465_7374_7061_7468;
 const GA_STREAM: u64 = 0x6765_6e65_7469_6373;
+const GATE_PT_STREAM: u64 = 0x6761_7465_5f70_7400;
+const GATE_STREAM: u64 = 0x6761_7465_0000_0000;
+const CHECK_STREAM: u64 = 0x6368_6563_6b00_0000;
+
+/// Samples of `pt` (and of the guided path tracer) with which the gate measures their
+/// variance at a GA pixel.
+pub const GATE_SAMPLES: u32 = 2048;
+/// Samples of the mixture estimator with which the gate counts its cost.
+pub const COST_SAMPLES: u32 = 256;
+/// The evolved estimator renders a pixel only where its predicted gain over `pt` exceeds
+/// this: away from GA pixels it renders with the union of up to `neighbours` mixtures,
+/// which evaluates more densities per vertex than the GA pixel's own mixture in the trial.
+pub const GATE_MARGIN: f64 = 1.25;
+/// GA pixels evolved before the gate decides whether to evolve the others.
+pub const PILOT_PIXELS: usize = 8;
 
 /// With pruning, generators get the steps that carry all but this share of the test paths'
 /// `Σ F²/q`: none, so steps are cut only past the deepest light-carrying test path. (Cutting
@@ -64,6 +92,12 @@ pub struct PlanConfig {
     /// test paths need (`TestPaths::steps_needed`).
     pub prune: bool,
     pub prune_variance: f64,
+    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
+    /// the GA when a pilot predicts no gain anywhere (see the module documentation).
+    pub gate: bool,
+    /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
+    /// individuals, with half the generations (beyond the paper).
+    pub warm_start: bool,
 }
 
 impl Default for PlanConfig {
@@ -75,6 +109,8 @@ impl Default for PlanConfig {
             neighbours: 4,
             prune: true,
             prune_variance: 0.5,
+            gate: true,
+            warm_start: false,
         }
     }
 }
@@ -107,6 +143,41 @@ impl PlanConfig {
     }
 }
 
+/// The estimator a plan is built for: the gate compares it with `pt`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Target {
+    /// `ga`: the mixture estimator (eq. 8).
+    Mixture,
+    /// `ga-pt`: path tracing guided by the mixture.
+    Guide,
+}
+
+/// One estimator's samples at a pixel, per sample: mean and variance of the luminance, and
+/// the cost ([`RayCounts::cost`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Moments {
+    pub mean: f64,
+    pub variance: f64,
+    pub cost: f64,
+}
+
+impl Moments {
+    /// `1 / (variance × cost)`; infinite without variance.
+    fn efficiency(&self) -> f64 {
+        1.0 / (self.variance * self.cost)
+    }
+}
+
+/// The gate's comparison at a GA pixel.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Trial {
+    pub pt: Moments,
+    pub evolved: Moments,
+    /// `evolved`'s efficiency over `pt`'s; 0 where neither has variance (nothing to gain).
+    pub gain: f64,
+}
+
 /// Why a GA pixel was chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -132,6 +203,14 @@ pub struct GaPixel {
     pub v_evolved: f64,
     /// The GA's best individual was no better than `srt`, which is kept instead.
     pub kept_srt: bool,
+    /// With the gate (and an evolved mixture): the evolved estimator against `pt` here.
+    pub trial: Option<Trial>,
+    /// The GA's best individual (before the comparison with `srt`), which warm-starts
+    /// neighbouring GA pixels.
+    #[serde(skip)]
+    pub best: Option<Individual>,
+    /// Whether this pixel's GA started from its neighbours' best individuals.
+    pub warm: bool,
     /// Test paths sampled (`M`) and those that carry light (stored).
     pub test_paths: usize,
     pub light_paths: usize,
@@ -160,6 +239,10 @@ pub struct PlanStats {
     pub empty_cells: usize,
     /// Grid cells left without a GA pixel because their baseline variance is low (pruning).
     pub low_variance_cells: usize,
+    /// GA pixels not evolved because no pilot pixel predicted a gain over `pt` (gate).
+    pub gated_pixels: usize,
+    /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
+    pub pt_pixels: usize,
     /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
     /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
     pub cell_variance: [f64; 3],
@@ -174,6 +257,11 @@ pub struct Plan {
     width: u32,
     height: u32,
     pub pixels: Vec<GaPixel>,
+    /// With the gate: points where the image renders with `pt` (one pixel of each
+    /// low-variance cell, and the GA pixels the pilot left out), interpolated like GA pixels.
+    pub pt_points: Vec<(u32, u32)>,
+    gate: bool,
+    pub target: Target,
     /// The defensive density alone: the mixture of an image without any GA pixel.
     pub srt: Mixture,
     neighbours: usize,
@@ -274,6 +362,8 @@ fn baseline(
 /// What [`choose_pixels`] chose and left out.
 struct Choice {
     pixels: Vec<(u32, u32, Origin)>,
+    /// A scattering pixel of each low-variance cell.
+    low: Vec<(u32, u32)>,
     empty_cells: usize,
     low_variance_cells: usize,
     /// Pooled baseline relative variance of every cell with a scattering pixel.
@@ -285,6 +375,7 @@ struct Choice {
 fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig) -> Choice {
     let g = config.grid;
     let mut chosen = Vec::new();
+    let mut low_cells = Vec::new();
     let mut cells = Vec::new();
     let (mut empty, mut low) = (0, 0);
     let mut cell_variance = Vec::new();
@@ -323,9 +414,10 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
                 0.0
             };
             match best {
-                Some(_) if config.prune && mean_noise < config.prune_variance => {
+                Some((_, x, y)) if config.prune && mean_noise < config.prune_variance => {
                     cell_variance.push(mean_noise);
                     low += 1;
+                    low_cells.push((x, y));
                 }
                 Some((_, x, y)) => {
                     cell_variance.push(mean_noise);
@@ -350,6 +442,7 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
     );
     Choice {
         pixels: chosen,
+        low: low_cells,
         empty_cells: empty,
         low_variance_cells: low,
         cell_variance,
@@ -364,14 +457,15 @@ fn run_pixel(
     (x, y, origin): (u32, u32, Origin),
     max_bounces: u32,
     seed: u64,
-    prune: bool,
+    (config, target): (&PlanConfig, Target),
+    seeds: &[Individual],
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
-    let (paths, counts) = TestPaths::sample(
+    let (paths, mut counts) = TestPaths::sample_until(
         view,
         srt,
         (x, y),
-        ga.test_paths,
+        (ga.test_paths, ga.max_light_paths),
         max_bounces,
         derived_seed(seed, TEST_PATH_STREAM),
     );
@@ -381,18 +475,25 @@ fn run_pixel(
     let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, 0);
     let v_srt = fitness::second_moment(view, &paths, srt);
     // Pruning: no generator step past the depth where the test paths carry light.
+    // A warm start needs fewer generations (`PlanConfig::warm_start`).
     let ga = &GaConfig {
-        max_steps: prune.then(|| paths.steps_needed(PRUNE_SHARE)),
+        max_steps: config.prune.then(|| paths.steps_needed(PRUNE_SHARE)),
+        generations: if seeds.is_empty() {
+            ga.generations
+        } else {
+            ga.generations.div_ceil(2)
+        },
         ..ga.clone()
     };
     let steps = ga
         .max_steps
         .unwrap_or(usize::MAX)
         .min(max_bounces.saturating_sub(1).max(1) as usize);
+    let mut best = None;
     let (mixture, v_best, v_evolved, kept_srt, history, evals) = if paths.is_empty() {
         (srt.clone(), v_srt, v_srt, true, Vec::new(), (0, 0))
     } else {
-        let mut evolution = evolve(ga, &paths, view, &mut rng);
+        let mut evolution = evolve_from(ga, &paths, view, &mut rng, seeds);
         let v_evolved = evolution.best_v;
         let mut evals = (
             evolution.individual_evaluations,
@@ -419,6 +520,7 @@ fn run_pixel(
             );
             evolution.best_v = v;
         }
+        best = Some(evolution.best.clone());
         if evolution.best_v < v_srt {
             (
                 evolution.best.to_mixture(),
@@ -439,10 +541,18 @@ fn run_pixel(
             )
         }
     };
+    let trial = (config.gate && !kept_srt)
+        .then(|| {
+            let evolved = (ga, &mixture);
+            run_trial(view, srt, evolved, target, (x, y), max_bounces, seed, &mut counts)
+        });
     let pixel = GaPixel {
         x,
         y,
         origin,
+        best,
+        warm: !seeds.is_empty(),
+        trial,
         steps,
         mixture,
         v_srt,
@@ -460,14 +570,153 @@ fn run_pixel(
     (pixel, counts)
 }
 
+/// One estimator's samples at pixel `(x, y)`: `n` samples of `pt`, guided by `guide` when
+/// given, or of `mixture`'s estimator (eq. 8) when given, from `stream`'s random streams.
+#[allow(clippy::too_many_arguments)]
+fn sample_moments(
+    view: &SceneView,
+    (x, y): (u32, u32),
+    max_bounces: u32,
+    (seed, stream): (u64, u64),
+    n: u32,
+    mixture: Option<&Mixture>,
+    guide: Option<&Guide>,
+    counts: &mut RayCounts,
+) -> Moments {
+    let camera = &view.scene.camera;
+    let pixel = y as u64 * camera.width as u64 + x as u64;
+    let seed = derived_seed(seed, stream);
+    let mut scratch = MixtureScratch::default();
+    let mut c = RayCounts::default();
+    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    for s in 0..n {
+        let mut rng = sample_rng(seed, pixel, s as u64);
+        let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+        let value = match mixture {
+            None => pt::radiance_guided(view, &ray, max_bounces, &mut rng, &mut c, guide),
+            Some(m) => match view.trace(&ray, &mut c) {
+                None => glam::Vec3::ZERO,
+                Some(x1) => {
+                    let direct = emitted(view.material(x1.prim), &x1, -ray.dir);
+                    let scattered =
+                        m.estimate(view, ray.origin, x1, max_bounces, &mut rng, &mut c, &mut scratch);
+                    direct + scattered.as_vec3()
+                }
+            },
+        };
+        let l = luminance(value.as_dvec3());
+        sum += l;
+        sum_sq += l * l;
+    }
+    counts.add(c);
+    let n = n as f64;
+    let mean = sum / n;
+    Moments {
+        mean,
+        variance: ((sum_sq - sum * mean) / (n - 1.0)).max(0.0),
+        cost: c.cost() / n,
+    }
+}
+
+/// The gate's comparison at `(x, y)` of `mixture`'s estimator for `target` with `pt`.
+///
+/// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
+/// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
+/// density is far below `srt`'s (down to the defensive weight), which a few hundred of its
+/// own samples mostly miss (fig5: the median 512-sample variance is 2–7× below the true
+/// one). Its second moment is therefore eq. 10 on fresh `srt` test paths, which sample
+/// exactly those paths at `srt`'s rate; its cost comes from `COST_SAMPLES` samples.
+#[allow(clippy::too_many_arguments)]
+fn run_trial(
+    view: &SceneView,
+    srt: &Mixture,
+    (ga, mixture): (&GaConfig, &Mixture),
+    target: Target,
+    (x, y): (u32, u32),
+    max_bounces: u32,
+    seed: u64,
+    counts: &mut RayCounts,
+) -> Trial {
+    let pt = sample_moments(
+        view,
+        (x, y),
+        max_bounces,
+        (seed, GATE_PT_STREAM),
+        GATE_SAMPLES,
+        None,
+        None,
+        counts,
+    );
+    let evolved = match target {
+        Target::Guide => {
+            let guide = Guide::new(mixture);
+            let stream = (seed, GATE_STREAM);
+            let g = Some(&guide);
+            sample_moments(view, (x, y), max_bounces, stream, GATE_SAMPLES, None, g, counts)
+        }
+        Target::Mixture => {
+            let stream = (seed, GATE_STREAM);
+            let m = Some(mixture);
+            let cost = sample_moments(view, (x, y), max_bounces, stream, COST_SAMPLES, m, None, counts);
+            let (check, c) = TestPaths::sample_until(
+                view,
+                srt,
+                (x, y),
+                (ga.test_paths, ga.max_light_paths),
+                max_bounces,
+                derived_seed(seed, CHECK_STREAM),
+            );
+            counts.add(c);
+            let mean = check.mean();
+            Moments {
+                mean,
+                variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
+                cost: cost.cost,
+            }
+        }
+    };
+    let gain = if pt.variance > 0.0 {
+        evolved.efficiency() / pt.efficiency()
+    } else {
+        0.0
+    };
+    Trial { pt, evolved, gain }
+}
+
+/// Best individuals of up to `config.neighbours` evolved GA pixels nearest to `at`, within
+/// two grid spacings: the first generation of a warm-started GA.
+fn neighbour_seeds(
+    done: &[Option<(GaPixel, RayCounts)>],
+    (x, y, _): (u32, u32, Origin),
+    config: &PlanConfig,
+) -> Vec<Individual> {
+    let reach = 2.0 * config.grid as f64;
+    let mut near: Vec<(f64, usize, &Individual)> = done
+        .iter()
+        .enumerate()
+        .filter_map(|(i, d)| {
+            let (p, _) = d.as_ref()?;
+            let best = p.best.as_ref()?;
+            let d = (p.x as f64 - x as f64).hypot(p.y as f64 - y as f64);
+            (d <= reach).then_some((d, i, best))
+        })
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.iter()
+        .take(config.neighbours)
+        .map(|n| n.2.clone())
+        .collect()
+}
+
 impl Plan {
     /// Runs the baseline, picks the GA pixels and evolves each of them (in parallel on the
-    /// current rayon pool), with progress bars on stderr when `progress`.
+    /// current rayon pool), with progress bars on stderr when `progress`; with the gate,
+    /// compares the evolved estimator for `target` with `pt` at each.
     pub fn build(
         view: &SceneView,
         ga: &GaConfig,
         config: &PlanConfig,
-        max_bounces: u32,
+        (max_bounces, target): (u32, Target),
         seed: u64,
         progress: bool,
     ) -> Result<Self, GaConfigError> {
@@ -490,19 +739,73 @@ impl Plan {
         if !v.is_empty() {
             stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
         }
-        let chosen = choice.pixels;
+        let chosen = &choice.pixels;
         stats.baseline_seconds = t0.elapsed().as_secs_f64();
 
         let t1 = Instant::now();
         let bar = progress_bar(chosen.len() as u64, "GA", progress);
-        let results: Vec<(GaPixel, RayCounts)> = chosen
-            .par_iter()
-            .map(|&c| {
-                let r = run_pixel(view, &srt, ga, c, max_bounces, seed, config.prune);
-                bar.inc(1);
-                r
-            })
-            .collect();
+        // Waves, each evolved in parallel: with the gate, a pilot of grid pixels spread
+        // evenly over the list; with warm starts, the grid pixels of "white" cells (in a
+        // checkerboard of cells), then the rest, seeded from their evolved neighbours.
+        let n = chosen.len();
+        let pilot: Vec<usize> = if config.gate {
+            let k = PILOT_PIXELS.min(n);
+            (0..k).map(|j| j * n / k).collect()
+        } else {
+            Vec::new()
+        };
+        let g = config.grid;
+        let white = |i: usize| {
+            let (x, y, origin) = chosen[i];
+            origin == Origin::Grid && (x / g + y / g) % 2 == 0
+        };
+        let (first, second): (Vec<usize>, Vec<usize>) = (0..n)
+            .filter(|i| !pilot.contains(i))
+            .partition(|&i| !config.warm_start || white(i));
+        let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; n];
+        let evolve_wave = |wave: &[usize], warm: bool, done: &mut Vec<Option<_>>| {
+            let results: Vec<(usize, (GaPixel, RayCounts))> = wave
+                .par_iter()
+                .map(|&i| {
+                    let seeds = if warm {
+                        neighbour_seeds(done, chosen[i], config)
+                    } else {
+                        Vec::new()
+                    };
+                    let r = run_pixel(
+                        view,
+                        &srt,
+                        ga,
+                        chosen[i],
+                        max_bounces,
+                        seed,
+                        (config, target),
+                        &seeds,
+                    );
+                    bar.inc(1);
+                    (i, r)
+                })
+                .collect();
+            for (i, r) in results {
+                done[i] = Some(r);
+            }
+        };
+        evolve_wave(&pilot, false, &mut done);
+        let pays = |p: &GaPixel| p.trial.is_some_and(|t| t.gain > GATE_MARGIN);
+        let mut pt_points = Vec::new();
+        if config.gate {
+            pt_points.extend(&choice.low);
+        }
+        let pilot_pays = done.iter().flatten().any(|(p, _)| pays(p));
+        if !config.gate || pilot_pays {
+            evolve_wave(&first, false, &mut done);
+            evolve_wave(&second, config.warm_start, &mut done);
+        } else {
+            stats.gated_pixels = first.len() + second.len();
+            let skipped = first.iter().chain(&second);
+            pt_points.extend(skipped.map(|&i| (chosen[i].0, chosen[i].1)));
+        }
+        let results: Vec<(GaPixel, RayCounts)> = done.into_iter().flatten().collect();
         bar.finish_and_clear();
         stats.ga_seconds = t1.elapsed().as_secs_f64();
         let mut pixels = Vec::with_capacity(results.len());
@@ -512,12 +815,18 @@ impl Plan {
             stats.evolve_cpu_seconds += p.ga_seconds;
             stats.individual_evaluations += p.individual_evaluations;
             stats.generator_evaluations += p.generator_evaluations;
+            if config.gate && !pays(&p) {
+                stats.pt_pixels += 1;
+            }
             pixels.push(p);
         }
         Ok(Self {
             width,
             height,
             pixels,
+            pt_points,
+            gate: config.gate,
+            target,
             srt,
             neighbours: config.neighbours,
             analysis: scene.analysis(),
@@ -535,10 +844,12 @@ impl Plan {
 
     /// The GA pixels nearest to `(x, y)` (up to `neighbours`) and their weights, into `out`:
     /// inverse squared distance, normalised to sum 1; a GA pixel itself takes weight 1.
+    /// Indices from `pixels.len()` on are `pt_points`.
     pub fn interpolation(&self, x: u32, y: u32, out: &mut Vec<(f64, usize)>) {
         out.clear();
-        for (i, p) in self.pixels.iter().enumerate() {
-            let d2 = (p.x as f64 - x as f64).powi(2) + (p.y as f64 - y as f64).powi(2);
+        let points = self.pixels.iter().map(|p| (p.x, p.y));
+        for (i, (px, py)) in points.chain(self.pt_points.iter().copied()).enumerate() {
+            let d2 = (px as f64 - x as f64).powi(2) + (py as f64 - y as f64).powi(2);
             if d2 == 0.0 {
                 out.clear();
                 out.push((1.0, i));
@@ -561,10 +872,43 @@ impl Plan {
         }
     }
 
-    /// The mixture pixel `(x, y)` renders with.
-    pub fn mixture_at(&self, x: u32, y: u32) -> Mixture {
+    /// Whether interpolation point `i` (see [`Self::interpolation`]) prefers `pt`: a
+    /// `pt_points` entry, or a GA pixel that kept `srt` or whose gate trial predicts no gain.
+    fn prefers_pt(&self, i: usize) -> bool {
+        self.pixels
+            .get(i)
+            .is_none_or(|p| p.kept_srt || !p.trial.is_some_and(|t| t.gain > GATE_MARGIN))
+    }
+
+    /// How pixel `(x, y)` renders: `None` with `pt`, else with this mixture (`ga`) or guided
+    /// by it (`ga-pt`). Without the gate: the union of the nearest GA pixels' mixtures, each
+    /// with its interpolation weight. With it: `pt` where the points preferring `pt` hold at
+    /// least half the interpolation weight, else the union of the other points' mixtures,
+    /// their weights renormalised. The choice depends on the plan alone, never on the
+    /// render's samples, so every pixel's estimator stays unbiased.
+    pub fn local(&self, x: u32, y: u32) -> Option<Mixture> {
         let mut weights = Vec::with_capacity(self.neighbours);
         self.interpolation(x, y, &mut weights);
+        if self.gate {
+            let total: f64 = weights.iter().map(|w| w.0).sum();
+            let pt: f64 = weights
+                .iter()
+                .filter(|w| self.prefers_pt(w.1))
+                .map(|w| w.0)
+                .sum();
+            if weights.is_empty() || pt >= 0.5 * total {
+                return None;
+            }
+            weights.retain(|w| !self.prefers_pt(w.1));
+            if !self.unnormalised {
+                weights.iter_mut().for_each(|w| w.0 /= total - pt);
+            }
+        }
+        Some(self.mixture_of(&weights))
+    }
+
+    /// The union of the GA pixels' mixtures in `weights` (`srt` for none).
+    fn mixture_of(&self, weights: &[(f64, usize)]) -> Mixture {
         if weights.is_empty() {
             return self.srt.clone();
         }

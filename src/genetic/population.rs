@@ -56,11 +56,28 @@ fn ranking(v: &[f64], order: &mut Vec<usize>) {
 
 /// Runs the genetic algorithm on the test paths of one pixel.
 pub fn evolve(config: &GaConfig, paths: &TestPaths, view: &SceneView, rng: &mut Rng) -> Evolution {
+    evolve_from(config, paths, view, rng, &[])
+}
+
+/// [`evolve`] with `seeds` (individuals evolved elsewhere, e.g. at neighbouring pixels) in
+/// the first generation, the rest random: a warm start.
+pub fn evolve_from(
+    config: &GaConfig,
+    paths: &TestPaths,
+    view: &SceneView,
+    rng: &mut Rng,
+    seeds: &[Individual],
+) -> Evolution {
     let n = config.population.max(1);
-    let mut pool = GenePool::new(view.scene, paths.max_bounces, config);
-    let mut population: Vec<Individual> = (0..n)
-        .map(|_| pool.random_individual(config, rng))
+    let mut pool = GenePool::new(view.scene, paths.max_bounces, config).with_test_paths(paths);
+    let mut population: Vec<Individual> = seeds
+        .iter()
+        .take(n)
+        .map(|s| pool.adopt(s, config))
         .collect();
+    while population.len() < n {
+        population.push(pool.random_individual(config, rng));
+    }
     let mut next = Vec::with_capacity(n);
     let mut evaluator = Evaluator::default();
     let (mut v, mut fit, mut order) = (Vec::new(), Vec::new(), Vec::new());

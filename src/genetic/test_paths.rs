@@ -31,6 +31,8 @@ pub struct TestPaths {
     pub max_bounces: u32,
     /// Per stored path: `F²/q`, `F` the luminance of the contribution.
     pub f2_over_q: Vec<f64>,
+    /// `Σ F/q` over every contribution of every sampled path.
+    pub f_over_q_sum: f64,
     /// Per stored path: number of vertices `x1 … x_len`.
     len: Vec<u32>,
     /// Per stored path: ends with a light point (next-event estimation).
@@ -43,6 +45,8 @@ pub struct TestPaths {
     /// Per scattering vertex: position, sampled direction, BRDF density of that direction,
     /// and whether it is a mirror (delta) vertex.
     point: Vec<DVec3>,
+    /// Per scattering vertex: its triangle.
+    prim: Vec<u32>,
     wi: Vec<DVec3>,
     brdf_pdf: Vec<f64>,
     delta: Vec<bool>,
@@ -197,12 +201,14 @@ impl TestPaths {
             sampled: 0,
             max_bounces,
             f2_over_q: Vec::new(),
+            f_over_q_sum: 0.0,
             len: Vec::new(),
             nee: Vec::new(),
             light_point: Vec::new(),
             light_prim: Vec::new(),
             offsets: vec![0],
             point: Vec::new(),
+            prim: Vec::new(),
             wi: Vec::new(),
             brdf_pdf: Vec::new(),
             delta: Vec::new(),
@@ -219,6 +225,21 @@ impl TestPaths {
         q: &Mixture,
         (x, y): (u32, u32),
         m: usize,
+        max_bounces: u32,
+        seed: u64,
+    ) -> (Self, RayCounts) {
+        Self::sample_until(view, q, (x, y), (m, usize::MAX), max_bounces, seed)
+    }
+
+    /// [`TestPaths::sample`], stopping early, after the packet during which the stored
+    /// light-carrying paths reach `max_light`: where most paths carry light, a few thousand
+    /// of them already pin eq. 10 down, and each costs the genetic algorithm `S + 1`
+    /// multiply-adds per individual. `sampled` counts the paths actually sampled.
+    pub fn sample_until(
+        view: &SceneView,
+        q: &Mixture,
+        (x, y): (u32, u32),
+        (m, max_light): (usize, usize),
         max_bounces: u32,
         seed: u64,
     ) -> (Self, RayCounts) {
@@ -246,6 +267,9 @@ impl TestPaths {
             }
             for lane in &packet.lanes[..n] {
                 paths.store(view, q, &lane.path, &lane.contributions);
+            }
+            if paths.len() >= max_light {
+                break;
             }
         }
         (paths, counts)
@@ -302,6 +326,7 @@ impl TestPaths {
             let pdf = q.pdf_path(view, path, c, self.max_bounces);
             let f = luminance(c.f);
             if pdf > 0.0 && f > 0.0 {
+                self.f_over_q_sum += f / pdf;
                 self.push(view, path, c, f * f / pdf);
             }
         }
@@ -319,6 +344,7 @@ impl TestPaths {
                 brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, v.wi)
             };
             self.point.push(v.point.p.as_dvec3());
+            self.prim.push(v.point.prim);
             self.wi.push(v.wi.as_dvec3());
             self.brdf_pdf.push(pdf);
             self.delta.push(v.delta);
@@ -360,6 +386,31 @@ impl TestPaths {
             }
         }
         1
+    }
+
+    /// `(1/M) Σ F/q`: the pixel's scattered light, as the test paths estimate it.
+    pub fn mean(&self) -> f64 {
+        if self.sampled == 0 {
+            0.0
+        } else {
+            self.f_over_q_sum / self.sampled as f64
+        }
+    }
+
+    /// Where step `k` of a generator must aim to reproduce stored path `i`: the point its
+    /// `k`-th non-delta scattering vertex's direction reached (the next vertex, or the light
+    /// point of a path ending in next-event estimation) and its triangle; `None` where the
+    /// path has no such step or it ended on an emitter it hit.
+    pub fn step_target(&self, i: usize, k: usize) -> Option<(DVec3, u32)> {
+        let (start, end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+        let j = (start..end).filter(|&j| !self.delta[j]).nth(k)?;
+        if j + 1 < end {
+            Some((self.point[j + 1], self.prim[j + 1]))
+        } else if self.nee[i] {
+            Some((self.light_point[i], self.light_prim[i]))
+        } else {
+            None
+        }
     }
 
     /// Number of stored (light-carrying) paths.

@@ -124,6 +124,11 @@ impl Guide {
         self
     }
 
+    /// Anchor cones at vertex `k`: the densities one evaluation of `pdf` there costs.
+    pub fn cones(&self, k: usize) -> usize {
+        self.levels.get(k).map_or(0, |l| l.anchors.len())
+    }
+
     /// Whether vertex `k` samples anything but the BRDF.
     pub fn guides(&self, k: usize) -> bool {
         k < self.levels.len()

@@ -136,7 +136,9 @@ impl Mixture {
             &mut scratch.contributions,
         );
         let mut sum = DVec3::ZERO;
+        let components = self.weights.iter().filter(|&&w| w > 0.0).count() as u64;
         for c in &scratch.contributions {
+            counts.densities += components * c.len as u64;
             let pdf = self.pdf_path(view, &scratch.path, c, max_bounces);
             if pdf > 0.0 {
                 sum += c.f / pdf;

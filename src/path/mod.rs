@@ -47,17 +47,30 @@ pub struct SceneView<'a> {
     pub epsilon: f32,
 }
 
+/// Cost of one sampler density, in rays (with their shading): about 10 ns against about
+/// 250 ns per traced and shaded ray on one core (`genpath bench`, fig5).
+pub const DENSITY_COST: f64 = 0.04;
+
 /// Counts of ray queries, for statistics.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct RayCounts {
     pub closest: u64,
     pub shadow: u64,
+    /// Sampler densities evaluated per path vertex (a mixture's generators at each vertex of
+    /// each contribution; a guide's anchor cones): the shading work beyond the rays.
+    pub densities: u64,
 }
 
 impl RayCounts {
     pub fn add(&mut self, other: RayCounts) {
         self.closest += other.closest;
         self.shadow += other.shadow;
+        self.densities += other.densities;
+    }
+
+    /// Work in ray equivalents: every ray, and [`DENSITY_COST`] per density.
+    pub fn cost(&self) -> f64 {
+        self.total() as f64 + DENSITY_COST * self.densities as f64
     }
     pub fn total(&self) -> u64 {
         self.closest + self.shadow

@@ -68,6 +68,10 @@ pub fn radiance_guided(
         }
         let n = brdf::facing_normal(x.ng, wo);
         let guide = guide.filter(|g| !material.mirror && g.guides(k));
+        if let Some(g) = guide {
+            // The light sample's and the guided sample's densities.
+            counts.densities += 2 * g.cones(k) as u64;
+        }
 
         // Next-event estimation (impossible through a mirror's delta).
         if !material.mirror {

@@ -1,7 +1,7 @@
 //! Image rendering: tiles in parallel (rayon), one deterministic random stream per pixel
 //! sample, a progress bar with ETA on stderr.
 
-use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::plan::{Plan, PlanConfig, Target};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::image::Image;
 use crate::path::guide::Guide;
@@ -95,11 +95,16 @@ impl Prepared {
                     srt_absorption: config.srt_absorption,
                     ..config.ga.clone()
                 };
+                let target = if config.method == Method::Ga {
+                    Target::Mixture
+                } else {
+                    Target::Guide
+                };
                 let plan = Plan::build(
                     view,
                     &ga,
                     &config.plan,
-                    settings.max_bounces,
+                    (settings.max_bounces, target),
                     settings.seed,
                     settings.progress,
                 )?;
@@ -246,7 +251,7 @@ fn render_tile(
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
             let local = match estimator {
-                Estimator::Ga(plan) | Estimator::GaPt(plan) => Some(plan.mixture_at(x, y)),
+                Estimator::Ga(plan) | Estimator::GaPt(plan) => plan.local(x, y),
                 _ => None,
             };
             let guide = match estimator {

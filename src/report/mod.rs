@@ -25,7 +25,8 @@ pub struct MethodSpec {
 
 /// Keys of `ga:key=value:…` specs.
 pub const GA_KEYS: &str = "m (test paths), pop (population), gen (generations), s (generators), \
-    grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1)";
+    grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
+    gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1])";
 
 impl MethodSpec {
     /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
@@ -71,6 +72,9 @@ impl MethodSpec {
                 "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
                 "neighbours" => plan.neighbours = int()?,
                 "cw" => ga.convex_weights = flag()?,
+                "gate" => plan.gate = flag()?,
+                "warm" => plan.warm_start = flag()?,
+                "da" => ga.data_anchors = value.parse().map_err(|e| bad(&e))?,
                 _ => return Err(format!("`{text}`: unknown key `{key}` (keys: {GA_KEYS})")),
             }
         }
