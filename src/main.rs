@@ -276,7 +276,7 @@ struct GaArgs {
     no_gate: bool,
     /// Evolve half the GA pixels (a checkerboard of grid cells) first and the others from
     /// their evolved neighbours' best individuals, with half the generations.
-    #[arg(long)]
+    #[arg(long, default_value_t = PlanConfig::default().warm_start, action = clap::ArgAction::Set, value_name = "BOOL")]
     warm_start: bool,
 }
 
@@ -300,6 +300,7 @@ impl GaArgs {
             convex_weights: self.convex_weights,
             max_light_paths: self.max_light_paths as usize,
             data_anchors: self.data_anchors,
+            directions_only: false,
         };
         let plan = PlanConfig {
             grid: self.ga_grid,
@@ -444,7 +445,10 @@ impl Session {
 }
 
 fn rays_json(rays: RayCounts) -> serde_json::Value {
-    serde_json::json!({ "closest": rays.closest, "shadow": rays.shadow, "total": rays.total() })
+    serde_json::json!({
+        "closest": rays.closest, "shadow": rays.shadow, "total": rays.total(),
+        "densities": rays.densities, "cost": rays.cost(),
+    })
 }
 
 /// Writes `stats` as `<output>.json` beside each output.

@@ -693,3 +693,65 @@ fn config_defaults_are_valid_and_bad_values_rejected() {
         assert!(bad.validate().is_err(), "{bad:?} accepted");
     }
 }
+
+/// The step targets of stored test paths (where data-driven anchors and path-following
+/// generators aim) lie along the directions those paths sampled, on the triangle named;
+/// the same check rejects another path's targets. Path-following generators aim
+/// their first cone at such a target, as seen from their first vertex.
+#[test]
+fn step_targets_lie_along_the_sampled_directions() {
+    let (scene, accel) = fig5();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let srt = srt_mixture(&scene);
+    let (paths, _) = TestPaths::sample(&view, &srt, FLOOR_PIXEL, 4000, MAX_BOUNCES, 3);
+    assert!(paths.len() > 10, "{} light-carrying paths", paths.len());
+    // `along(i, k, j)`: path j's k-th step target seen from path i's k-th step.
+    let along = |i: usize, k: usize, j: usize| -> Option<bool> {
+        let (origin, wi) = paths.step_origin(i, k)?;
+        let (target, prim) = paths.step_target(j, k)?;
+        let [a, b, c] = scene.mesh.vertices(prim).map(|v| v.as_dvec3());
+        let n = (b - a).cross(c - a).normalize();
+        let on_triangle = (target - a).dot(n).abs() < 1e-4;
+        Some(on_triangle && (target - origin).normalize().dot(wi) > 1.0 - 1e-6)
+    };
+    let (mut right, mut checked, mut wrong, mut wrong_checked) = (0, 0, 0, 0);
+    for i in 0..paths.len() {
+        for k in 0..MAX_BOUNCES as usize {
+            if let Some(ok) = along(i, k, i) {
+                checked += 1;
+                right += usize::from(ok);
+            }
+            if let Some(ok) = along(i, k, (i + 1) % paths.len()) {
+                wrong_checked += 1;
+                wrong += usize::from(ok);
+            }
+        }
+    }
+    assert!(
+        checked > paths.len() && right == checked,
+        "{right} of {checked}"
+    );
+    assert!(
+        wrong_checked > 10 && wrong * 10 < wrong_checked,
+        "{wrong} of {wrong_checked}"
+    );
+    // A path-following generator's first cone contains a target from its first vertex.
+    let config = GaConfig::default();
+    let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config).with_test_paths(&paths);
+    let mut rng = Rng::seed_from_u64(5);
+    let gene = pool.path_gene(&mut rng).expect("test paths carry light");
+    let DirectionSampler::Anchor(cone) = &gene.generator.steps[0].sampler else {
+        panic!("the first step of a path-following generator is an anchor cone");
+    };
+    let hit = (0..paths.len()).any(|i| {
+        paths.step_target(i, 0).is_some_and(|(t, _)| {
+            let (origin, _) = paths.step_origin(i, 0).unwrap();
+            (t - cone.anchor).length() < 1e-12 && cone.inside(origin, (t - origin).normalize())
+        })
+    });
+    assert!(
+        hit,
+        "anchor {:?} is no stored path's first target",
+        cone.anchor
+    );
+}

@@ -233,8 +233,8 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
             ..PlanConfig::default()
         };
         let target = (max_bounces, Target::Mixture);
-        let plan = Plan::build(&view, &ga, &config, target, 3, false)
-            .map_err(|e| format!("GA: {e}"))?;
+        let plan =
+            Plan::build(&view, &ga, &config, target, 3, false).map_err(|e| format!("GA: {e}"))?;
         films.push(render(&view, &settings, Estimator::Ga(&plan)));
         films.push(render(&view, &settings, Estimator::GaPt(&plan)));
     }

@@ -146,6 +146,29 @@ impl Evaluator {
         }
         self.individual_evaluations += population.len() as u64;
     }
+
+    /// [`optimise_weights`] for `ind`, whose generators were evaluated by the last
+    /// [`Self::evaluate`]; returns its new `V`.
+    pub fn optimise(
+        &self,
+        paths: &TestPaths,
+        ind: &mut Individual,
+        defensive: f64,
+        iterations: usize,
+    ) -> f64 {
+        let densities: Vec<&[f64]> = ind
+            .genes
+            .iter()
+            .map(|g| self.densities[self.slot_of[&g.id]].as_slice())
+            .collect();
+        optimise_weights(
+            (&paths.f2_over_q, paths.sampled),
+            &densities,
+            &mut ind.weights,
+            defensive,
+            iterations,
+        )
+    }
 }
 
 /// The mixture weights of fixed generators that minimise eq. 10 (beyond the paper).
@@ -164,7 +187,7 @@ impl Evaluator {
 /// feasible start, overwritten. Returns the final `V`.
 pub fn optimise_weights(
     (f2_over_q, sampled): (&[f64], usize),
-    densities: &[Vec<f64>],
+    densities: &[&[f64]],
     weights: &mut [f64],
     defensive: f64,
     iterations: usize,
@@ -175,7 +198,7 @@ pub fn optimise_weights(
     let mixture_pdf = |w: &[f64], pdf: &mut [f64]| {
         pdf.iter_mut().for_each(|p| *p = 0.0);
         for (d, &wi) in densities.iter().zip(w) {
-            for (p, di) in pdf.iter_mut().zip(d) {
+            for (p, di) in pdf.iter_mut().zip(d.iter()) {
                 *p += wi * di;
             }
         }
@@ -192,7 +215,7 @@ pub fn optimise_weights(
         // g_i with the current pdf.
         for (g, d) in gradient.iter_mut().zip(densities) {
             let mut sum = 0.0;
-            for ((c, p), di) in f2_over_q.iter().zip(&pdf).zip(d) {
+            for ((c, p), di) in f2_over_q.iter().zip(&pdf).zip(d.iter()) {
                 sum += c * di / (p * p);
             }
             *g = sum / sampled as f64;
@@ -274,7 +297,8 @@ mod tests {
         let defensive = 0.05;
         let start = [0.4, 0.3, 0.3];
         let mut w = start;
-        let v = optimise_weights((&c, 2 * c.len()), &d, &mut w, defensive, 200);
+        let refs: Vec<&[f64]> = d.iter().map(|v| v.as_slice()).collect();
+        let v = optimise_weights((&c, 2 * c.len()), &refs, &mut w, defensive, 200);
         let sum: f64 = w.iter().sum();
         assert!(
             (sum - 1.0).abs() < 1e-12 && w[0] >= defensive - 1e-12,

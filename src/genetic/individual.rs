@@ -23,6 +23,10 @@ use std::f64::consts::PI;
 pub const MAX_LIGHT_LEVEL: u8 = 2;
 /// Random cone half-angles are log-uniform in this range (radians).
 pub const THETA_C_RANGE: (f64, f64) = (0.02, 1.5);
+/// Cones of generators that follow a test path: half-angles log-uniform, probabilities
+/// uniform in these ranges.
+pub const FOLLOW_THETA_C: (f64, f64) = (0.05, 0.5);
+pub const FOLLOW_ALPHA: (f64, f64) = (0.5, 0.95);
 /// Random cone probabilities `α` are uniform in this range.
 pub const ALPHA_RANGE: (f64, f64) = (0.05, 0.95);
 /// Random light-region probabilities `β` are uniform in `[0, BETA_MAX)`.
@@ -95,6 +99,8 @@ pub struct GenePool<'a> {
     /// their `F²/q`, and the share of anchors drawn from them (`GaConfig::data_anchors`).
     paths: Option<(&'a TestPaths, Vec<f64>)>,
     data_anchors: f64,
+    /// `GaConfig::directions_only`: the absorption of every step.
+    fixed_absorption: Option<f64>,
 }
 
 /// A uniform number in `[lo, hi)`.
@@ -127,6 +133,7 @@ impl<'a> GenePool<'a> {
             next_id: 1,
             paths: None,
             data_anchors: config.data_anchors,
+            fixed_absorption: config.directions_only.then_some(config.srt_absorption),
         }
     }
 
@@ -145,19 +152,54 @@ impl<'a> GenePool<'a> {
         self
     }
 
+    /// A light-carrying test path picked with probability ∝ its `F²/q` (`None` without).
+    fn pick_path(&self, rng: &mut crate::sampling::Rng) -> Option<(&'a TestPaths, usize)> {
+        let (paths, cdf) = self.paths.as_ref()?;
+        let total = cdf.last().copied().unwrap_or(0.0);
+        if total.is_nan() || total <= 0.0 {
+            return None;
+        }
+        let target = rng.random::<f64>() * total;
+        Some((
+            paths,
+            cdf.partition_point(|&c| c <= target).min(cdf.len() - 1),
+        ))
+    }
+
+    /// A generator that follows one light-carrying test path (picked ∝ `F²/q`): each step
+    /// aims a cone at the point the path's direction reached there (half-angle in
+    /// `FOLLOW_THETA_C`, probability in `FOLLOW_ALPHA`), BRDF sampling past the path's end.
+    /// `None` without test paths.
+    pub fn path_gene(&mut self, rng: &mut crate::sampling::Rng) -> Option<Gene> {
+        let (paths, i) = self.pick_path(rng)?;
+        let mut gene = self.random_gene(rng);
+        for k in 0..gene.generator.steps.len() {
+            let (sampler, prim) = match paths.step_target(i, k) {
+                Some((anchor, prim)) => {
+                    let (lo, hi) = FOLLOW_THETA_C;
+                    let sampler = AnchorSampler {
+                        anchor,
+                        theta_c: (lo.ln() + (hi.ln() - lo.ln()) * rng.random::<f64>()).exp(),
+                        alpha: range(rng, FOLLOW_ALPHA),
+                    };
+                    (DirectionSampler::Anchor(sampler), Some(prim))
+                }
+                None => (DirectionSampler::Brdf, None),
+            };
+            gene.generator.steps[k].sampler = sampler;
+            gene.anchor_prims[k] = prim;
+        }
+        Some(gene)
+    }
+
     /// An anchor point for step `k` and its triangle. With probability `data_anchors` (and
     /// test paths), where a light-carrying test path's `k`-th direction arrived, the path
     /// picked with probability ∝ its `F²/q` (beyond the paper: the light's actual routes);
     /// otherwise, or where that path has no `k`-th step, uniform by area on all surfaces.
     pub fn random_anchor(&self, k: usize, rng: &mut crate::sampling::Rng) -> (DVec3, u32) {
-        if let Some((paths, cdf)) = &self.paths {
-            let total = cdf.last().copied().unwrap_or(0.0);
-            if total > 0.0 && rng.random::<f64>() < self.data_anchors {
-                let target = rng.random::<f64>() * total;
-                let i = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
-                if let Some(found) = paths.step_target(i, k) {
-                    return found;
-                }
+        if self.paths.is_some() && rng.random::<f64>() < self.data_anchors {
+            if let Some(found) = self.pick_path(rng).and_then(|(p, i)| p.step_target(i, k)) {
+                return found;
             }
         }
         self.random_surface_point(rng)
@@ -243,25 +285,30 @@ impl<'a> GenePool<'a> {
         let mut anchor_prims = Vec::with_capacity(n);
         for k in 0..n {
             let (sampler, prim) = self.random_sampler(k, rng);
+            let absorption = match self.fixed_absorption {
+                Some(a) => a,
+                None => Self::random_absorption(rng),
+            };
             steps.push(Step {
                 sampler,
-                absorption: Self::random_absorption(rng),
+                absorption,
             });
             anchor_prims.push(prim);
         }
+        let light = match self.fixed_absorption {
+            Some(_) => self.srt.light,
+            None => self.random_light(rng),
+        };
         Gene {
             id: self.fresh_id(),
-            generator: PathGenerator {
-                steps,
-                light: self.random_light(rng),
-            },
+            generator: PathGenerator { steps, light },
             anchor_prims,
         }
     }
 
     /// `ind`, evolved with another pool, as a member of this one: fresh gene ids (ids are
     /// per pool), the defensive component this pool's, and every generator cut or padded
-    /// (with BRDF steps of absorption 0.5) to this pool's number of steps.
+    /// (with BRDF steps) to this pool's number of steps.
     pub fn adopt(&mut self, ind: &Individual, config: &GaConfig) -> Individual {
         let mut genes = vec![self.srt()];
         for gene in &ind.genes[1..] {
@@ -270,7 +317,7 @@ impl<'a> GenePool<'a> {
                 self.steps,
                 Step {
                     sampler: DirectionSampler::Brdf,
-                    absorption: 0.5,
+                    absorption: self.fixed_absorption.unwrap_or(0.5),
                 },
             );
             gene.anchor_prims.resize(self.steps, None);
@@ -294,8 +341,14 @@ impl<'a> GenePool<'a> {
     ) -> Individual {
         let mut genes = vec![self.srt()];
         let mut weights = vec![range(rng, (0.0, 1.0))];
+        // With data anchors, that share of individuals follows light-carrying test paths.
+        let follow = self.paths.is_some() && rng.random::<f64>() < self.data_anchors;
         for _ in 0..config.generators {
-            genes.push(self.random_gene(rng));
+            let gene = match follow {
+                true => self.path_gene(rng),
+                false => None,
+            };
+            genes.push(gene.unwrap_or_else(|| self.random_gene(rng)));
             weights.push(range(rng, (0.1, 1.0)));
         }
         let mut ind = Individual { genes, weights };

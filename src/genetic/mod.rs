@@ -63,23 +63,29 @@ pub struct GaConfig {
     /// Share of random anchor points drawn where light-carrying test paths went (beyond
     /// the paper, which draws them uniformly by area on all surfaces: 0).
     pub data_anchors: f64,
+    /// Evolve directional samplers only: every generator keeps `srt`'s absorption and light
+    /// sampler, so that `V` measures exactly what a guide for path tracing takes from the
+    /// mixture (`ga-pt` sets it).
+    pub directions_only: bool,
 }
 
 impl Default for GaConfig {
-    /// Measured on a fig5 floor pixel (tests/genetic.rs `ga_improves_on_srt`, V on 200 000
-    /// independent srt paths; srt: 16.6, hand-made anchors: ~6): smaller than the paper's
-    /// 150 × 200, since evaluation on a fixed set of test paths converges within a few tens
-    /// of generations — 40 × 30 reached 8.0, 60 × 50 reaches 6.6. `M` matters more than the
-    /// population: only ~1 % of srt paths carry light there, and with M = 2 000 (27 such
-    /// paths) the GA over-fits them (9.7 on fresh paths); M = 50 000 keeps ~500 and costs
-    /// ~0.1 s of tracing. Mutation rates follow the usual "about one change per offspring":
-    /// S = 4 generators of 4 steps and a light sampler hold 20 samplers.
+    /// Chosen for error at equal time, every phase counted (reports/README.md): on fig5,
+    /// 256², `ga-pt` at 64 spp, 30 × 20 with M = 10 000 on a 32-pixel grid plans in 0.5 s
+    /// for relMSE 0.64; 60 × 50 with M = 50 000 plans in 4.3 s for 0.46, and the paper-like
+    /// 60 × 50, M = 50 000, grid 16 in 14 s for 0.42 — better per sample, worse at every
+    /// budget up to 60 s. On one fig5 floor pixel (tests/genetic.rs `ga_improves_on_srt`,
+    /// V on 200 000 fresh srt paths; srt 16.6) 40 × 30 reached 8.0 and 60 × 50 6.6: a few
+    /// tens of generations on a fixed set of test paths get most of the way. Below
+    /// M ≈ 2 000 (27 light-carrying paths there) the GA over-fits. Mutation rates follow the
+    /// usual "about one change per offspring": S = 4 generators of 4 steps and a light
+    /// sampler hold 20 samplers.
     fn default() -> Self {
         Self {
-            population: 60,
-            generations: 50,
+            population: 30,
+            generations: 20,
             generators: 4,
-            test_paths: 50_000,
+            test_paths: 10_000,
             elitism: 2,
             p_cross: 0.7,
             p_sampler_mutate: 0.1,
@@ -90,9 +96,10 @@ impl Default for GaConfig {
             srt_absorption: 0.5,
             anchor_shift: 0.05,
             max_steps: None,
-            convex_weights: false,
+            convex_weights: true,
             max_light_paths: 2_000,
             data_anchors: 0.5,
+            directions_only: false,
         }
     }
 }
@@ -110,7 +117,10 @@ impl GaConfig {
             return fail("population, generations and generators must be at least 1".into());
         }
         if !(self.data_anchors.is_finite() && (0.0..=1.0).contains(&self.data_anchors)) {
-            return fail(format!("data_anchors {} is not in [0, 1]", self.data_anchors));
+            return fail(format!(
+                "data_anchors {} is not in [0, 1]",
+                self.data_anchors
+            ));
         }
         if self.max_light_paths == 0 {
             return fail("max_light_paths must be at least 1".into());

@@ -120,11 +120,16 @@ pub fn mutate(ind: &mut Individual, pool: &mut GenePool, config: &GaConfig, rng:
                 changed = true;
             }
         }
-        if rng.random::<f64>() < config.p_sampler_mutate {
+        if config.directions_only {
+            // Light sampler and absorptions stay `srt`'s.
+        } else if rng.random::<f64>() < config.p_sampler_mutate {
             mutate_light(pool, gene, rng);
             changed = true;
         }
-        if !gene.generator.steps.is_empty() && rng.random::<f64>() < config.p_absorb {
+        if !config.directions_only
+            && !gene.generator.steps.is_empty()
+            && rng.random::<f64>() < config.p_absorb
+        {
             let k = rng.random_range(0..gene.generator.steps.len());
             let a = &mut gene.generator.steps[k].absorption;
             *a = perturb_probability(*a, rng, ABSORPTION_MIN, ABSORPTION_MAX);

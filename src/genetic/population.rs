@@ -47,6 +47,11 @@ fn roulette(fitness: &[f64], rng: &mut Rng) -> usize {
     fitness.len() - 1
 }
 
+/// With `GaConfig::convex_weights`: individuals per generation whose weights are optimised,
+/// and the iterations each gets.
+const CONVEX_ELITE: usize = 4;
+const CONVEX_STEPS: usize = 20;
+
 /// Indices of `v` sorted by increasing `V` (best first); ties by index, so deterministic.
 fn ranking(v: &[f64], order: &mut Vec<usize>) {
     order.clear();
@@ -85,6 +90,21 @@ pub fn evolve_from(
     for generation in 0..config.generations.max(1) {
         evaluator.evaluate(view, paths, &population, &mut v);
         ranking(&v, &mut order);
+        if config.convex_weights {
+            // Lamarckian: the best individuals get their generators' optimal weights, which
+            // their offspring inherit.
+            for &i in order.iter().take(CONVEX_ELITE.min(n)) {
+                if v[i].is_finite() {
+                    v[i] = evaluator.optimise(
+                        paths,
+                        &mut population[i],
+                        config.defensive_weight,
+                        CONVEX_STEPS,
+                    );
+                }
+            }
+            ranking(&v, &mut order);
+        }
         let (sum, count) = v
             .iter()
             .filter(|x| x.is_finite())

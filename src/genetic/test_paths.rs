@@ -40,6 +40,10 @@ pub struct TestPaths {
     /// Per stored path: the light point and its triangle (unused where `nee` is false).
     light_point: Vec<DVec3>,
     light_prim: Vec<u32>,
+    /// Per stored path ending in next-event estimation: the vertex that absorbed (reached by
+    /// the last stored direction) and its triangle.
+    end_point: Vec<DVec3>,
+    end_prim: Vec<u32>,
     /// Scattering vertices of path `i` are `offsets[i]..offsets[i + 1]`.
     offsets: Vec<u32>,
     /// Per scattering vertex: position, sampled direction, BRDF density of that direction,
@@ -206,6 +210,8 @@ impl TestPaths {
             nee: Vec::new(),
             light_point: Vec::new(),
             light_prim: Vec::new(),
+            end_point: Vec::new(),
+            end_prim: Vec::new(),
             offsets: vec![0],
             point: Vec::new(),
             prim: Vec::new(),
@@ -358,6 +364,12 @@ impl TestPaths {
         };
         self.light_point.push(point);
         self.light_prim.push(prim);
+        let end = match path.vertices.get(scattering) {
+            Some(v) if c.nee => (v.point.p.as_dvec3(), v.point.prim),
+            _ => (DVec3::ZERO, u32::MAX),
+        };
+        self.end_point.push(end.0);
+        self.end_prim.push(end.1);
         self.f2_over_q.push(f2q);
     }
 
@@ -398,19 +410,32 @@ impl TestPaths {
     }
 
     /// Where step `k` of a generator must aim to reproduce stored path `i`: the point its
-    /// `k`-th non-delta scattering vertex's direction reached (the next vertex, or the light
-    /// point of a path ending in next-event estimation) and its triangle; `None` where the
-    /// path has no such step or it ended on an emitter it hit.
+    /// `k`-th non-delta scattering vertex's direction reached (the next vertex, or the one
+    /// that absorbed and connected to the light) and its triangle; `None` where the path has
+    /// no such step or it ended on an emitter it hit through a mirror.
     pub fn step_target(&self, i: usize, k: usize) -> Option<(DVec3, u32)> {
-        let (start, end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
-        let j = (start..end).filter(|&j| !self.delta[j]).nth(k)?;
+        let j = self.step_vertex(i, k)?;
+        let end = self.offsets[i + 1] as usize;
         if j + 1 < end {
             Some((self.point[j + 1], self.prim[j + 1]))
         } else if self.nee[i] {
-            Some((self.light_point[i], self.light_prim[i]))
+            Some((self.end_point[i], self.end_prim[i]))
         } else {
             None
         }
+    }
+
+    /// The `k`-th non-delta scattering vertex of stored path `i`, as an index of the vertex
+    /// arrays.
+    fn step_vertex(&self, i: usize, k: usize) -> Option<usize> {
+        let (start, end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+        (start..end).filter(|&j| !self.delta[j]).nth(k)
+    }
+
+    /// Where step `k` of stored path `i` started and the unit direction it sampled.
+    pub fn step_origin(&self, i: usize, k: usize) -> Option<(DVec3, DVec3)> {
+        let j = self.step_vertex(i, k)?;
+        Some((self.point[j], self.wi[j]))
     }
 
     /// Number of stored (light-carrying) paths.
