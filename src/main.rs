@@ -278,6 +278,10 @@ struct GaArgs {
     /// their evolved neighbours' best individuals, with half the generations.
     #[arg(long, default_value_t = PlanConfig::default().warm_start, action = clap::ArgAction::Set, value_name = "BOOL")]
     warm_start: bool,
+    /// Seconds the GA plan may take (baseline included); GA pixels not evolved by then are
+    /// left out. The plan then depends on timing, not only on the seed.
+    #[arg(long, value_name = "SECONDS")]
+    ga_time_limit: Option<f64>,
 }
 
 impl GaArgs {
@@ -311,6 +315,7 @@ impl GaArgs {
             prune_variance: self.prune_variance,
             gate: !self.no_gate,
             warm_start: self.warm_start,
+            time_limit: self.ga_time_limit,
         };
         ga.validate()?;
         plan.validate()?;

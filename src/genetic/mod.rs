@@ -97,7 +97,7 @@ impl Default for GaConfig {
             anchor_shift: 0.05,
             max_steps: None,
             convex_weights: true,
-            max_light_paths: 2_000,
+            max_light_paths: 1_000,
             data_anchors: 0.5,
             directions_only: false,
         }

@@ -23,8 +23,8 @@
 //!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
-//!    pixels spread over the image; when none of them predicts a gain, the other GA pixels
-//!    are not evolved and the whole image renders with `pt`. Low-variance cells (pruning)
+//!    pixels spread over the image; unless at least half of them predict a gain, the other
+//!    GA pixels are not evolved and the whole image renders with `pt`. Low-variance cells (pruning)
 //!    render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
@@ -111,6 +111,11 @@ pub struct PlanConfig {
     /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
     /// individuals, with half the generations (beyond the paper).
     pub warm_start: bool,
+    /// Wall-clock seconds the plan (baseline included) may take: past them, GA pixels not
+    /// yet evolved are left out (to `pt` with the gate, to their neighbours' mixtures
+    /// without). The GA then runs in chunks and the plan depends on timing, not only on the
+    /// seed. `None`: no limit.
+    pub time_limit: Option<f64>,
 }
 
 impl Default for PlanConfig {
@@ -124,6 +129,7 @@ impl Default for PlanConfig {
             prune_variance: 0.5,
             gate: true,
             warm_start: true,
+            time_limit: None,
         }
     }
 }
@@ -144,6 +150,15 @@ impl PlanConfig {
             return fail(format!(
                 "prune variance {} must be finite and ≥ 0",
                 self.prune_variance
+            ));
+        }
+        if self
+            .time_limit
+            .is_some_and(|t| !(t.is_finite() && t >= 0.0))
+        {
+            return fail(format!(
+                "GA time limit {:?} must be finite and ≥ 0 seconds",
+                self.time_limit
             ));
         }
         if !(1..=64).contains(&self.neighbours) {
@@ -270,6 +285,8 @@ pub struct PlanStats {
     pub gated_pixels: usize,
     /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
     pub pt_pixels: usize,
+    /// GA pixels not evolved because the plan reached `PlanConfig::time_limit`.
+    pub time_limited_pixels: usize,
     /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
     /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
     pub cell_variance: [f64; 3],
@@ -827,15 +844,12 @@ impl Plan {
             .filter(|i| !pilot.contains(i))
             .partition(|&i| !config.warm_start || white(i));
         let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; n];
-        let evolve_wave = |wave: &[usize], warm: bool, done: &mut Vec<Option<_>>| {
+        // A wave: GA pixels and the individuals each starts from.
+        let evolve_wave = |wave: &[(usize, Vec<Individual>)], done: &mut Vec<Option<_>>| {
             let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                 .par_iter()
-                .map(|&i| {
-                    let seeds = if warm {
-                        neighbour_seeds(done, chosen[i], config)
-                    } else {
-                        Vec::new()
-                    };
+                .map(|(i, seeds)| {
+                    let i = *i;
                     let r = run_pixel(
                         view,
                         &srt,
@@ -844,7 +858,7 @@ impl Plan {
                         max_bounces,
                         seed,
                         (config, target),
-                        &seeds,
+                        seeds,
                     );
                     bar.inc(1);
                     (i, r)
@@ -854,16 +868,56 @@ impl Plan {
                 done[i] = Some(r);
             }
         };
-        evolve_wave(&pilot, false, &mut done);
-        let pays = |p: &GaPixel| p.pays(target);
+        let cold = |wave: &[usize]| -> Vec<(usize, Vec<Individual>)> {
+            wave.iter().map(|&i| (i, Vec::new())).collect()
+        };
+        evolve_wave(&cold(&pilot), &mut done);
         let mut pt_points = Vec::new();
         if config.gate {
             pt_points.extend(&choice.low);
         }
-        let pilot_pays = done.iter().flatten().any(|(p, _)| pays(p));
+        // The GA goes on where at least half the pilot pixels predict a gain above the
+        // winning margin: one pixel alone (an outlier, or a small region) does not pay for
+        // evolving the whole image.
+        let paying = done
+            .iter()
+            .flatten()
+            .filter(|(p, _)| p.pays(target))
+            .count();
+        let pilot_pays = 2 * paying >= pilot.len().max(1);
         if !config.gate || pilot_pays {
-            evolve_wave(&first, false, &mut done);
-            evolve_wave(&second, config.warm_start, &mut done);
+            // With a time limit, the waves run in chunks, each only if time is left.
+            let chunk = match config.time_limit {
+                Some(_) => 4 * rayon::current_num_threads(),
+                None => usize::MAX,
+            };
+            let mut late = Vec::new();
+            let mut run_chunks = |jobs: &[(usize, Vec<Individual>)], done: &mut Vec<_>| {
+                for c in jobs.chunks(chunk) {
+                    if config
+                        .time_limit
+                        .is_some_and(|limit| t0.elapsed().as_secs_f64() >= limit)
+                    {
+                        late.extend(c.iter().map(|j| j.0));
+                    } else {
+                        evolve_wave(c, done);
+                    }
+                }
+            };
+            run_chunks(&cold(&first), &mut done);
+            // Seeds from the pilot and the first wave only, whatever the chunks.
+            let second: Vec<(usize, Vec<Individual>)> = second
+                .iter()
+                .map(|&i| match config.warm_start {
+                    true => (i, neighbour_seeds(&done, chosen[i], config)),
+                    false => (i, Vec::new()),
+                })
+                .collect();
+            run_chunks(&second, &mut done);
+            stats.time_limited_pixels = late.len();
+            if config.gate {
+                pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
+            }
         } else {
             stats.gated_pixels = first.len() + second.len();
             let skipped = first.iter().chain(&second);

@@ -47,9 +47,10 @@ pub struct SceneView<'a> {
     pub epsilon: f32,
 }
 
-/// Cost of one sampler density, in rays (with their shading): about 10 ns against about
-/// 250 ns per traced and shaded ray on one core (`genpath bench`, fig5).
-pub const DENSITY_COST: f64 = 0.04;
+/// Cost of one sampler density, in rays (with their shading): `ga-pt` against `pt` renders
+/// at 32 spp, 2 threads (best of 3): cbox 10.4 ns per density against 137 ns per ray, fig5
+/// 8.3 against 111.
+pub const DENSITY_COST: f64 = 0.075;
 
 /// Counts of ray queries, for statistics.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

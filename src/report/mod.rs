@@ -184,8 +184,43 @@ pub enum SweepError {
     },
 }
 
-/// Samples per pixel of the two renders that calibrate a time budget.
-const CALIBRATION_SPP: [u32; 2] = [1, 4];
+/// Samples per pixel of the two renders that calibrate a time budget: long enough that
+/// their difference is not lost in timing noise (with 1 and 4, fig5 `ga-pt` budgeted for
+/// half its real cost per sample and ran 66 s for a 30 s budget).
+const CALIBRATION_SPP: [u32; 2] = [2, 16];
+
+/// With budgets in seconds, a GA plan may take this share of each budget
+/// (`PlanConfig::time_limit`); the render gets the rest.
+pub const GA_BUDGET_SHARE: f64 = 0.25;
+
+/// Samples per pixel that fill `seconds` of rendering with `prepared`: render time is a
+/// fixed part (per-pixel mixtures are built once per pixel whatever the spp) plus a cost per
+/// sample, measured by two short renders.
+fn calibrated_spp(
+    view: &SceneView,
+    settings: &RenderSettings,
+    prepared: &Prepared,
+    seconds: f64,
+) -> u32 {
+    let time = |spp: u32| {
+        let calibration = RenderSettings {
+            spp,
+            ..settings.clone()
+        };
+        render(view, &calibration, prepared.estimator())
+            .elapsed
+            .as_secs_f64()
+    };
+    let [a, b] = CALIBRATION_SPP;
+    let (t1, t2) = (time(a), time(b));
+    let per_spp = ((t2 - t1) / f64::from(b - a))
+        .max(t2 / f64::from(b) * 0.5)
+        .max(1e-9);
+    let fixed = (t1 - per_spp * f64::from(a)).max(0.0);
+    ((seconds - fixed) / per_spp)
+        .floor()
+        .clamp(1.0, f64::from(1u32 << 24)) as u32
+}
 
 impl Sweep<'_> {
     /// Runs every method × repetition × budget; `on_row` sees each row as it is done.
@@ -212,61 +247,50 @@ impl Sweep<'_> {
                     progress: false,
                     ..self.settings.clone()
                 };
-                let t0 = Instant::now();
-                let prepared = Prepared::new(view, &spec.config, &settings)?;
-                let prepare_s = t0.elapsed().as_secs_f64();
-                let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
-                let spp_list: Vec<(f64, u32)> = match &self.budgets {
-                    Budgets::Spp(b) => b.iter().map(|&spp| (f64::from(spp), spp)).collect(),
-                    Budgets::Seconds(b) => {
-                        // Render time = fixed + per-spp cost (per-pixel mixtures are built
-                        // once per pixel whatever the spp), from two short renders.
-                        let time = |spp: u32| {
-                            let calibration = RenderSettings {
-                                spp,
-                                ..settings.clone()
-                            };
-                            render(view, &calibration, prepared.estimator())
-                                .elapsed
-                                .as_secs_f64()
-                        };
-                        let (t1, t2) = (time(CALIBRATION_SPP[0]), time(CALIBRATION_SPP[1]));
-                        let per_spp = ((t2 - t1)
-                            / f64::from(CALIBRATION_SPP[1] - CALIBRATION_SPP[0]))
-                        .max(t2 / f64::from(CALIBRATION_SPP[1]) * 0.1)
-                        .max(1e-9);
-                        let fixed = (t1 - per_spp * f64::from(CALIBRATION_SPP[0])).max(0.0);
-                        b.iter()
-                            .map(|&t| {
-                                let spp = ((t - prepare_s - fixed) / per_spp).floor();
-                                (t, spp.clamp(1.0, f64::from(1u32 << 24)) as u32)
-                            })
-                            .collect()
-                    }
+                // With budgets in seconds, a GA plan is built per budget with its time limit
+                // (`GA_BUDGET_SHARE` of it); with budgets in samples, once.
+                let plans: Vec<(Option<f64>, Vec<f64>)> = match &self.budgets {
+                    Budgets::Spp(b) => vec![(None, b.iter().map(|&s| f64::from(s)).collect())],
+                    Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), vec![t])).collect(),
                 };
-                for (budget, spp) in spp_list {
-                    let settings = RenderSettings {
-                        spp,
-                        ..settings.clone()
+                for (seconds, budgets) in plans {
+                    let mut config = spec.config.clone();
+                    config.plan.time_limit = seconds.map(|t| GA_BUDGET_SHARE * t);
+                    let t0 = Instant::now();
+                    let prepared = Prepared::new(view, &config, &settings)?;
+                    let prepare_s = t0.elapsed().as_secs_f64();
+                    let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
+                    let spp_list: Vec<(f64, u32)> = match seconds {
+                        None => budgets.iter().map(|&spp| (spp, spp as u32)).collect(),
+                        Some(t) => {
+                            let spp = calibrated_spp(view, &settings, &prepared, t - prepare_s);
+                            vec![(t, spp)]
+                        }
                     };
-                    let film = render(view, &settings, prepared.estimator());
-                    let Some(m) = metrics::compare(&film.image, self.reference) else {
-                        unreachable!("sizes checked above");
-                    };
-                    let row = Row {
-                        scene: self.scene_name.clone(),
-                        method: spec.label.clone(),
-                        budget,
-                        spp,
-                        seconds: prepare_s + film.elapsed.as_secs_f64(),
-                        ga_seconds,
-                        relmse: m.relmse,
-                        mse: m.mse,
-                        seed: settings.seed,
-                    };
-                    on_row(&row);
-                    rows.push(row);
-                    bar.inc(1);
+                    for (budget, spp) in spp_list {
+                        let settings = RenderSettings {
+                            spp,
+                            ..settings.clone()
+                        };
+                        let film = render(view, &settings, prepared.estimator());
+                        let Some(m) = metrics::compare(&film.image, self.reference) else {
+                            unreachable!("sizes checked above");
+                        };
+                        let row = Row {
+                            scene: self.scene_name.clone(),
+                            method: spec.label.clone(),
+                            budget,
+                            spp,
+                            seconds: prepare_s + film.elapsed.as_secs_f64(),
+                            ga_seconds,
+                            relmse: m.relmse,
+                            mse: m.mse,
+                            seed: settings.seed,
+                        };
+                        on_row(&row);
+                        rows.push(row);
+                        bar.inc(1);
+                    }
                 }
             }
         }
