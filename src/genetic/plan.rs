@@ -1053,17 +1053,10 @@ impl Plan {
 mod tests {
     use super::*;
     use crate::path::generator::PathGenerator;
-    use crate::sampling::light_point::{LightPointSampler, LightRegion};
+    use crate::sampling::light_point::LightPointSampler;
 
     fn mixture(absorption: f64) -> Mixture {
-        let light = LightPointSampler {
-            region: LightRegion {
-                prim: 0,
-                level: 0,
-                cell: 0,
-            },
-            beta: 0.0,
-        };
+        let light = LightPointSampler::uniform(0);
         Mixture::new(vec![PathGenerator::srt(3, absorption, light)], vec![1.0])
     }
 

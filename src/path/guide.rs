@@ -206,18 +206,11 @@ impl Guide {
 mod tests {
     use super::*;
     use crate::path::generator::{PathGenerator, Step};
-    use crate::sampling::light_point::{LightPointSampler, LightRegion};
+    use crate::sampling::light_point::LightPointSampler;
     use crate::sampling::{sample_rng, uniform};
 
     fn mixture() -> Mixture {
-        let light = LightPointSampler {
-            region: LightRegion {
-                prim: 0,
-                level: 0,
-                cell: 0,
-            },
-            beta: 0.0,
-        };
+        let light = LightPointSampler::uniform(0);
         let anchor = |p: DVec3, theta_c| Step {
             sampler: DirectionSampler::Anchor(AnchorSampler::new(p, theta_c, 0.8).unwrap()),
             absorption: 0.5,

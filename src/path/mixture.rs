@@ -152,17 +152,10 @@ impl Mixture {
 mod tests {
     use super::*;
     use crate::path::generator::PathGenerator;
-    use crate::sampling::light_point::{LightPointSampler, LightRegion};
+    use crate::sampling::light_point::LightPointSampler;
 
     fn generator(absorption: f64) -> PathGenerator {
-        let light = LightPointSampler {
-            region: LightRegion {
-                prim: 0,
-                level: 0,
-                cell: 0,
-            },
-            beta: 0.0,
-        };
+        let light = LightPointSampler::uniform(0);
         PathGenerator::srt(3, absorption, light)
     }
 

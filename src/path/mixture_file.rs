@@ -15,7 +15,7 @@
 use super::generator::{DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN};
 use super::mixture::Mixture;
 use crate::sampling::anchor::AnchorSampler;
-use crate::sampling::light_point::{LightPointSampler, LightRegion};
+use crate::sampling::light_point::LightPointSampler;
 use crate::scene::Scene;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -53,14 +53,7 @@ struct GeneratorFile {
 
 /// Uniform light sampling by area (a light-point sampler with β = 0).
 pub fn uniform_light(scene: &Scene) -> LightPointSampler {
-    LightPointSampler {
-        region: LightRegion {
-            prim: scene.emitters.prims[0],
-            level: 0,
-            cell: 0,
-        },
-        beta: 0.0,
-    }
+    LightPointSampler::uniform(scene.emitters.prims[0])
 }
 
 /// The `srt` method as a mixture: the one `srt` generator with uniform light sampling.

@@ -82,6 +82,19 @@ pub struct LightPointSampler {
 }
 
 impl LightPointSampler {
+    /// Light points uniform over all emitter area (`β = 0`), the region named by emitter
+    /// triangle `prim` unused.
+    pub fn uniform(prim: u32) -> Self {
+        Self {
+            region: LightRegion {
+                prim,
+                level: 0,
+                cell: 0,
+            },
+            beta: 0.0,
+        }
+    }
+
     pub fn new(
         region: LightRegion,
         beta: f64,
