@@ -6,8 +6,11 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// Runs genpath in the repository's root, where relative paths such as
+/// `scenes/fig5/scene.toml` resolve.
 fn genpath(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_genpath"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(args)
         .output()
         .expect("run genpath")
@@ -332,11 +335,7 @@ fn srt_and_mixture_methods_render() {
             "--width", "16", "--height", "16", "--quiet", "--method", method,
         ]);
         args.extend(extra);
-        let output = Command::new(env!("CARGO_BIN_EXE_genpath"))
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .args(&args)
-            .output()
-            .unwrap();
+        let output = genpath(&args);
         assert!(
             output.status.success(),
             "{method}: {}",
@@ -845,11 +844,7 @@ fn pruning_is_listed_and_can_be_turned_off() {
             "--no-gate",
         ];
         args.extend_from_slice(extra);
-        let output = Command::new(env!("CARGO_BIN_EXE_genpath"))
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .args(&args)
-            .output()
-            .unwrap();
+        let output = genpath(&args);
         assert!(
             output.status.success(),
             "{}",

@@ -241,9 +241,8 @@ pub fn optimise_weights(
         }
         eta = (eta * 2.0).min(1.0);
     }
-    // The pdf of the kept weights (a rejected last candidate may have overwritten it).
-    mixture_pdf(weights, &mut pdf);
-    moment_of(f2_over_q, sampled, &pdf)
+    // `v` is the kept weights' V: a step overwrites it only when it keeps the candidate.
+    v
 }
 
 #[cfg(test)]

@@ -108,6 +108,11 @@ fn range(rng: &mut crate::sampling::Rng, (lo, hi): (f64, f64)) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
 
+/// A log-uniform number in `[lo, hi)`.
+fn log_uniform(rng: &mut crate::sampling::Rng, (lo, hi): (f64, f64)) -> f64 {
+    (lo.ln() + (hi.ln() - lo.ln()) * rng.random::<f64>()).exp()
+}
+
 impl<'a> GenePool<'a> {
     pub fn new(scene: &'a Scene, max_bounces: u32, config: &GaConfig) -> Self {
         let mut total = 0.0;
@@ -176,10 +181,9 @@ impl<'a> GenePool<'a> {
         for k in 0..gene.generator.steps.len() {
             let (sampler, prim) = match paths.step_target(i, k) {
                 Some((anchor, prim)) => {
-                    let (lo, hi) = FOLLOW_THETA_C;
                     let sampler = AnchorSampler {
                         anchor,
-                        theta_c: (lo.ln() + (hi.ln() - lo.ln()) * rng.random::<f64>()).exp(),
+                        theta_c: log_uniform(rng, FOLLOW_THETA_C),
                         alpha: range(rng, FOLLOW_ALPHA),
                     };
                     (DirectionSampler::Anchor(sampler), Some(prim))
@@ -234,8 +238,7 @@ impl<'a> GenePool<'a> {
     }
 
     pub fn random_theta_c(rng: &mut crate::sampling::Rng) -> f64 {
-        let (lo, hi) = THETA_C_RANGE;
-        (lo.ln() + (hi.ln() - lo.ln()) * rng.random::<f64>()).exp()
+        log_uniform(rng, THETA_C_RANGE)
     }
 
     pub fn random_alpha(rng: &mut crate::sampling::Rng) -> f64 {
@@ -276,9 +279,10 @@ impl<'a> GenePool<'a> {
         }
     }
 
-    /// A random generator: one step per vertex that can scatter before `max_bounces`, or
-    /// `GaConfig::max_steps` of them (the
-    /// absorption there is 1 anyway), each of a random type and absorption.
+    /// A random generator: one step per vertex that can scatter before `max_bounces` (the
+    /// absorption there is 1 anyway), or `GaConfig::max_steps` of them, each of a random
+    /// type and absorption (`srt`'s absorption and light sampler with
+    /// `GaConfig::directions_only`).
     pub fn random_gene(&mut self, rng: &mut crate::sampling::Rng) -> Gene {
         let n = self.steps;
         let mut steps = Vec::with_capacity(n);

@@ -24,8 +24,8 @@
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
 //!    pixels spread over the image; unless at least half of them predict a gain, the other
-//!    GA pixels are not evolved and the whole image renders with `pt`. Low-variance cells (pruning)
-//!    render with `pt` too.
+//!    GA pixels are not evolved and the whole image renders with `pt`. Low-variance cells
+//!    (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -36,8 +36,8 @@ use super::test_paths::TestPaths;
 use super::{fitness, luminance, GaConfig, GaConfigError};
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
-use crate::path::{emitted, mixture_file, pt, RayCounts, SceneView};
-use crate::render::progress_bar;
+use crate::path::{emitted, mixture_file, RayCounts, SceneView};
+use crate::render::{progress_bar, sample};
 use crate::sampling::{sample_rng, uniform};
 use crate::scene::SceneAnalysis;
 use rayon::prelude::*;
@@ -58,8 +58,8 @@ pub const GATE_SAMPLES: u32 = 2048;
 /// Samples of the mixture estimator with which the gate counts its cost.
 pub const COST_SAMPLES: u32 = 256;
 /// The gate's thresholds on a trial's predicted gain: `(lose, win)`. The GA goes on past
-/// the pilot only if some pilot pixel predicts a gain above `win`; a GA pixel prefers `pt`
-/// where it predicts one below `lose`.
+/// the pilot only if at least half the pilot pixels predict a gain above `win`; a GA pixel
+/// prefers `pt` where it predicts one below `lose`.
 ///
 /// The guided path tracer keeps `pt`'s next-event estimation and its BRDF sampling (at the
 /// defensive weight), so it rarely loses much, while its 2048-sample trial is noisy (fig5:
@@ -281,7 +281,8 @@ pub struct PlanStats {
     pub empty_cells: usize,
     /// Grid cells left without a GA pixel because their baseline variance is low (pruning).
     pub low_variance_cells: usize,
-    /// GA pixels not evolved because no pilot pixel predicted a gain over `pt` (gate).
+    /// GA pixels not evolved because fewer than half the pilot pixels predicted a gain over
+    /// `pt` (gate).
     pub gated_pixels: usize,
     /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
     pub pt_pixels: usize,
@@ -406,10 +407,9 @@ fn baseline(
 /// What [`choose_pixels`] chose and left out.
 struct Choice {
     pixels: Vec<(u32, u32, Origin)>,
-    /// A scattering pixel of each low-variance cell.
+    /// A scattering pixel of each low-variance cell (pruning).
     low: Vec<(u32, u32)>,
     empty_cells: usize,
-    low_variance_cells: usize,
     /// Pooled baseline relative variance of every cell with a scattering pixel.
     cell_variance: Vec<f64>,
 }
@@ -421,7 +421,7 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
     let mut chosen = Vec::new();
     let mut low_cells = Vec::new();
     let mut cells = Vec::new();
-    let (mut empty, mut low) = (0, 0);
+    let mut empty = 0;
     let mut cell_variance = Vec::new();
     for cy in (0..height).step_by(g as usize) {
         for cx in (0..width).step_by(g as usize) {
@@ -460,7 +460,6 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
             match best {
                 Some((_, x, y)) if config.prune && mean_noise < config.prune_variance => {
                     cell_variance.push(mean_noise);
-                    low += 1;
                     low_cells.push((x, y));
                 }
                 Some((_, x, y)) => {
@@ -488,7 +487,6 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
         pixels: chosen,
         low: low_cells,
         empty_cells: empty,
-        low_variance_cells: low,
         cell_variance,
     }
 }
@@ -648,26 +646,16 @@ fn sample_moments(
     for s in 0..n {
         let mut rng = sample_rng(seed, pixel, s as u64);
         let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-        let value = match mixture {
-            None => pt::radiance_guided(view, &ray, max_bounces, &mut rng, &mut c, guide),
-            Some(m) => match view.trace(&ray, &mut c) {
-                None => glam::Vec3::ZERO,
-                Some(x1) => {
-                    let direct = emitted(view.material(x1.prim), &x1, -ray.dir);
-                    let scattered = m.estimate(
-                        view,
-                        ray.origin,
-                        x1,
-                        max_bounces,
-                        &mut rng,
-                        &mut c,
-                        &mut scratch,
-                    );
-                    direct + scattered.as_vec3()
-                }
-            },
-        };
-        let l = luminance(value.as_dvec3());
+        let value = sample(
+            view,
+            &ray,
+            max_bounces,
+            (mixture, guide),
+            &mut rng,
+            &mut c,
+            &mut scratch,
+        );
+        let l = luminance(value);
         sum += l;
         sum_sq += l * l;
     }
@@ -814,7 +802,7 @@ impl Plan {
         stats.skipped_pixels = base.iter().filter(|b| !b.scatters).count();
         let choice = choose_pixels(&base, width, height, config);
         stats.empty_cells = choice.empty_cells;
-        stats.low_variance_cells = choice.low_variance_cells;
+        stats.low_variance_cells = choice.low.len();
         let mut v = choice.cell_variance;
         v.sort_by(f64::total_cmp);
         if !v.is_empty() {

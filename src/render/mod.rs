@@ -1,6 +1,7 @@
 //! Image rendering: tiles in parallel (rayon), one deterministic random stream per pixel
 //! sample, a progress bar with ETA on stderr.
 
+use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanConfig, Target};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::image::Image;
@@ -8,7 +9,7 @@ use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
-use crate::sampling::{sample_rng, uniform};
+use crate::sampling::{sample_rng, uniform, Rng};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
@@ -235,6 +236,31 @@ pub fn render(view: &SceneView, settings: &RenderSettings, estimator: Estimator)
     }
 }
 
+/// One sample of the radiance along camera ray `ray`: path tracing, guided by the guide when
+/// given, or with a mixture the emission seen at the first hit plus the mixture's estimator
+/// (eq. 8) from there.
+#[allow(clippy::too_many_arguments)]
+pub fn sample(
+    view: &SceneView,
+    ray: &Ray,
+    max_bounces: u32,
+    (mixture, guide): (Option<&Mixture>, Option<&Guide>),
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+    scratch: &mut MixtureScratch,
+) -> DVec3 {
+    let Some(mixture) = mixture else {
+        return pt::radiance_guided(view, ray, max_bounces, rng, counts, guide).as_dvec3();
+    };
+    match view.trace(ray, counts) {
+        None => DVec3::ZERO,
+        Some(x1) => {
+            let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();
+            direct + mixture.estimate(view, ray.origin, x1, max_bounces, rng, counts, scratch)
+        }
+    }
+}
+
 fn render_tile(
     view: &SceneView,
     settings: &RenderSettings,
@@ -268,33 +294,15 @@ fn render_tile(
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                let value = match mixture {
-                    None => pt::radiance_guided(
-                        view,
-                        &ray,
-                        settings.max_bounces,
-                        &mut rng,
-                        &mut rays,
-                        guide.as_ref(),
-                    )
-                    .as_dvec3(),
-                    Some(mixture) => match view.trace(&ray, &mut rays) {
-                        None => DVec3::ZERO,
-                        Some(x1) => {
-                            let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();
-                            direct
-                                + mixture.estimate(
-                                    view,
-                                    ray.origin,
-                                    x1,
-                                    settings.max_bounces,
-                                    &mut rng,
-                                    &mut rays,
-                                    &mut scratch,
-                                )
-                        }
-                    },
-                };
+                let value = sample(
+                    view,
+                    &ray,
+                    settings.max_bounces,
+                    (mixture, guide.as_ref()),
+                    &mut rng,
+                    &mut rays,
+                    &mut scratch,
+                );
                 sum += value;
                 sum_sq += value * value;
             }
