@@ -9,7 +9,7 @@
 #[path = "../tests/stress/mod.rs"]
 mod stress;
 
-use genpath::accel::{self, AccelError, AccelKind};
+use genpath::accel::{self, AccelError, AccelKind, Coherence};
 use genpath::report::bench::{bounds, camera_rays, random_rays, ray_rates};
 use genpath::scene::Scene;
 use glam::Vec3;
@@ -42,10 +42,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     };
     let (lo, hi) = bounds(&mesh);
     let sets = [
-        ("coherent", coherent),
+        ("coherent", coherent, Coherence::Coherent),
         (
             "incoherent",
             random_rays(lo, hi, (RAYS * RAYS) as usize, 11),
+            Coherence::Incoherent,
         ),
     ];
 
@@ -69,8 +70,8 @@ fn main() -> Result<(), Box<dyn Error>> {
             Err(err) => return Err(err.into()),
         };
         let build = start.elapsed();
-        for (set, rays) in &sets {
-            let r = ray_rates(&*accel, rays, PASSES);
+        for (set, rays, coherence) in &sets {
+            let r = ray_rates(&*accel, rays, *coherence, PASSES);
             for (query, single, packet) in [
                 ("intersect", r.closest_single, r.closest_packet),
                 ("occluded", r.occluded_single, r.occluded_packet),

@@ -2,7 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
-use genpath::accel::{self, Accel, AccelKind};
+use genpath::accel::{self, Accel, AccelKind, Coherence};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::genetic::GaConfig;
 use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
@@ -762,8 +762,16 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     let n = args.rays;
     let (lo, hi) = bounds(&scene.mesh);
     let sets = [
-        ("coherent", camera_rays(&scene.camera, n, n)),
-        ("incoherent", random_rays(lo, hi, (n * n) as usize, 11)),
+        (
+            "coherent",
+            camera_rays(&scene.camera, n, n),
+            Coherence::Coherent,
+        ),
+        (
+            "incoherent",
+            random_rays(lo, hi, (n * n) as usize, 11),
+            Coherence::Incoherent,
+        ),
     ];
     println!(
         "{}: {} triangles, {} rays per set, best of {passes}, one thread",
@@ -791,8 +799,8 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             }
             Err(e) => return Err(e.into()),
         };
-        for (set, rays) in &sets {
-            let r = ray_rates(accel.as_ref(), rays, passes);
+        for (set, rays, coherence) in &sets {
+            let r = ray_rates(accel.as_ref(), rays, *coherence, passes);
             println!(
                 "{:<8} {set:<11} {:>15.2} {:>15.2} {:>16.2} {:>16.2} {:>6.1}",
                 accel.name(),

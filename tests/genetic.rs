@@ -2,7 +2,7 @@
 //! per-path generator densities of the test-path store, eq. 10 against a measured second
 //! moment, and the GA improving on the srt baseline.
 
-use genpath::accel::{self, Accel, AccelKind, Hit, Ray, PACKET_SIZE};
+use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
 use genpath::genetic::individual::{GenePool, Individual};
 use genpath::genetic::operators::{crossover, mutate};
@@ -348,16 +348,16 @@ impl Accel for NudgedLane<'_> {
     fn occluded(&self, ray: &Ray) -> bool {
         self.0.occluded(ray)
     }
-    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: Coherence) {
         let mut nudged = [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); PACKET_SIZE];
         nudged[..rays.len()].copy_from_slice(rays);
         if let Some(ray) = nudged[..rays.len()].get_mut(3) {
             ray.dir = (ray.dir + Vec3::new(1e-3, 0.0, 0.0)).normalize();
         }
-        self.0.intersect_packet(&nudged[..rays.len()], hits);
+        self.0.intersect_packet(&nudged[..rays.len()], hits, c);
     }
-    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]) {
-        self.0.occluded_packet(rays, blocked)
+    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], c: Coherence) {
+        self.0.occluded_packet(rays, blocked, c)
     }
     fn name(&self) -> &'static str {
         "nudged"

@@ -6,7 +6,7 @@
 //! 1e-4 whose leaf box ends before that — all hits of a scene of scale 1e-4, and any-hit
 //! queries with `tmax < 1e-4`. The BVH2 node test has no such floor.
 
-use super::{Accel, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use super::{Accel, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
 use obvhs::ray::RayHit;
 use obvhs::rt_triangle::RtTriangle;
@@ -98,14 +98,14 @@ impl Accel for BvhAccel {
         })
     }
 
-    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], _: Coherence) {
         assert!(rays.len() <= PACKET_SIZE && rays.len() == hits.len());
         for (ray, hit) in rays.iter().zip(hits) {
             *hit = self.intersect(ray);
         }
     }
 
-    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]) {
+    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], _: Coherence) {
         assert!(rays.len() <= PACKET_SIZE && rays.len() == blocked.len());
         for (ray, out) in rays.iter().zip(blocked) {
             *out = self.occluded(ray);

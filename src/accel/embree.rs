@@ -4,7 +4,7 @@
 //! the padding its SIMD loads need). The scene is built robust (watertight along shared edges,
 //! which a renderer needs more than the last few percent of speed) and with high quality.
 
-use super::{Accel, AccelError, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use super::{Accel, AccelError, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use embree4_sys as sys;
 use std::mem::size_of;
 
@@ -143,6 +143,16 @@ impl Drop for EmbreeAccel {
     }
 }
 
+/// Embree's query flags for `coherence`: the coherent flag selects its packet (frustum)
+/// traversal for `rtcIntersect16`, twice as fast as the default on camera rays (cbox, one
+/// thread: 16–19 against 10 Mray/s) and half as fast on incoherent rays.
+fn query_flags(coherence: Coherence) -> sys::RTCRayQueryFlags {
+    match coherence {
+        Coherence::Coherent => sys::RTC_RAY_QUERY_FLAG_COHERENT,
+        Coherence::Incoherent => sys::RTC_RAY_QUERY_FLAG_INCOHERENT,
+    }
+}
+
 fn error_name(code: sys::RTCError) -> &'static str {
     match code {
         sys::RTC_ERROR_NONE => "no error",
@@ -239,7 +249,7 @@ impl Accel for EmbreeAccel {
         shadow.tfar == f32::NEG_INFINITY
     }
 
-    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], coherence: Coherence) {
         assert_eq!(rays.len(), hits.len());
         let (valid, ray) = rtc_ray16(rays);
         let mut rayhit = sys::RTCRayHit16 {
@@ -248,8 +258,11 @@ impl Accel for EmbreeAccel {
         };
         rayhit.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; 16];
         rayhit.hit.instID[0] = [sys::RTC_INVALID_GEOMETRY_ID; 16];
+        let mut args = sys::RTCIntersectArguments::default();
+        sys::rtcInitIntersectArguments(&mut args);
+        args.flags = query_flags(coherence);
         // SAFETY: as in `intersect`; `valid` and `rayhit` are 64-byte aligned by their types.
-        unsafe { sys::rtcIntersect16(&valid, self.scene, &mut rayhit, None) };
+        unsafe { sys::rtcIntersect16(&valid, self.scene, &mut rayhit, Some(&mut args)) };
         let (r, h) = (&rayhit.ray, &rayhit.hit);
         for (i, out) in hits.iter_mut().enumerate() {
             *out = (valid.0[i] != 0 && h.geomID[i] != sys::RTC_INVALID_GEOMETRY_ID)
@@ -257,7 +270,9 @@ impl Accel for EmbreeAccel {
         }
     }
 
-    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]) {
+    /// Any-hit packets always take Embree's default (hybrid) traversal: its coherent one is
+    /// slower for them (cbox camera rays, one thread: 26–28 against 38–40 Mray/s).
+    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], _: Coherence) {
         assert_eq!(rays.len(), blocked.len());
         let (valid, mut ray) = rtc_ray16(rays);
         // SAFETY: as in `intersect_packet`.

@@ -3,7 +3,9 @@
 //! `embree.rs` goes through Intel Embree (`embree4-sys`), `bvh.rs` through the pure-Rust
 //! `obvhs` crate. Both answer closest-hit and any-hit queries for single rays and for
 //! packets of up to [`PACKET_SIZE`] rays; a packet query returns exactly what the same rays
-//! would return one at a time.
+//! would return one at a time, with one exception: a ray that meets two triangles at the
+//! same `t` (through an edge they share) may get either from Embree's coherent packet
+//! traversal, which visits triangles in another order.
 
 use glam::Vec3;
 
@@ -20,6 +22,17 @@ pub use embree::EmbreeAccel;
 
 /// Rays per packet query (Embree's `rtcIntersect16`).
 pub const PACKET_SIZE: usize = 16;
+
+/// How alike the rays of a packet are, which a back-end may use to pick its traversal.
+/// Answers never depend on it; only speed does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coherence {
+    /// Rays with nearby origins and directions, e.g. camera rays through one pixel or tile:
+    /// Embree traverses them as a packet (one frustum).
+    Coherent,
+    /// Rays in unrelated directions, e.g. after a bounce: Embree traverses them one by one.
+    Incoherent,
+}
 
 /// A ray segment `origin + t·dir`, `t ∈ [tmin, tmax]`. `dir` need not be normalised; `t` is
 /// measured in units of `dir`.
@@ -106,9 +119,9 @@ pub trait Accel: Send + Sync {
     /// Whether anything blocks the ray within `[tmin, tmax]`.
     fn occluded(&self, ray: &Ray) -> bool;
     /// Closest hits of up to [`PACKET_SIZE`] rays; `hits.len() == rays.len()`.
-    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>]);
+    fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], coherence: Coherence);
     /// Any-hit answers of up to [`PACKET_SIZE`] rays; `blocked.len() == rays.len()`.
-    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool]);
+    fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], coherence: Coherence);
     /// Back-end name for logs and stats.
     fn name(&self) -> &'static str;
 }

@@ -14,7 +14,7 @@
 //! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]).
 
 use super::luminance;
-use crate::accel::{Ray, PACKET_SIZE};
+use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
     Contribution, DirectionSampler, PathGenerator, PathVertices, Query, Walk,
 };
@@ -139,7 +139,8 @@ impl Packet {
             *ray = camera_ray(view, pixel, &mut lane.rng);
         }
         let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
-        view.trace_packet(rays, points, counts);
+        // One pixel's camera rays: the coherent case packets are made for.
+        view.trace_packet(rays, points, Coherence::Coherent, counts);
         for ((lane, ray), x1) in lanes.iter_mut().zip(rays).zip(points.iter()) {
             lane.contributions.clear();
             lane.query = None;
@@ -173,7 +174,8 @@ impl Packet {
     /// returns how many rays.
     fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
         let count = self.gather(false);
-        view.trace_packet(&self.rays[..count], &mut self.points[..count], counts);
+        let (rays, points) = (&self.rays[..count], &mut self.points[..count]);
+        view.trace_packet(rays, points, Coherence::Incoherent, counts);
         for (&i, y) in self.owner[..count].iter().zip(&self.points) {
             let lane = &mut self.lanes[i];
             let g = &q.generators[lane.generator];

@@ -6,7 +6,7 @@ pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
 
-use crate::accel::{Accel, Hit, Ray, PACKET_SIZE};
+use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::scene::{Material, Scene};
 use glam::Vec3;
 
@@ -140,6 +140,7 @@ impl<'a> SceneView<'a> {
         &self,
         rays: &[Ray],
         points: &mut [Option<SurfacePoint>],
+        coherence: Coherence,
         counts: &mut RayCounts,
     ) {
         assert_eq!(rays.len(), points.len());
@@ -149,7 +150,7 @@ impl<'a> SceneView<'a> {
         counts.closest += rays.len() as u64;
         let mut hits = [None; PACKET_SIZE];
         let hits = &mut hits[..rays.len()];
-        self.accel.intersect_packet(rays, hits);
+        self.accel.intersect_packet(rays, hits, coherence);
         for ((point, ray), hit) in points.iter_mut().zip(rays).zip(hits.iter()) {
             *point = hit.map(|hit| self.surface_point(ray, &hit));
         }
@@ -162,7 +163,8 @@ impl<'a> SceneView<'a> {
             return;
         }
         counts.shadow += rays.len() as u64;
-        self.accel.occluded_packet(rays, free);
+        self.accel
+            .occluded_packet(rays, free, Coherence::Incoherent);
         free.iter_mut().for_each(|f| *f = !*f);
     }
 }

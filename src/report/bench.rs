@@ -6,7 +6,7 @@
 //! Every figure is the best of a few passes: the machines are shared, and the best pass is
 //! the one least disturbed.
 
-use crate::accel::{Accel, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use crate::accel::{Accel, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use crate::scene::Camera;
 use glam::Vec3;
 use rand::{Rng as _, SeedableRng};
@@ -82,12 +82,12 @@ fn intersect_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
         .count()
 }
 
-fn intersect_packets(accel: &dyn Accel, rays: &[Ray]) -> usize {
+fn intersect_packets(accel: &dyn Accel, rays: &[Ray], coherence: Coherence) -> usize {
     let mut hits = [None::<Hit>; PACKET_SIZE];
     rays.chunks(PACKET_SIZE)
         .map(|packet| {
             let hits = &mut hits[..packet.len()];
-            accel.intersect_packet(black_box(packet), hits);
+            accel.intersect_packet(black_box(packet), hits, coherence);
             hits.iter().filter(|h| h.is_some()).count()
         })
         .sum()
@@ -97,12 +97,12 @@ fn occluded_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
     rays.iter().filter(|r| accel.occluded(black_box(r))).count()
 }
 
-fn occluded_packets(accel: &dyn Accel, rays: &[Ray]) -> usize {
+fn occluded_packets(accel: &dyn Accel, rays: &[Ray], coherence: Coherence) -> usize {
     let mut blocked = [false; PACKET_SIZE];
     rays.chunks(PACKET_SIZE)
         .map(|packet| {
             let blocked = &mut blocked[..packet.len()];
-            accel.occluded_packet(black_box(packet), blocked);
+            accel.occluded_packet(black_box(packet), blocked, coherence);
             blocked.iter().filter(|&&b| b).count()
         })
         .sum()
@@ -119,14 +119,15 @@ pub struct RayRates {
     pub hit_fraction: f64,
 }
 
-/// Measures [`RayRates`], each query the best of `passes`.
-pub fn ray_rates(accel: &dyn Accel, rays: &[Ray], passes: usize) -> RayRates {
+/// Measures [`RayRates`], each query the best of `passes`; packets are traced with the
+/// traversal `coherence` asks for.
+pub fn ray_rates(accel: &dyn Accel, rays: &[Ray], coherence: Coherence, passes: usize) -> RayRates {
     let n = rays.len() as f64;
     let mrays = |d: Duration| n / d.as_secs_f64().max(1e-12) / 1e6;
     let (closest_single, hits) = best(passes, || intersect_single(accel, rays));
-    let (closest_packet, _) = best(passes, || intersect_packets(accel, rays));
+    let (closest_packet, _) = best(passes, || intersect_packets(accel, rays, coherence));
     let (occluded_single, _) = best(passes, || occluded_single(accel, rays));
-    let (occluded_packet, _) = best(passes, || occluded_packets(accel, rays));
+    let (occluded_packet, _) = best(passes, || occluded_packets(accel, rays, coherence));
     RayRates {
         closest_single: mrays(closest_single),
         closest_packet: mrays(closest_packet),
