@@ -23,8 +23,9 @@
 //!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
-//!    pixels spread over the image; unless at least half of them predict a gain, the other
-//!    GA pixels are not evolved and the whole image renders with `pt`. Low-variance cells
+//!    pixels spread over the image, for `1 / PILOT_SHARE` of the generations; unless at least
+//!    half of them predict a gain, the other GA pixels are not evolved and the whole image
+//!    renders with `pt`. Where they do, the pilot pixels go on from their best individuals. Low-variance cells
 //!    (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
@@ -76,6 +77,11 @@ pub fn gate_margins(target: Target) -> (f64, f64) {
 }
 /// GA pixels evolved before the gate decides whether to evolve the others.
 pub const PILOT_PIXELS: usize = 8;
+/// The pilot evolves for `1 / PILOT_SHARE` of the generations before its trial decides: a
+/// scene where the GA cannot pay costs a quarter of a full pilot (cbox, 2 s budgets: the
+/// full pilot took a third of the time). Where the pilot pays, its pixels go on from their
+/// best individual for the remaining generations.
+pub const PILOT_SHARE: usize = 4;
 
 /// With pruning, generators get the steps that carry all but this share of the test paths'
 /// `Σ F²/q`: none, so steps are cut only past the deepest light-carrying test path. (Cutting
@@ -501,7 +507,7 @@ fn run_pixel(
     max_bounces: u32,
     seed: u64,
     (config, target): (&PlanConfig, Target),
-    seeds: &[Individual],
+    (seeds, generations): (&[Individual], usize),
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
     let (paths, mut counts) = TestPaths::sample_until(
@@ -518,16 +524,11 @@ fn run_pixel(
     let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, 0);
     let v_srt = fitness::second_moment(view, &paths, srt);
     // Pruning: no generator step past the depth where the test paths carry light.
-    // A warm start needs fewer generations (`PlanConfig::warm_start`); a guide takes only
-    // the directional samplers.
+    // A guide takes only the directional samplers.
     let ga = &GaConfig {
         directions_only: ga.directions_only || target == Target::Guide,
         max_steps: config.prune.then(|| paths.steps_needed(PRUNE_SHARE)),
-        generations: if seeds.is_empty() {
-            ga.generations
-        } else {
-            ga.generations.div_ceil(2)
-        },
+        generations,
         ..ga.clone()
     };
     let steps = ga
@@ -832,11 +833,12 @@ impl Plan {
             .filter(|i| !pilot.contains(i))
             .partition(|&i| !config.warm_start || white(i));
         let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; n];
-        // A wave: GA pixels and the individuals each starts from.
-        let evolve_wave = |wave: &[(usize, Vec<Individual>)], done: &mut Vec<Option<_>>| {
+        // A wave: GA pixels, the individuals each starts from and its generations.
+        type Job = (usize, Vec<Individual>, usize);
+        let evolve_wave = |wave: &[Job], done: &mut Vec<Option<_>>| {
             let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                 .par_iter()
-                .map(|(i, seeds)| {
+                .map(|(i, seeds, generations)| {
                     let i = *i;
                     let r = run_pixel(
                         view,
@@ -846,7 +848,7 @@ impl Plan {
                         max_bounces,
                         seed,
                         (config, target),
-                        seeds,
+                        (seeds, *generations),
                     );
                     bar.inc(1);
                     (i, r)
@@ -856,10 +858,15 @@ impl Plan {
                 done[i] = Some(r);
             }
         };
-        let cold = |wave: &[usize]| -> Vec<(usize, Vec<Individual>)> {
-            wave.iter().map(|&i| (i, Vec::new())).collect()
+        let cold = |wave: &[usize]| -> Vec<Job> {
+            wave.iter()
+                .map(|&i| (i, Vec::new(), ga.generations))
+                .collect()
         };
-        evolve_wave(&cold(&pilot), &mut done);
+        let scout = ga.generations.div_ceil(PILOT_SHARE);
+        let pilot_jobs: Vec<Job> = pilot.iter().map(|&i| (i, Vec::new(), scout)).collect();
+        evolve_wave(&pilot_jobs, &mut done);
+        let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
         let mut pt_points = Vec::new();
         if config.gate {
             pt_points.extend(&choice.low);
@@ -880,7 +887,7 @@ impl Plan {
                 None => usize::MAX,
             };
             let mut late = Vec::new();
-            let mut run_chunks = |jobs: &[(usize, Vec<Individual>)], done: &mut Vec<_>| {
+            let mut run_chunks = |jobs: &[Job], done: &mut Vec<_>| {
                 for c in jobs.chunks(chunk) {
                     if config
                         .time_limit
@@ -892,13 +899,32 @@ impl Plan {
                     }
                 }
             };
+            // The pilot goes on from each pixel's best individual for the remaining
+            // generations, whatever the time limit (the pilot showed the GA pays); its
+            // scouting still counts in the stats.
+            let rest = ga.generations.saturating_sub(scout);
+            let go_on: Vec<Job> = pilot
+                .iter()
+                .filter_map(|&i| {
+                    let (p, counts) = done[i].take()?;
+                    let seeds: Vec<Individual> = p.best.iter().cloned().collect();
+                    scouted.push((p, counts));
+                    Some(match seeds.is_empty() || rest == 0 {
+                        true => (i, Vec::new(), ga.generations),
+                        false => (i, seeds, rest),
+                    })
+                })
+                .collect();
+            evolve_wave(&go_on, &mut done);
             run_chunks(&cold(&first), &mut done);
-            // Seeds from the pilot and the first wave only, whatever the chunks.
-            let second: Vec<(usize, Vec<Individual>)> = second
+            // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
+            // needs half the generations.
+            let warm = ga.generations.div_ceil(2);
+            let second: Vec<Job> = second
                 .iter()
                 .map(|&i| match config.warm_start {
-                    true => (i, neighbour_seeds(&done, chosen[i], config)),
-                    false => (i, Vec::new()),
+                    true => (i, neighbour_seeds(&done, chosen[i], config), warm),
+                    false => (i, Vec::new(), ga.generations),
                 })
                 .collect();
             run_chunks(&second, &mut done);
@@ -915,12 +941,19 @@ impl Plan {
         bar.finish_and_clear();
         stats.ga_seconds = t1.elapsed().as_secs_f64();
         let mut pixels = Vec::with_capacity(results.len());
-        for (p, counts) in results {
+        // The work of the pilot pixels' scouting runs, which the pixels that went on replaced.
+        for (p, counts) in scouted
+            .iter()
+            .map(|(p, c)| (p, *c))
+            .chain(results.iter().map(|(p, c)| (p, *c)))
+        {
             stats.rays.add(counts);
             stats.test_path_cpu_seconds += p.test_path_seconds;
             stats.evolve_cpu_seconds += p.ga_seconds;
             stats.individual_evaluations += p.individual_evaluations;
             stats.generator_evaluations += p.generator_evaluations;
+        }
+        for (p, _) in results {
             if config.gate && p.prefers_pt(target) {
                 stats.pt_pixels += 1;
             }

@@ -20,7 +20,7 @@
 
 use super::generator::DirectionSampler;
 use super::mixture::Mixture;
-use crate::sampling::anchor::{inside_cone, AnchorSampler};
+use crate::sampling::anchor::{AnchorSampler, ConeTest};
 use crate::sampling::brdf;
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
@@ -31,10 +31,10 @@ use glam::{DVec3, Vec3};
 struct GuideAnchor {
     weight: f64,
     sampler: AnchorSampler,
-    /// `weight · p1`, `weight · p2` and `tan²(θc/2)` of the sampler.
+    /// `weight · p1`, `weight · p2` and the sampler's cone test.
     inside: f64,
     outside: f64,
-    tan2_half: f64,
+    test: ConeTest,
 }
 
 impl GuideAnchor {
@@ -45,14 +45,14 @@ impl GuideAnchor {
             sampler,
             inside: weight * p1,
             outside: weight * p2,
-            tan2_half: sampler.tan2_half(),
+            test: ConeTest::new(sampler.tan2_half()),
         }
     }
 
     /// `weight · pdf(wi)` from `x`: [`AnchorSampler::pdf`] without recomputing constants.
     #[inline]
     fn weighted_pdf(&self, x: DVec3, wi: DVec3) -> f64 {
-        if inside_cone(self.sampler.axis(x), wi, self.tan2_half) {
+        if self.test.inside(self.sampler.anchor - x, wi) {
             self.inside
         } else {
             self.outside
@@ -87,7 +87,10 @@ pub struct GuideSample {
 }
 
 impl Guide {
-    /// The guide of `mixture`, whose weights are taken as they are.
+    /// The guide of `mixture`, whose weights are taken as they are. A cone that several
+    /// generators share at one level (neighbours that adopted one another's individuals,
+    /// generators that differ only later) becomes one cone with the summed weight: the
+    /// same density, evaluated once.
     pub fn new(mixture: &Mixture) -> Self {
         let depth = mixture
             .generators
@@ -96,15 +99,21 @@ impl Guide {
             .max()
             .unwrap_or(0);
         let mut levels = vec![Level::default(); depth];
+        let mut cones: Vec<(f64, AnchorSampler)> = Vec::new();
         for (k, level) in levels.iter_mut().enumerate() {
+            cones.clear();
             for (g, &w) in mixture.generators.iter().zip(&mixture.weights) {
                 match g.steps.get(k).map(|s| &s.sampler) {
                     Some(DirectionSampler::Anchor(a)) => {
-                        level.anchors.push(GuideAnchor::new(w, *a))
+                        match cones.iter_mut().find(|(_, c)| c == a) {
+                            Some((weight, _)) => *weight += w,
+                            None => cones.push((w, *a)),
+                        }
                     }
                     _ => level.brdf += w,
                 }
             }
+            level.anchors = cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)).collect();
         }
         // Levels where everything samples the BRDF are left out: beyond them, `level` is
         // `None` and the guide is BRDF sampling.

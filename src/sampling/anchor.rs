@@ -110,19 +110,20 @@ impl AnchorSampler {
     pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
         // One sin_cos gives the extents and tan²(θc/2) = h_c / g_c.
         let (hc, gc) = self.extents();
-        if inside_cone(self.axis(from), dir, hc / gc) {
+        if ConeTest::new(hc / gc).inside(self.anchor - from, dir) {
             self.alpha / (2.0 * PI * hc)
         } else {
             (1.0 - self.alpha) / (2.0 * PI * gc)
         }
     }
 
-    /// Whether unit `dir` lies strictly inside the cone: its angle to the axis,
-    /// `2·atan2(|d−a|, |d+a|)`, is below θc, tested as `|d−a|² < tan²(θc/2)·|d+a|²`. Both
-    /// lengths stay accurate near 0 and near π, where `acos(d·a)` does not, and the test
-    /// needs no trigonometry per direction (`tan2_half` is [`Self::tan2_half`]).
+    /// Whether unit `dir` lies strictly inside the cone: its angle to the axis is below θc,
+    /// tested by [`ConeTest`] without normalising the axis. It agrees with [`inside_cone`]:
+    /// the angle `2·atan2(|d−a|, |d+a|)` against the unit axis `a`, tested as
+    /// `|d−a|² < tan²(θc/2)·|d+a|²`; both stay accurate near 0 and near π, where
+    /// `acos(d·a)` does not, and neither needs trigonometry per direction.
     pub fn inside(&self, from: DVec3, dir: DVec3) -> bool {
-        inside_cone(self.axis(from), dir, self.tan2_half())
+        ConeTest::new(self.tan2_half()).inside(self.anchor - from, dir)
     }
 
     /// `tan²(θc/2)`, the constant of [`Self::inside`].
@@ -133,10 +134,65 @@ impl AnchorSampler {
 }
 
 /// Whether unit `dir` is strictly inside the cone of unit `axis` whose half-angle θc has
-/// `tan²(θc/2) = tan2_half` (see [`AnchorSampler::inside`]).
+/// `tan²(θc/2) = tan2_half`: the reference formulation, which [`ConeTest`] must agree with.
 #[inline]
 pub fn inside_cone(axis: DVec3, dir: DVec3, tan2_half: f64) -> bool {
     (dir - axis).length_squared() < tan2_half * (dir + axis).length_squared()
+}
+
+/// The cone test of [`AnchorSampler::inside`] without normalising the axis: the density
+/// evaluations of guides and of the fitness spend much of their time in it. With
+/// `d = anchor − from` of any length and unit `dir`, `dir·d = |d| cos α` and
+/// `|dir × d| = |d| sin α` for the angle α between them, and `dir` is inside where
+/// `tan² α < tan² θc` on the cone's side (`θc < π/2`), or anywhere but the opposite cone of
+/// half-angle `π − θc` (`θc > π/2`). No square root, no division; the cross product keeps
+/// directions near the axis (or its opposite) accurate, as `|d − a|` does in
+/// [`inside_cone`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConeTest {
+    /// `tan² θc = 4t / (1 − t)²` for `t = tan²(θc/2)` (infinite at `θc = π/2`).
+    tan2: f64,
+    /// `θc > π/2`.
+    wide: bool,
+}
+
+impl ConeTest {
+    /// The test of the cone with `tan²(θc/2) = tan2_half`.
+    pub fn new(tan2_half: f64) -> Self {
+        let t = tan2_half;
+        Self {
+            tan2: 4.0 * t / ((1.0 - t) * (1.0 - t)),
+            wide: t > 1.0,
+        }
+    }
+
+    /// Whether unit `dir` is strictly inside the cone around `d = anchor − from`. Where `d`
+    /// is zero (or too short or long to square), the axis is [`AnchorSampler::axis`]'s.
+    #[inline]
+    pub fn inside(&self, d: DVec3, dir: DVec3) -> bool {
+        let l2 = d.length_squared();
+        if !(l2 > 1e-150 && l2 < 1e150) {
+            return self.inside_degenerate(d, dir);
+        }
+        self.test(d, dir)
+    }
+
+    /// [`Self::inside`] where `d` cannot be squared: around its direction, or +z.
+    #[cold]
+    fn inside_degenerate(&self, d: DVec3, dir: DVec3) -> bool {
+        self.test(d.try_normalize().unwrap_or(DVec3::Z), dir)
+    }
+
+    #[inline(always)]
+    fn test(&self, d: DVec3, dir: DVec3) -> bool {
+        let c = dir.dot(d);
+        let near_axis = dir.cross(d).length_squared() < self.tan2 * (c * c);
+        if self.wide {
+            c > 0.0 || !near_axis
+        } else {
+            c > 0.0 && near_axis
+        }
+    }
 }
 
 #[cfg(test)]
@@ -194,6 +250,64 @@ mod tests {
                 assert!((outside.length() - 1.0).abs() < 1e-15 && !s.inside(from, outside));
             }
         }
+    }
+
+    /// `ConeTest` against the reference `inside_cone` on uniform directions, for cones from
+    /// tiny to nearly the whole sphere and axes of any length: they may differ only within
+    /// rounding of the cone's edge. A test built for a cone 0.1 % wider (of θc or of π − θc,
+    /// whichever is smaller) must differ.
+    #[test]
+    fn cone_test_agrees_with_the_reference_away_from_the_edge() {
+        use rand::{Rng as _, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let from = DVec3::new(0.3, -0.2, 0.1);
+        let half_pi = 0.5 * PI;
+        let cones = [
+            1e-7,
+            1e-4,
+            0.3,
+            1.0,
+            half_pi - 1e-9,
+            half_pi,
+            half_pi + 1e-9,
+            2.0,
+        ];
+        let mut wrong_differs = 0;
+        for theta_c in cones.into_iter().chain([PI - 1e-4, PI - 1e-7]) {
+            for length in [1e-3, 1.0, 1e3] {
+                let axis = DVec3::new(-1.3, 2.0, 0.5).normalize();
+                let s = AnchorSampler::new(from + length * axis, theta_c, 0.5).unwrap();
+                let (t, test) = (s.tan2_half(), ConeTest::new(s.tan2_half()));
+                let wider = theta_c + 1e-3 * theta_c.min(PI - theta_c);
+                let wider = AnchorSampler::new(s.anchor, wider, 0.5).unwrap();
+                let wrong = ConeTest::new(wider.tan2_half());
+                for i in 0..4000 {
+                    // Uniform directions, and directions within a few θc of the axis (or of
+                    // its opposite), where a tiny cone's edge lies.
+                    let dir = if i % 2 == 0 {
+                        let z: f64 = rng.random_range(-1.0..1.0);
+                        let phi: f64 = rng.random_range(0.0..2.0 * PI);
+                        let r = (1.0 - z * z).sqrt();
+                        DVec3::new(r * phi.cos(), r * phi.sin(), z)
+                    } else {
+                        let u = [0.0, rng.random::<f64>() * 0.999, rng.random()];
+                        s.sample(from, [if i % 4 == 1 { 0.0 } else { 0.9 }, u[1], u[2]])
+                    };
+                    let angle = dir.cross(axis).length().atan2(dir.dot(axis));
+                    let d = s.anchor - from;
+                    let got = test.inside(d, dir);
+                    if (angle - theta_c).abs() > 1e-9 * theta_c.max(1e-3) {
+                        assert_eq!(got, angle < theta_c, "θc {theta_c}, |d| {length}: {dir}");
+                        assert_eq!(got, inside_cone(axis, dir, t), "θc {theta_c}: {dir}");
+                    }
+                    wrong_differs += usize::from(wrong.inside(d, dir) != got);
+                }
+            }
+        }
+        assert!(
+            wrong_differs > 0,
+            "a wider cone's test was never told apart"
+        );
     }
 
     #[test]
