@@ -9,7 +9,8 @@
 # Seeds 101, 102, …: disjoint from the references' streams (their seed 1 was used before
 # `genpath reference` derived its halves' seeds).
 # Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
-# and reports/bench*.json (`genpath bench`). Takes about 27 × (sum of budgets) seconds.
+# and reports/bench*.json (`genpath bench`), reports/bench-stress.txt (`cargo bench --bench
+# rays`). Takes about 27 × (sum of budgets) seconds.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
@@ -31,3 +32,6 @@ for scene in ${SCENES:-fig5 fig1 cbox glossy}; do
 done
 "$bin" bench scenes/cbox/scene.toml --json reports/bench.json > reports/bench.txt
 "$bin" bench scenes/fig5/scene.toml --json reports/bench-fig5.json > reports/bench-fig5.txt
+# Rays/s on the 106 800-triangle stress mesh of the cross-check test, where the back-ends'
+# traversal (not the per-ray call overhead of a 10–38-triangle scene) decides.
+cargo bench --features embree,obvhs --bench rays > reports/bench-stress.txt
