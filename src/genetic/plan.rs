@@ -25,8 +25,8 @@
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
 //!    pixels spread over the image, for `1 / PILOT_SHARE` of the generations; unless at least
 //!    half of them predict a gain, the other GA pixels are not evolved and the whole image
-//!    renders with `pt`. Where they do, the pilot pixels go on from their best individuals. Low-variance cells
-//!    (pruning) render with `pt` too.
+//!    renders with `pt`. Where they do, the pilot pixels go on from their best individuals.
+//!    Low-variance cells (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -243,7 +243,8 @@ pub struct GaPixel {
     /// neighbouring GA pixels.
     #[serde(skip)]
     pub best: Option<Individual>,
-    /// Whether this pixel's GA started from its neighbours' best individuals.
+    /// Whether this pixel's GA started from evolved individuals: its neighbours' best, or
+    /// (a pilot pixel) its own scouting run's.
     pub warm: bool,
     /// Test paths sampled (`M`) and those that carry light (stored).
     pub test_paths: usize,
@@ -915,6 +916,7 @@ impl Plan {
                     })
                 })
                 .collect();
+            bar.inc_length(go_on.len() as u64);
             evolve_wave(&go_on, &mut done);
             run_chunks(&cold(&first), &mut done);
             // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
