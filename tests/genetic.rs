@@ -6,6 +6,7 @@ use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
 use genpath::genetic::individual::{GenePool, Individual};
 use genpath::genetic::operators::{crossover, mutate};
+use genpath::genetic::plan::{Plan, PlanConfig, Target, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{luminance, GaConfig};
@@ -754,4 +755,54 @@ fn step_targets_lie_along_the_sampled_directions() {
         "anchor {:?} is no stored path's first target",
         cone.anchor
     );
+}
+
+/// With a time limit the plan has already used up, only the gate's pilot evolves. Where the
+/// pilot shows that guiding pays (fig5), the cells left without a GA pixel take their evolved
+/// neighbours' guides: with a guide they are not `pt` points, which then hold only the
+/// low-variance cells, and the pilot's guides reach far beyond their own cells. (With a
+/// mixture they would be `pt` points; no shipped scene makes the mixture's pilot pay, see
+/// `Plan::build`.)
+#[test]
+fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
+    let mut scene = Scene::load(&fig5_dir().join("scene.toml")).expect("fig5 loads");
+    scene.resize(64, 64);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = GaConfig {
+        population: 16,
+        generations: 8,
+        test_paths: 4000,
+        ..GaConfig::default()
+    };
+    let config = PlanConfig {
+        grid: 8,
+        time_limit: Some(0.0),
+        ..PlanConfig::default()
+    };
+    let plan =
+        Plan::build(&view, &ga, &config, (MAX_BOUNCES, Target::Guide), 5, false).expect("plan");
+    let stats = &plan.stats;
+    eprintln!(
+        "{} GA pixels, {} late, {} pt points, {} low-variance cells",
+        plan.pixels.len(),
+        stats.time_limited_pixels,
+        plan.pt_points.len(),
+        stats.low_variance_cells
+    );
+    assert_eq!(
+        stats.gated_pixels, 0,
+        "the pilot must pay on fig5 for this test"
+    );
+    assert_eq!(plan.pixels.len(), PILOT_PIXELS, "only the pilot evolves");
+    assert!(stats.time_limited_pixels > 0);
+    assert_eq!(plan.pt_points.len(), stats.low_variance_cells);
+    let guided = (0..64)
+        .flat_map(|y| (0..64).map(move |x| (x, y)))
+        .filter(|&(x, y)| plan.local(x, y).is_some())
+        .count();
+    // Were the late cells `pt` points, a pixel would render guided only where a pilot
+    // pixel's weight dominates, about its own 8 × 8 cell: 8 × 64 pixels.
+    let cells = (PILOT_PIXELS * 64) as usize;
+    assert!(guided > 2 * cells, "{guided} guided pixels");
 }
