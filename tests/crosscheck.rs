@@ -264,8 +264,9 @@ fn check_any_hit(
 
 /// Packet queries must return exactly the single-ray answers, with either traversal.
 /// Packet sizes cycle through 16 and partial sizes so that masked-off lanes are exercised.
-/// The coherence hint alternates with the packet, so that each traversal sees full and
-/// partial packets.
+/// The coherence hint alternates every four packets, so that each traversal sees full and
+/// partial packets. Where a ray meets two triangles at one `t`, the coherent traversal may
+/// name either (see `Accel`): the checker's ambiguous verdict is accepted there.
 fn check_packets(
     checker: &Checker,
     accel: &dyn Accel,
@@ -286,12 +287,14 @@ fn check_packets(
         };
         let end = (start + size).min(rays.len());
         let (packet, expected) = (&rays[start..end], &hits[start..end]);
-        let coherence = [Coherence::Coherent, Coherence::Incoherent][chunk_index % 2];
+        let coherence = [Coherence::Coherent, Coherence::Incoherent][(chunk_index / 4) % 2];
 
         let mut got = [None; PACKET_SIZE];
         accel.intersect_packet(packet, &mut got[..packet.len()], coherence);
         for (i, (g, e)) in got.iter().zip(expected).enumerate() {
-            if g != e {
+            let tie = coherence == Coherence::Coherent
+                && matches!(checker.compare(&packet[i], *g, *e), Verdict::Ambiguous);
+            if g != e && !tie {
                 report.packet_failures += 1;
                 report.fail(format!(
                     "{name} {coherence:?} packet intersect {g:?} vs single {e:?}: {:?}",

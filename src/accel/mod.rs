@@ -24,13 +24,14 @@ pub use embree::EmbreeAccel;
 pub const PACKET_SIZE: usize = 16;
 
 /// How alike the rays of a packet are, which a back-end may use to pick its traversal.
-/// Answers never depend on it; only speed does.
+/// Answers depend on it only at exact ties (see the module documentation); speed does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Coherence {
     /// Rays with nearby origins and directions, e.g. camera rays through one pixel or tile:
     /// Embree traverses them as a packet (one frustum).
     Coherent,
-    /// Rays in unrelated directions, e.g. after a bounce: Embree traverses them one by one.
+    /// Rays in unrelated directions, e.g. after a bounce: Embree's default (hybrid)
+    /// traversal, which goes on ray by ray once few rays of the packet are left.
     Incoherent,
 }
 

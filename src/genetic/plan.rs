@@ -24,9 +24,10 @@
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
 //!    pixels spread over the image, for `1 / PILOT_SHARE` of the generations; unless at least
-//!    half of them predict a gain, the other GA pixels are not evolved and the whole image
-//!    renders with `pt`. Where they do, the pilot pixels go on from their best individuals.
-//!    Low-variance cells (pruning) render with `pt` too.
+//!    half of them predict a gain, the other GA pixels are not evolved and become `pt`
+//!    points: the image renders with `pt` except near a pilot pixel that does not predict a
+//!    loss. Where they do, the pilot pixels go on from their best individuals (with a fresh
+//!    random stream). Low-variance cells (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -508,7 +509,7 @@ fn run_pixel(
     max_bounces: u32,
     seed: u64,
     (config, target): (&PlanConfig, Target),
-    (seeds, generations): (&[Individual], usize),
+    (seeds, generations, stream): (&[Individual], usize, u64),
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
     let (paths, mut counts) = TestPaths::sample_until(
@@ -522,7 +523,7 @@ fn run_pixel(
     let test_path_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let pixel = y as u64 * view.scene.camera.width as u64 + x as u64;
-    let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, 0);
+    let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, stream);
     let v_srt = fitness::second_moment(view, &paths, srt);
     // Pruning: no generator step past the depth where the test paths carry light.
     // A guide takes only the directional samplers.
@@ -834,12 +835,14 @@ impl Plan {
             .filter(|i| !pilot.contains(i))
             .partition(|&i| !config.warm_start || white(i));
         let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; n];
-        // A wave: GA pixels, the individuals each starts from and its generations.
-        type Job = (usize, Vec<Individual>, usize);
+        // A wave: GA pixels, the individuals each starts from, its generations and its GA
+        // random stream (a pilot pixel that goes on takes a fresh one: its scouting run's
+        // would replay the same random individuals and breeding).
+        type Job = (usize, Vec<Individual>, usize, u64);
         let evolve_wave = |wave: &[Job], done: &mut Vec<Option<_>>| {
             let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                 .par_iter()
-                .map(|(i, seeds, generations)| {
+                .map(|(i, seeds, generations, stream)| {
                     let i = *i;
                     let r = run_pixel(
                         view,
@@ -849,7 +852,7 @@ impl Plan {
                         max_bounces,
                         seed,
                         (config, target),
-                        (seeds, *generations),
+                        (seeds, *generations, *stream),
                     );
                     bar.inc(1);
                     (i, r)
@@ -861,11 +864,11 @@ impl Plan {
         };
         let cold = |wave: &[usize]| -> Vec<Job> {
             wave.iter()
-                .map(|&i| (i, Vec::new(), ga.generations))
+                .map(|&i| (i, Vec::new(), ga.generations, 0))
                 .collect()
         };
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        let pilot_jobs: Vec<Job> = pilot.iter().map(|&i| (i, Vec::new(), scout)).collect();
+        let pilot_jobs: Vec<Job> = pilot.iter().map(|&i| (i, Vec::new(), scout, 0)).collect();
         evolve_wave(&pilot_jobs, &mut done);
         let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
         let mut pt_points = Vec::new();
@@ -902,18 +905,23 @@ impl Plan {
             };
             // The pilot goes on from each pixel's best individual for the remaining
             // generations, whatever the time limit (the pilot showed the GA pays); its
-            // scouting still counts in the stats.
+            // scouting still counts in the stats. A scout without a best individual (no
+            // light-carrying test path) or without generations left stands as it is.
             let rest = ga.generations.saturating_sub(scout);
             let go_on: Vec<Job> = pilot
                 .iter()
                 .filter_map(|&i| {
                     let (p, counts) = done[i].take()?;
-                    let seeds: Vec<Individual> = p.best.iter().cloned().collect();
-                    scouted.push((p, counts));
-                    Some(match seeds.is_empty() || rest == 0 {
-                        true => (i, Vec::new(), ga.generations),
-                        false => (i, seeds, rest),
-                    })
+                    match p.best.clone() {
+                        Some(best) if rest > 0 => {
+                            scouted.push((p, counts));
+                            Some((i, vec![best], rest, 1))
+                        }
+                        _ => {
+                            done[i] = Some((p, counts));
+                            None
+                        }
+                    }
                 })
                 .collect();
             bar.inc_length(go_on.len() as u64);
@@ -925,8 +933,8 @@ impl Plan {
             let second: Vec<Job> = second
                 .iter()
                 .map(|&i| match config.warm_start {
-                    true => (i, neighbour_seeds(&done, chosen[i], config), warm),
-                    false => (i, Vec::new(), ga.generations),
+                    true => (i, neighbour_seeds(&done, chosen[i], config), warm, 0),
+                    false => (i, Vec::new(), ga.generations, 0),
                 })
                 .collect();
             run_chunks(&second, &mut done);

@@ -11,7 +11,9 @@
 //! [`Walk`](crate::path::generator::Walk) with its own random stream, and the walks of a
 //! packet advance in lockstep, their pending rays traced together (Embree's `rtcIntersect16`
 //! and `rtcOccluded16`; a loop on obvhs). A path's result does not depend on how its rays
-//! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]).
+//! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]),
+//! but for a camera ray through an edge two triangles share at the same `t`, which the
+//! coherent camera packets may answer with the other triangle (a set of measure zero).
 
 use super::luminance;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};

@@ -252,15 +252,16 @@ mod tests {
         }
     }
 
-    /// `ConeTest` against the reference `inside_cone` on uniform directions, for cones from
-    /// tiny to nearly the whole sphere and axes of any length: they may differ only within
-    /// rounding of the cone's edge. A test built for a cone 0.1 % wider (of θc or of π − θc,
-    /// whichever is smaller) must differ.
+    /// `ConeTest` against the reference `inside_cone` on uniform directions and on directions
+    /// near the cone's edge, for cones from tiny to nearly the whole sphere and axes of any
+    /// length, zero (the +z fallback) and too short or long to square included: they may
+    /// differ only within 1e-6 of the cone's smaller angular extent (θc or π − θc) of its
+    /// edge. For every cone, a test built for one 0.1 % wider (in its smaller extent) must
+    /// differ on directions drawn between the two edges.
     #[test]
     fn cone_test_agrees_with_the_reference_away_from_the_edge() {
         use rand::{Rng as _, SeedableRng};
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
-        let from = DVec3::new(0.3, -0.2, 0.1);
         let half_pi = 0.5 * PI;
         let cones = [
             1e-7,
@@ -272,42 +273,59 @@ mod tests {
             half_pi + 1e-9,
             2.0,
         ];
-        let mut wrong_differs = 0;
         for theta_c in cones.into_iter().chain([PI - 1e-4, PI - 1e-7]) {
-            for length in [1e-3, 1.0, 1e3] {
-                let axis = DVec3::new(-1.3, 2.0, 0.5).normalize();
-                let s = AnchorSampler::new(from + length * axis, theta_c, 0.5).unwrap();
+            let extent = theta_c.min(PI - theta_c);
+            for length in [0.0, 1e-80, 1e-3, 1.0, 1e3, 1e80] {
+                // From the origin, an anchor 1e-80 away is not rounded onto `from`.
+                let from = match length < 1e-10 {
+                    true => DVec3::ZERO,
+                    false => DVec3::new(0.3, -0.2, 0.1),
+                };
+                let towards = DVec3::new(-1.3, 2.0, 0.5).normalize();
+                let s = AnchorSampler::new(from + length * towards, theta_c, 0.5).unwrap();
+                let axis = s.axis(from);
+                assert_eq!(axis == DVec3::Z, length == 0.0);
                 let (t, test) = (s.tan2_half(), ConeTest::new(s.tan2_half()));
-                let wider = theta_c + 1e-3 * theta_c.min(PI - theta_c);
-                let wider = AnchorSampler::new(s.anchor, wider, 0.5).unwrap();
+                let wider = AnchorSampler::new(s.anchor, theta_c + 1e-3 * extent, 0.5).unwrap();
                 let wrong = ConeTest::new(wider.tan2_half());
+                let d = s.anchor - from;
+                let mut wrong_differs = 0;
                 for i in 0..4000 {
-                    // Uniform directions, and directions within a few θc of the axis (or of
-                    // its opposite), where a tiny cone's edge lies.
-                    let dir = if i % 2 == 0 {
-                        let z: f64 = rng.random_range(-1.0..1.0);
-                        let phi: f64 = rng.random_range(0.0..2.0 * PI);
-                        let r = (1.0 - z * z).sqrt();
-                        DVec3::new(r * phi.cos(), r * phi.sin(), z)
-                    } else {
-                        let u = [0.0, rng.random::<f64>() * 0.999, rng.random()];
-                        s.sample(from, [if i % 4 == 1 { 0.0 } else { 0.9 }, u[1], u[2]])
+                    // Uniform directions; directions inside and outside the cone, within a
+                    // few θc of its axis (or of its opposite), where a tiny cone's edge lies;
+                    // and directions just inside the wider cone's edge.
+                    let u = [rng.random::<f64>(), rng.random::<f64>()];
+                    let dir = match i % 4 {
+                        0 => {
+                            let z = 2.0 * u[0] - 1.0;
+                            let r = (1.0 - z * z).sqrt();
+                            let phi = 2.0 * PI * u[1];
+                            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+                        }
+                        1 => s.sample(from, [0.0, 0.999 * u[0], u[1]]),
+                        2 => s.sample(from, [0.9, 0.999 * u[0], u[1]]),
+                        // The band between the two edges: inside the wider cone near its
+                        // edge or, for a wide cone, outside this one near its edge (there
+                        // `sample` measures from the antipode).
+                        _ if theta_c <= half_pi => {
+                            wider.sample(from, [0.0, 0.9999 + 1e-4 * u[0], u[1]])
+                        }
+                        _ => s.sample(from, [0.9, 1e-3 * u[0], u[1]]),
                     };
                     let angle = dir.cross(axis).length().atan2(dir.dot(axis));
-                    let d = s.anchor - from;
                     let got = test.inside(d, dir);
-                    if (angle - theta_c).abs() > 1e-9 * theta_c.max(1e-3) {
+                    if (angle - theta_c).abs() > 1e-6 * extent {
                         assert_eq!(got, angle < theta_c, "θc {theta_c}, |d| {length}: {dir}");
                         assert_eq!(got, inside_cone(axis, dir, t), "θc {theta_c}: {dir}");
                     }
                     wrong_differs += usize::from(wrong.inside(d, dir) != got);
                 }
+                assert!(
+                    wrong_differs > 100,
+                    "θc {theta_c}, |d| {length}: a 0.1 % wider cone told apart {wrong_differs} times"
+                );
             }
         }
-        assert!(
-            wrong_differs > 0,
-            "a wider cone's test was never told apart"
-        );
     }
 
     #[test]
