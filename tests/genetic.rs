@@ -803,6 +803,6 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
         .count();
     // Were the late cells `pt` points, a pixel would render guided only where a pilot
     // pixel's weight dominates, about its own 8 × 8 cell: 8 × 64 pixels.
-    let cells = (PILOT_PIXELS * 64) as usize;
+    let cells = PILOT_PIXELS * 64;
     assert!(guided > 2 * cells, "{guided} guided pixels");
 }
