@@ -35,8 +35,12 @@ fn fig5() -> (Scene, Box<dyn Accel>) {
 }
 
 fn fig5_on(kind: AccelKind) -> (Scene, Box<dyn Accel>) {
+    fig5_sized(kind, SIZE)
+}
+
+fn fig5_sized(kind: AccelKind, size: u32) -> (Scene, Box<dyn Accel>) {
     let mut scene = Scene::load(&fig5_dir().join("scene.toml")).expect("fig5 loads");
-    scene.resize(SIZE, SIZE);
+    scene.resize(size, size);
     let accel = accel::build(kind, &scene.mesh).expect("accel");
     (scene, accel)
 }
@@ -765,9 +769,7 @@ fn step_targets_lie_along_the_sampled_directions() {
 /// `Plan::build`.)
 #[test]
 fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
-    let mut scene = Scene::load(&fig5_dir().join("scene.toml")).expect("fig5 loads");
-    scene.resize(64, 64);
-    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let (scene, accel) = fig5_sized(AccelKind::default_available(), 64);
     let view = SceneView::new(&scene, accel.as_ref());
     let ga = GaConfig {
         population: 16,

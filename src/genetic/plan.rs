@@ -120,8 +120,8 @@ pub struct PlanConfig {
     pub warm_start: bool,
     /// Wall-clock seconds the plan (baseline included) may take: past them, GA pixels not
     /// yet evolved are left out (to `pt` with the gate and the mixture target, to their
-    /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on timing, not only on the
-    /// seed. `None`: no limit.
+    /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on
+    /// timing, not only on the seed. `None`: no limit.
     pub time_limit: Option<f64>,
 }
 
