@@ -1041,7 +1041,24 @@ impl Plan {
     /// render's samples, so every pixel's estimator stays unbiased.
     pub fn local(&self, x: u32, y: u32) -> Option<Mixture> {
         let mut weights = Vec::with_capacity(self.neighbours);
-        self.interpolation(x, y, &mut weights);
+        let mut parts = Vec::with_capacity(self.neighbours);
+        self.local_parts(x, y, &mut weights, &mut parts)
+            .then(|| Mixture::union(&parts))
+    }
+
+    /// [`Self::local`] without building the union: `false` for `pt`, else `true` with the
+    /// weighted mixtures of the union in `parts` (`srt` alone where there is no point to
+    /// interpolate). `weights` is scratch. The renderer passes the same buffers for every
+    /// pixel, so that this allocates nothing.
+    pub fn local_parts<'a>(
+        &'a self,
+        x: u32,
+        y: u32,
+        weights: &mut Vec<(f64, usize)>,
+        parts: &mut Vec<(f64, &'a Mixture)>,
+    ) -> bool {
+        parts.clear();
+        self.interpolation(x, y, weights);
         if self.gate {
             let total: f64 = weights.iter().map(|w| w.0).sum();
             let pt: f64 = weights
@@ -1050,26 +1067,18 @@ impl Plan {
                 .map(|w| w.0)
                 .sum();
             if weights.is_empty() || pt >= 0.5 * total {
-                return None;
+                return false;
             }
             weights.retain(|w| !self.prefers_pt(w.1));
             if !self.unnormalised {
                 weights.iter_mut().for_each(|w| w.0 /= total - pt);
             }
         }
-        Some(self.mixture_of(&weights))
-    }
-
-    /// The union of the GA pixels' mixtures in `weights` (`srt` for none).
-    fn mixture_of(&self, weights: &[(f64, usize)]) -> Mixture {
         if weights.is_empty() {
-            return self.srt.clone();
+            parts.push((1.0, &self.srt));
         }
-        let parts: Vec<(f64, &Mixture)> = weights
-            .iter()
-            .map(|&(w, i)| (w, &self.pixels[i].mixture))
-            .collect();
-        Mixture::union(&parts)
+        parts.extend(weights.iter().map(|&(w, i)| (w, &self.pixels[i].mixture)));
+        true
     }
 
     pub fn width(&self) -> u32 {

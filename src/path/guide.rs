@@ -25,12 +25,13 @@ use crate::sampling::brdf;
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
-/// One weighted anchor cone of a level, with what its density needs precomputed: the guide
-/// evaluates every cone of a level twice per vertex (light sample and guided sample).
+/// One weighted anchor cone of a level, as sampling needs it.
 #[derive(Clone, Copy, Debug)]
 struct GuideAnchor {
     weight: f64,
     sampler: AnchorSampler,
+    /// [`AnchorSampler::extents`], computed once.
+    extents: (f64, f64),
     /// `weight · p1`, `weight · p2` and the sampler's cone test.
     inside: f64,
     outside: f64,
@@ -43,6 +44,7 @@ impl GuideAnchor {
         Self {
             weight,
             sampler,
+            extents: sampler.extents(),
             inside: weight * p1,
             outside: weight * p2,
             test: ConeTest::new(sampler.tan2_half()),
@@ -60,6 +62,63 @@ impl GuideAnchor {
     }
 }
 
+/// Cones per [`ConeBlock`].
+const LANES: usize = 4;
+
+/// [`LANES`] cones of a level in structure-of-arrays form, for the density loop: the guide
+/// evaluates every cone of a level for each of its samples and each light sample, and
+/// fixed-width arrays let the compiler evaluate lanes side by side. Unused lanes have zero
+/// densities.
+#[derive(Clone, Copy, Debug, Default)]
+struct ConeBlock {
+    x: [f64; LANES],
+    y: [f64; LANES],
+    z: [f64; LANES],
+    tan2: [f64; LANES],
+    wide: [bool; LANES],
+    inside: [f64; LANES],
+    outside: [f64; LANES],
+}
+
+impl ConeBlock {
+    fn set(&mut self, lane: usize, a: &GuideAnchor) {
+        let p = a.sampler.anchor;
+        (self.x[lane], self.y[lane], self.z[lane]) = (p.x, p.y, p.z);
+        (self.tan2[lane], self.wide[lane]) = (a.test.tan2(), a.test.wide());
+        (self.inside[lane], self.outside[lane]) = (a.inside, a.outside);
+    }
+
+    /// The summed weighted densities of the block's cones at `wi` from `x`, with the same
+    /// arithmetic as [`ConeTest::inside`], and whether a lane's `anchor − x` is too short
+    /// or long to square (the caller then takes [`GuideAnchor::weighted_pdf`]).
+    #[inline]
+    fn weighted_pdf(&self, x: DVec3, wi: DVec3) -> (f64, bool) {
+        let mut value = [0.0; LANES];
+        let mut degenerate = [false; LANES];
+        for lane in 0..LANES {
+            let d = DVec3::new(self.x[lane], self.y[lane], self.z[lane]) - x;
+            let l2 = d.length_squared();
+            degenerate[lane] = !(l2 > 1e-150 && l2 < 1e150);
+            let c = wi.dot(d);
+            let near_axis = wi.cross(d).length_squared() < self.tan2[lane] * (c * c);
+            let inside = if self.wide[lane] {
+                c > 0.0 || !near_axis
+            } else {
+                c > 0.0 && near_axis
+            };
+            value[lane] = if inside {
+                self.inside[lane]
+            } else {
+                self.outside[lane]
+            };
+        }
+        (
+            (value[0] + value[1]) + (value[2] + value[3]),
+            degenerate.iter().any(|&b| b),
+        )
+    }
+}
+
 /// The samplers of one vertex index.
 #[derive(Clone, Debug, Default)]
 struct Level {
@@ -67,12 +126,34 @@ struct Level {
     brdf: f64,
     /// Anchor cones and their weights.
     anchors: Vec<GuideAnchor>,
+    /// The same cones for the density loop.
+    blocks: Vec<ConeBlock>,
+}
+
+impl Level {
+    fn set_anchors(&mut self, cones: &[(f64, AnchorSampler)]) {
+        self.anchors.clear();
+        self.anchors
+            .extend(cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)));
+        self.blocks.clear();
+        for chunk in self.anchors.chunks(LANES) {
+            let mut block = ConeBlock::default();
+            for (lane, a) in chunk.iter().enumerate() {
+                block.set(lane, a);
+            }
+            self.blocks.push(block);
+        }
+    }
 }
 
 /// Per vertex index, the weighted directional samplers of a mixture.
 #[derive(Clone, Debug, Default)]
 pub struct Guide {
     levels: Vec<Level>,
+    /// Levels in use; `levels` may keep the storage of an earlier, deeper guide.
+    depth: usize,
+    /// Scratch of [`Self::rebuild`]: one level's cones and their summed weights.
+    cones: Vec<(f64, AnchorSampler)>,
     /// Fault injection for statistical tests: scales the anchors' densities when evaluated.
     pdf_error: Option<f64>,
 }
@@ -92,38 +173,56 @@ impl Guide {
     /// generators that differ only later) becomes one cone with the summed weight: the
     /// same density, evaluated once.
     pub fn new(mixture: &Mixture) -> Self {
-        let depth = mixture
-            .generators
-            .iter()
-            .map(|g| g.steps.len())
-            .max()
-            .unwrap_or(0);
-        let mut levels = vec![Level::default(); depth];
-        let mut cones: Vec<(f64, AnchorSampler)> = Vec::new();
-        for (k, level) in levels.iter_mut().enumerate() {
-            cones.clear();
-            for (g, &w) in mixture.generators.iter().zip(&mixture.weights) {
+        let mut guide = Self::default();
+        guide.rebuild(&[(1.0, mixture)]);
+        guide
+    }
+
+    /// This guide remade as the guide of the union of `parts`, mixture `m` scaled by `w`
+    /// ([`Mixture::union`] without building it), reusing its storage: the renderer makes
+    /// one guide per pixel from its neighbours' mixtures.
+    pub fn rebuild(&mut self, parts: &[(f64, &Mixture)]) {
+        let generators = || {
+            parts.iter().flat_map(|&(w, m)| {
+                m.generators
+                    .iter()
+                    .zip(&m.weights)
+                    .map(move |(g, &wg)| (g, w * wg))
+            })
+        };
+        let depth = generators().map(|(g, _)| g.steps.len()).max().unwrap_or(0);
+        if self.levels.len() < depth {
+            self.levels.resize_with(depth, Level::default);
+        }
+        // Levels where everything samples the BRDF are left out at the end: beyond
+        // `depth`, the guide is BRDF sampling.
+        self.depth = 0;
+        for k in 0..depth {
+            self.cones.clear();
+            let mut brdf = 0.0;
+            for (g, w) in generators() {
                 match g.steps.get(k).map(|s| &s.sampler) {
                     Some(DirectionSampler::Anchor(a)) => {
-                        match cones.iter_mut().find(|(_, c)| c == a) {
+                        match self.cones.iter_mut().find(|(_, c)| c == a) {
                             Some((weight, _)) => *weight += w,
-                            None => cones.push((w, *a)),
+                            None => self.cones.push((w, *a)),
                         }
                     }
-                    _ => level.brdf += w,
+                    _ => brdf += w,
                 }
             }
-            level.anchors = cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)).collect();
+            let level = &mut self.levels[k];
+            level.brdf = brdf;
+            level.set_anchors(&self.cones);
+            if !self.cones.is_empty() {
+                self.depth = k + 1;
+            }
         }
-        // Levels where everything samples the BRDF are left out: beyond them, `level` is
-        // `None` and the guide is BRDF sampling.
-        while levels.last().is_some_and(|l| l.anchors.is_empty()) {
-            levels.pop();
-        }
-        Self {
-            levels,
-            pdf_error: None,
-        }
+    }
+
+    /// The samplers of vertex `k`, where the guide has more than BRDF sampling.
+    fn level(&self, k: usize) -> Option<&Level> {
+        self.levels[..self.depth].get(k)
     }
 
     /// This guide with every anchor density scaled by `factor` when evaluated (not when
@@ -135,21 +234,29 @@ impl Guide {
 
     /// Anchor cones at vertex `k`: the densities one evaluation of `pdf` there costs.
     pub fn cones(&self, k: usize) -> usize {
-        self.levels.get(k).map_or(0, |l| l.anchors.len())
+        self.level(k).map_or(0, |l| l.anchors.len())
     }
 
     /// Whether vertex `k` samples anything but the BRDF.
     pub fn guides(&self, k: usize) -> bool {
-        k < self.levels.len()
+        k < self.depth
     }
 
     /// `p_k(wi)` at `x` for the material's BRDF pdf `brdf_pdf` there.
     fn pdf_with(&self, k: usize, x: DVec3, wi: DVec3, brdf_pdf: f64) -> f64 {
-        let Some(level) = self.levels.get(k) else {
+        let Some(level) = self.level(k) else {
             return brdf_pdf;
         };
         let scale = self.pdf_error.unwrap_or(1.0);
-        let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
+        let (mut anchors, mut degenerate) = (0.0, false);
+        for block in &level.blocks {
+            let (sum, d) = block.weighted_pdf(x, wi);
+            anchors += sum;
+            degenerate |= d;
+        }
+        if degenerate {
+            anchors = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
+        }
         level.brdf * brdf_pdf + scale * anchors
     }
 
@@ -171,7 +278,7 @@ impl Guide {
         u: [f64; 4],
     ) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
-        let Some(level) = self.levels.get(k) else {
+        let Some(level) = self.level(k) else {
             let s = brdf::sample(material, n, wo, rest)?;
             return Some(GuideSample {
                 wi: s.wi,
@@ -182,17 +289,21 @@ impl Guide {
         let xd = x.as_dvec3();
         let mut target = u[0] - level.brdf;
         let wi = if target < 0.0 {
-            brdf::sample(material, n, wo, rest)?.wi
+            brdf::sample_direction(material, n, wo, rest)?
         } else {
-            let mut chosen = &level.anchors[level.anchors.len() - 1].sampler;
+            let mut chosen = &level.anchors[level.anchors.len() - 1];
             for a in &level.anchors {
                 if target < a.weight {
-                    chosen = &a.sampler;
+                    chosen = a;
                     break;
                 }
                 target -= a.weight;
             }
-            chosen.sample(xd, rest).as_vec3().normalize()
+            chosen
+                .sampler
+                .sample_with_extents(xd, rest, chosen.extents)
+                .as_vec3()
+                .normalize()
         };
         let cos = n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);
@@ -290,5 +401,102 @@ mod tests {
         }
         // About 0.7 · 0.8 of the samples go into the 0.2-rad cone.
         assert!(anchored > 4_500, "{anchored} samples in the anchor cone");
+    }
+
+    /// A mixture of `count` one-step generators with anchors on a ring of radius 2 around
+    /// the origin, cone angles from 0.05 to 2.9 rad (narrow and wide cones), plus `srt`.
+    fn ring(count: usize, seed: u64) -> Mixture {
+        let light = LightPointSampler::uniform(0);
+        let mut rng = sample_rng(seed, 0, 0);
+        let mut generators = vec![PathGenerator::srt(3, 0.5, light)];
+        for i in 0..count {
+            let phi = i as f64 * 2.4;
+            let anchor = DVec3::new(2.0 * phi.cos(), 1.0, 2.0 * phi.sin());
+            let theta_c = 0.05 + 2.85 * uniform(&mut rng) as f64;
+            generators.push(PathGenerator {
+                steps: vec![Step {
+                    sampler: DirectionSampler::Anchor(
+                        AnchorSampler::new(anchor, theta_c, 0.7).unwrap(),
+                    ),
+                    absorption: 0.5,
+                }],
+                light,
+            });
+        }
+        let weights = (0..=count).map(|i| 1.0 + i as f64).collect();
+        Mixture::new(generators, weights)
+    }
+
+    /// The largest relative difference of `a`'s and `b`'s level-0 densities over random
+    /// directions from points near the origin, one of them on an anchor (where the block
+    /// loop must hand over to the scalar test).
+    fn max_difference(a: &Guide, b: &Guide) -> f64 {
+        let mut rng = sample_rng(8, 0, 0);
+        let mut worst: f64 = 0.0;
+        let on_anchor = DVec3::new(2.0, 1.0, 0.0);
+        for i in 0..20_000 {
+            let x = if i % 10 == 0 {
+                on_anchor
+            } else {
+                DVec3::new(uniform(&mut rng) as f64, 0.0, uniform(&mut rng) as f64)
+            };
+            let z = 1.0 - 2.0 * uniform(&mut rng) as f64;
+            let phi = std::f64::consts::TAU * uniform(&mut rng) as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let wi = DVec3::new(r * phi.cos(), z, r * phi.sin());
+            let (pa, pb) = (a.pdf_with(0, x, wi, 0.3), b.pdf_with(0, x, wi, 0.3));
+            worst = worst.max((pa - pb).abs() / pa.max(pb));
+        }
+        worst
+    }
+
+    /// The density loop over cone blocks against one `ConeTest` per cone, and a guide
+    /// rebuilt in the storage of a deeper one against a fresh guide of the union.
+    #[test]
+    fn blocks_and_rebuilt_guides_agree_with_the_scalar_densities() {
+        let (m1, m2) = (ring(7, 1), ring(6, 2));
+        let scalar = |g: &Guide, x: DVec3, wi: DVec3| -> f64 {
+            let level = &g.levels[0];
+            level.brdf * 0.3
+                + level
+                    .anchors
+                    .iter()
+                    .map(|a| a.weighted_pdf(x, wi))
+                    .sum::<f64>()
+        };
+        // Blocks (two of four lanes, one partly filled) against the per-cone test.
+        let guide = Guide::new(&m1);
+        assert_eq!((guide.cones(0), guide.levels[0].blocks.len()), (7, 2));
+        let mut rng = sample_rng(9, 0, 0);
+        for i in 0..20_000 {
+            let x = if i % 10 == 0 {
+                DVec3::new(2.0, 1.0, 0.0) // on the first anchor: d = 0
+            } else {
+                DVec3::new(uniform(&mut rng) as f64, 0.0, uniform(&mut rng) as f64)
+            };
+            let wi = DVec3::new(
+                uniform(&mut rng) as f64 - 0.5,
+                uniform(&mut rng) as f64 - 0.5,
+                uniform(&mut rng) as f64 - 0.5,
+            )
+            .normalize();
+            let (block, reference) = (guide.pdf_with(0, x, wi, 0.3), scalar(&guide, x, wi));
+            assert!(
+                (block - reference).abs() <= 1e-12 * reference,
+                "{block} vs {reference} at {x}, {wi}"
+            );
+        }
+        // A guide rebuilt from parts, in storage that held a two-level guide.
+        let mut rebuilt = Guide::new(&mixture());
+        rebuilt.rebuild(&[(0.25, &m1), (0.75, &m2)]);
+        let fresh = Guide::new(&Mixture::union(&[(0.25, &m1), (0.75, &m2)]));
+        assert!(!rebuilt.guides(1) && rebuilt.cones(0) == fresh.cones(0));
+        let same = max_difference(&rebuilt, &fresh);
+        assert!(same < 1e-12, "rebuilt guide differs by {same}");
+        // The comparison tells other weights apart.
+        let mut other = Guide::default();
+        other.rebuild(&[(0.5, &m1), (0.5, &m2)]);
+        let different = max_difference(&other, &fresh);
+        assert!(different > 0.05, "other weights differ by only {different}");
     }
 }

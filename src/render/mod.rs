@@ -273,16 +273,24 @@ fn render_tile(
     let mut variance = Vec::with_capacity(n);
     let mut rays = RayCounts::default();
     let mut scratch = MixtureScratch::default();
+    // A guide per pixel, made in the same storage.
+    let (mut guide, mut weights, mut parts) = (Guide::default(), Vec::new(), Vec::new());
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
             let local = match estimator {
-                Estimator::Ga(plan) | Estimator::GaPt(plan) => plan.local(x, y),
+                Estimator::Ga(plan) => plan.local(x, y),
                 _ => None,
             };
-            let guide = match estimator {
-                Estimator::GaPt(_) => local.as_ref().map(Guide::new),
-                _ => None,
+            let guided = match estimator {
+                Estimator::GaPt(plan) => {
+                    let guided = plan.local_parts(x, y, &mut weights, &mut parts);
+                    if guided {
+                        guide.rebuild(&parts);
+                    }
+                    guided
+                }
+                _ => false,
             };
             let mixture = match estimator {
                 Estimator::Pt | Estimator::GaPt(_) => None,
@@ -298,7 +306,7 @@ fn render_tile(
                     view,
                     &ray,
                     settings.max_bounces,
-                    (mixture, guide.as_ref()),
+                    (mixture, guided.then_some(&guide)),
                     &mut rng,
                     &mut rays,
                     &mut scratch,

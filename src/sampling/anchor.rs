@@ -72,7 +72,7 @@ impl AnchorSampler {
     /// `(h_c, g_c)`: the extent in `h = 1 − cos θ` of the cone, `[0, h_c]`, and of the rest
     /// of the sphere measured from the antipode, `g = 2 − h ∈ [0, g_c]`. Both are computed
     /// from the half-angle so neither cancels: `h_c = 2 sin²(θc/2)`, `g_c = 2 cos²(θc/2)`.
-    fn extents(&self) -> (f64, f64) {
+    pub fn extents(&self) -> (f64, f64) {
         let (s, c) = (0.5 * self.theta_c).sin_cos();
         (2.0 * s * s, 2.0 * c * c)
     }
@@ -90,8 +90,13 @@ impl AnchorSampler {
     /// A unit direction from three uniform numbers in [0, 1): `u[0]` picks the cone with
     /// probability α, `u[1]` the polar coordinate, `u[2]` the azimuth.
     pub fn sample(&self, from: DVec3, u: [f64; 3]) -> DVec3 {
+        self.sample_with_extents(from, u, self.extents())
+    }
+
+    /// [`Self::sample`] with [`Self::extents`] computed by the caller: for callers that
+    /// sample one cone many times, this saves a `sin_cos` per direction.
+    pub fn sample_with_extents(&self, from: DVec3, u: [f64; 3], (hc, gc): (f64, f64)) -> DVec3 {
         let axis = self.axis(from);
-        let (hc, gc) = self.extents();
         // Uniform in h (inside) or in g = 2 − h (outside) is uniform in solid angle. Outside,
         // g is drawn directly so that directions near the antipode keep their precision.
         let (cos_t, sin_t) = if u[0] < self.alpha {
@@ -181,6 +186,16 @@ impl ConeTest {
     #[cold]
     fn inside_degenerate(&self, d: DVec3, dir: DVec3) -> bool {
         self.test(d.try_normalize().unwrap_or(DVec3::Z), dir)
+    }
+
+    /// `tan² θc` (infinite at `θc = π/2`).
+    pub fn tan2(&self) -> f64 {
+        self.tan2
+    }
+
+    /// Whether `θc > π/2`: the test is then "not in the opposite cone".
+    pub fn wide(&self) -> bool {
+        self.wide
     }
 
     #[inline(always)]

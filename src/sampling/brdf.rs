@@ -103,6 +103,23 @@ fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
     (t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c).normalize()
 }
 
+/// The direction [`sample`] draws from `u` for a non-mirror material (`None` for one that
+/// does not scatter), without its density and weight: for callers that evaluate both for a
+/// mixture anyway.
+pub fn sample_direction(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<Vec3> {
+    if !m.scatters() {
+        return None;
+    }
+    let phi = 2.0 * PI * u[2];
+    let wi = if u[0] < diffuse_probability(m) {
+        around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi)
+    } else {
+        let c = u[1].powf(1.0 / (m.ns as f64 + 1.0));
+        around(reflect(wo, n).as_dvec3().normalize(), c, phi)
+    };
+    Some(wi.as_vec3())
+}
+
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
 /// (below the surface, or a black material).
 pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
@@ -115,17 +132,7 @@ pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample
             delta: true,
         });
     }
-    if !m.scatters() {
-        return None;
-    }
-    let phi = 2.0 * PI * u[2];
-    let wi = if u[0] < diffuse_probability(m) {
-        around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi)
-    } else {
-        let c = u[1].powf(1.0 / (m.ns as f64 + 1.0));
-        around(reflect(wo, n).as_dvec3().normalize(), c, phi)
-    }
-    .as_vec3();
+    let wi = sample_direction(m, n, wo, u)?;
     let pdf = pdf(m, n, wo, wi);
     let cos = n.dot(wi);
     if cos <= 0.0 || pdf <= 0.0 {
