@@ -14,6 +14,7 @@
 pub mod explain;
 pub mod fitness;
 pub mod individual;
+pub mod nearest;
 pub mod operators;
 pub mod plan;
 pub mod population;

@@ -33,6 +33,7 @@
 //! the mixtures and choices do not depend on the samples they are used with.
 
 use super::individual::Individual;
+use super::nearest::PointGrid;
 use super::population::{evolve_from, GenerationStats};
 use super::test_paths::TestPaths;
 use super::{fitness, luminance, GaConfig, GaConfigError};
@@ -43,6 +44,7 @@ use crate::render::{progress_bar, sample};
 use crate::sampling::{sample_rng, uniform};
 use crate::scene::SceneAnalysis;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 /// Stream tags: the baseline, the test paths and the GA use seeds derived from the user's
@@ -323,6 +325,8 @@ pub struct Plan {
     /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
     unnormalised: bool,
     pub stats: PlanStats,
+    /// `pixels` and then `pt_points`, bucketed for [`Self::interpolation`] on first use.
+    index: OnceLock<PointGrid>,
 }
 
 /// Per-pixel baseline estimate.
@@ -987,6 +991,7 @@ impl Plan {
             analysis: scene.analysis(),
             unnormalised: false,
             stats,
+            index: OnceLock::new(),
         })
     }
 
@@ -1001,21 +1006,20 @@ impl Plan {
     /// inverse squared distance, normalised to sum 1; a GA pixel itself takes weight 1.
     /// Indices from `pixels.len()` on are `pt_points`.
     pub fn interpolation(&self, x: u32, y: u32, out: &mut Vec<(f64, usize)>) {
-        out.clear();
-        let points = self.pixels.iter().map(|p| (p.x, p.y));
-        for (i, (px, py)) in points.chain(self.pt_points.iter().copied()).enumerate() {
-            let d2 = (px as f64 - x as f64).powi(2) + (py as f64 - y as f64).powi(2);
-            if d2 == 0.0 {
-                out.clear();
-                out.push((1.0, i));
-                return;
-            }
-            // Keep the `neighbours` smallest distances, sorted, ties by index.
-            if out.len() < self.neighbours || d2 < out[out.len() - 1].0 {
-                let at = out.partition_point(|&(d, _)| d <= d2);
-                out.insert(at, (d2, i));
-                out.truncate(self.neighbours);
-            }
+        let index = self.index.get_or_init(|| {
+            let points = self.pixels.iter().map(|p| (p.x, p.y));
+            PointGrid::new(
+                points.chain(self.pt_points.iter().copied()).collect(),
+                self.width,
+                self.height,
+            )
+        });
+        // The `neighbours` smallest distances, sorted, ties by index.
+        index.nearest(x, y, self.neighbours, out);
+        if let Some(&(_, i)) = out.first().filter(|(d2, _)| *d2 == 0.0) {
+            out.clear();
+            out.push((1.0, i));
+            return;
         }
         let mut total = 0.0;
         for (w, _) in out.iter_mut() {
@@ -1159,6 +1163,7 @@ mod tests {
             },
             unnormalised: false,
             stats: PlanStats::default(),
+            index: OnceLock::new(),
         }
     }
 

@@ -40,14 +40,17 @@ struct GuideAnchor {
 
 impl GuideAnchor {
     fn new(weight: f64, sampler: AnchorSampler) -> Self {
-        let (p1, p2) = sampler.densities();
+        // One sin_cos for all three: the guide makes these per pixel.
+        let extents = sampler.extents();
+        let (p1, p2) = sampler.densities_with_extents(extents);
         Self {
             weight,
             sampler,
-            extents: sampler.extents(),
+            extents,
             inside: weight * p1,
             outside: weight * p2,
-            test: ConeTest::new(sampler.tan2_half()),
+            // tan²(θc/2) = h_c / g_c, as `AnchorSampler::tan2_half`.
+            test: ConeTest::new(extents.0 / extents.1),
         }
     }
 

@@ -79,7 +79,11 @@ impl AnchorSampler {
 
     /// `(p1, p2)`: the densities inside and outside the cone, per steradian.
     pub fn densities(&self) -> (f64, f64) {
-        let (hc, gc) = self.extents();
+        self.densities_with_extents(self.extents())
+    }
+
+    /// [`Self::densities`] with [`Self::extents`] computed by the caller.
+    pub fn densities_with_extents(&self, (hc, gc): (f64, f64)) -> (f64, f64) {
         // Ωc = 2π h_c and 4π − Ωc = 2π g_c.
         (
             self.alpha / (2.0 * PI * hc),
