@@ -246,7 +246,7 @@ fn stored_paths_give_the_generators_own_densities() {
             &mut contributions,
         );
         for c in &contributions {
-            paths.push(&view, &path, c, 1.0);
+            paths.push(&view, &path, c, DVec3::ONE);
             expected.push(
                 judges
                     .iter()

@@ -173,7 +173,40 @@ impl GaConfig {
     }
 }
 
-/// Luminance of linear Rec. 709 RGB: the scalar the fitness measures variance of.
+/// How the genetic algorithm and the gate measure the variance of a pixel's estimator:
+/// `Σ_c w_c Var[v_c]` over the RGB channels of its samples `v`.
+///
+/// The weights are [`ChannelWeights::relative`] to the pixel's value `I`, so that this is,
+/// up to a constant factor, the pixel's share of the relMSE that `genpath compare` reports,
+/// `mean_c (x_c − ref_c)² / (ref_c² + 0.01)`. The luminance the paper's fitness could take
+/// instead weights blue by 0.07: on fig5 the mixture then aims at the red wall's light,
+/// and the image's blue channel keeps 1.5 times the red one's relative error.
+///
+/// Eq. 10's second moment becomes `Σ_c w_c E[(f_c/p)²] = E[F²/p²]` with
+/// `F² = Σ_c w_c f_c²`, still convex in the mixture weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChannelWeights(DVec3);
+
+impl ChannelWeights {
+    /// Equal weights, summing to 1.
+    pub const EQUAL: Self = Self(DVec3::splat(1.0 / 3.0));
+
+    /// `w_c ∝ 1 / (I_c² + 0.01)` for the pixel value `I` (negative or non-finite channels
+    /// count as 0), normalised to sum 1.
+    pub fn relative(value: DVec3) -> Self {
+        let i = DVec3::select(value.cmpgt(DVec3::ZERO), value, DVec3::ZERO);
+        let i = DVec3::select(i.is_finite_mask(), i, DVec3::ZERO);
+        let w = (i * i + 0.01).recip();
+        Self(w / w.element_sum())
+    }
+
+    /// `Σ_c w_c s_c` for per-channel squares (or variances) `s`.
+    pub fn weigh(&self, s: DVec3) -> f64 {
+        self.0.dot(s)
+    }
+}
+
+/// Luminance of linear Rec. 709 RGB: what the baseline measures relative variance of.
 pub fn luminance(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }

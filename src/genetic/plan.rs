@@ -36,13 +36,14 @@ use super::individual::Individual;
 use super::nearest::PointGrid;
 use super::population::{evolve_from, GenerationStats};
 use super::test_paths::TestPaths;
-use super::{fitness, luminance, GaConfig, GaConfigError};
+use super::{fitness, luminance, ChannelWeights, GaConfig, GaConfigError};
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, mixture_file, RayCounts, SceneView};
 use crate::render::{progress_bar, sample};
 use crate::sampling::{sample_rng, uniform};
 use crate::scene::SceneAnalysis;
+use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -190,8 +191,9 @@ pub enum Target {
     Guide,
 }
 
-/// One estimator's samples at a pixel, per sample: mean and variance of the luminance, and
-/// the cost ([`RayCounts::cost`]).
+/// One estimator's samples at a pixel, per sample: mean and variance under the pixel's
+/// [`ChannelWeights`] (`√(Σ_c w_c mean_c²)` and `Σ_c w_c Var_c`), and the cost
+/// ([`RayCounts::cost`]).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct Moments {
     pub mean: f64,
@@ -600,7 +602,7 @@ fn run_pixel(
             view,
             srt,
             evolved,
-            target,
+            (target, paths.weights()),
             (x, y),
             max_bounces,
             seed,
@@ -639,7 +641,7 @@ fn sample_moments(
     (x, y): (u32, u32),
     max_bounces: u32,
     (seed, stream): (u64, u64),
-    n: u32,
+    (n, weights): (u32, ChannelWeights),
     mixture: Option<&Mixture>,
     guide: Option<&Guide>,
     counts: &mut RayCounts,
@@ -649,7 +651,7 @@ fn sample_moments(
     let seed = derived_seed(seed, stream);
     let mut scratch = MixtureScratch::default();
     let mut c = RayCounts::default();
-    let (mut sum, mut sum_sq) = (0.0, 0.0);
+    let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
     for s in 0..n {
         let mut rng = sample_rng(seed, pixel, s as u64);
         let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
@@ -662,16 +664,16 @@ fn sample_moments(
             &mut c,
             &mut scratch,
         );
-        let l = luminance(value);
-        sum += l;
-        sum_sq += l * l;
+        sum += value;
+        sum_sq += value * value;
     }
     counts.add(c);
     let n = n as f64;
     let mean = sum / n;
+    let variance = ((sum_sq - sum * mean) / (n - 1.0)).max(DVec3::ZERO);
     Moments {
-        mean,
-        variance: ((sum_sq - sum * mean) / (n - 1.0)).max(0.0),
+        mean: weights.weigh(mean * mean).sqrt(),
+        variance: weights.weigh(variance),
         cost: c.cost() / n,
     }
 }
@@ -689,7 +691,7 @@ fn run_trial(
     view: &SceneView,
     srt: &Mixture,
     (ga, mixture): (&GaConfig, &Mixture),
-    target: Target,
+    (target, weights): (Target, ChannelWeights),
     (x, y): (u32, u32),
     max_bounces: u32,
     seed: u64,
@@ -700,7 +702,7 @@ fn run_trial(
         (x, y),
         max_bounces,
         (seed, GATE_PT_STREAM),
-        GATE_SAMPLES,
+        (GATE_SAMPLES, weights),
         None,
         None,
         counts,
@@ -715,7 +717,7 @@ fn run_trial(
                 (x, y),
                 max_bounces,
                 stream,
-                GATE_SAMPLES,
+                (GATE_SAMPLES, weights),
                 None,
                 g,
                 counts,
@@ -729,12 +731,12 @@ fn run_trial(
                 (x, y),
                 max_bounces,
                 stream,
-                COST_SAMPLES,
+                (COST_SAMPLES, weights),
                 m,
                 None,
                 counts,
             );
-            let (check, c) = TestPaths::sample_until(
+            let (mut check, c) = TestPaths::sample_until(
                 view,
                 srt,
                 (x, y),
@@ -743,6 +745,7 @@ fn run_trial(
                 derived_seed(seed, CHECK_STREAM),
             );
             counts.add(c);
+            check.weigh(weights);
             let mean = check.mean();
             Moments {
                 mean,

@@ -1,7 +1,8 @@
 //! The test paths of one pixel (paper §5.4): `M` paths sampled once from a defensive density
 //! `q` and reused for every fitness evaluation. Only paths with `F > 0` are stored (`M` still
 //! counts the others), each with what any generator needs to evaluate its density without
-//! tracing a ray, and `F²/q`.
+//! tracing a ray, and `F²/q` for `F² = Σ_c w_c f_c²` ([`ChannelWeights`]: by default
+//! relative to the pixel value the paths themselves estimate).
 //!
 //! Storage is structure-of-arrays: the scattering vertices of all paths are flattened into
 //! per-vertex arrays indexed through `offsets`. The BRDF density of each scattering vertex is
@@ -15,7 +16,7 @@
 //! but for a camera ray through an edge two triangles share at the same `t`, which the
 //! coherent camera packets may answer with the other triangle (a set of measure zero).
 
-use super::luminance;
+use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
     Contribution, DirectionSampler, PathGenerator, PathVertices, Query, Walk,
@@ -31,10 +32,14 @@ pub struct TestPaths {
     /// Number of sampled paths, zero-contribution ones included (`M` of eq. 10).
     pub sampled: usize,
     pub max_bounces: u32,
-    /// Per stored path: `F²/q`, `F` the luminance of the contribution.
+    /// Per stored path: `F²/q`, `F² = Σ_c w_c f_c²` for the contribution `f` and
+    /// [`Self::weights`].
     pub f2_over_q: Vec<f64>,
-    /// `Σ F/q` over every contribution of every sampled path.
-    pub f_over_q_sum: f64,
+    /// Per stored path: `f_c²/q` per channel.
+    f2_rgb_over_q: Vec<DVec3>,
+    /// `Σ f/q` over every contribution of every sampled path.
+    f_over_q_sum: DVec3,
+    weights: ChannelWeights,
     /// Per stored path: number of vertices `x1 … x_len`.
     len: Vec<u32>,
     /// Per stored path: ends with a light point (next-event estimation).
@@ -209,7 +214,9 @@ impl TestPaths {
             sampled: 0,
             max_bounces,
             f2_over_q: Vec::new(),
-            f_over_q_sum: 0.0,
+            f2_rgb_over_q: Vec::new(),
+            f_over_q_sum: DVec3::ZERO,
+            weights: ChannelWeights::EQUAL,
             len: Vec::new(),
             nee: Vec::new(),
             light_point: Vec::new(),
@@ -282,6 +289,7 @@ impl TestPaths {
                 break;
             }
         }
+        paths.weigh(ChannelWeights::relative(paths.value()));
         (paths, counts)
     }
 
@@ -319,6 +327,7 @@ impl TestPaths {
             }
             paths.store(view, q, &path, &contributions);
         }
+        paths.weigh(ChannelWeights::relative(paths.value()));
         (paths, counts)
     }
 
@@ -334,17 +343,16 @@ impl TestPaths {
         self.sampled += 1;
         for c in contributions {
             let pdf = q.pdf_path(view, path, c, self.max_bounces);
-            let f = luminance(c.f);
-            if pdf > 0.0 && f > 0.0 {
-                self.f_over_q_sum += f / pdf;
-                self.push(view, path, c, f * f / pdf);
+            if pdf > 0.0 && c.f.max_element() > 0.0 {
+                self.f_over_q_sum += c.f / pdf;
+                self.push(view, path, c, c.f * c.f / pdf);
             }
         }
     }
 
-    /// Stores the part of `path` that contribution `c` uses, with its `F²/q` (`sampled`,
-    /// the `M` of eq. 10, is the caller's to count).
-    pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: f64) {
+    /// Stores the part of `path` that contribution `c` uses, with its `f_c²/q` (`sampled`,
+    /// the `M` of eq. 10, is the caller's to count; `f2_over_q` is [`Self::weigh`]'s).
+    pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: DVec3) {
         let scattering = if c.nee { c.len - 1 } else { c.len };
         for v in &path.vertices[..scattering] {
             let pdf = if v.delta {
@@ -374,7 +382,29 @@ impl TestPaths {
         };
         self.end_point.push(end.0);
         self.end_prim.push(end.1);
-        self.f2_over_q.push(f2q);
+        self.f2_rgb_over_q.push(f2q);
+    }
+
+    /// Sets the channel weights of `F` and recomputes every `F²/q`.
+    pub fn weigh(&mut self, weights: ChannelWeights) {
+        self.weights = weights;
+        self.f2_over_q.clear();
+        self.f2_over_q
+            .extend(self.f2_rgb_over_q.iter().map(|&s| weights.weigh(s)));
+    }
+
+    /// The channel weights of `F`.
+    pub fn weights(&self) -> ChannelWeights {
+        self.weights
+    }
+
+    /// `(1/M) Σ f/q`: the pixel's scattered light, as the test paths estimate it.
+    pub fn value(&self) -> DVec3 {
+        if self.sampled == 0 {
+            DVec3::ZERO
+        } else {
+            self.f_over_q_sum / self.sampled as f64
+        }
     }
 
     /// Directional samples that carry all but `share` of the light: the smallest `L` such that
@@ -395,22 +425,22 @@ impl TestPaths {
             .collect();
         by_steps.sort_by_key(|&(steps, _)| steps);
         let mut acc = 0.0;
-        for (steps, f) in by_steps {
+        for &(steps, f) in &by_steps {
             acc += f;
             if acc >= (1.0 - share) * total {
                 return steps.max(1);
             }
         }
-        1
+        // Summed in another order than `total`, `acc` may end an ulp short of it: every
+        // path is needed then.
+        by_steps.last().map_or(1, |&(steps, _)| steps.max(1))
     }
 
-    /// `(1/M) Σ F/q`: the pixel's scattered light, as the test paths estimate it.
+    /// `√(Σ_c w_c I_c²)` for [`Self::value`] `I`: what eq. 10's second moment less its
+    /// square is the variance of.
     pub fn mean(&self) -> f64 {
-        if self.sampled == 0 {
-            0.0
-        } else {
-            self.f_over_q_sum / self.sampled as f64
-        }
+        let i = self.value();
+        self.weights.weigh(i * i).sqrt()
     }
 
     /// Where step `k` of a generator must aim to reproduce stored path `i`: the point its
@@ -444,11 +474,11 @@ impl TestPaths {
 
     /// Number of stored (light-carrying) paths.
     pub fn len(&self) -> usize {
-        self.f2_over_q.len()
+        self.f2_rgb_over_q.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.f2_over_q.is_empty()
+        self.f2_rgb_over_q.is_empty()
     }
 
     /// The density `p_g` of every stored path, into `out` (`out.len() == self.len()`):
@@ -487,5 +517,36 @@ impl TestPaths {
             }
             *out = pdf;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A store of paths with `(sampled directions, F²/q)`, in this order.
+    fn store(paths: &[(u32, f64)]) -> TestPaths {
+        let mut t = TestPaths::new(5);
+        for &(steps, f2q) in paths {
+            // A path of `steps + 1` vertices ending with a light point.
+            t.len.push(steps + 1);
+            t.nee.push(true);
+            t.f2_rgb_over_q.push(DVec3::splat(f2q));
+        }
+        t.weigh(ChannelWeights::EQUAL);
+        t
+    }
+
+    #[test]
+    fn steps_needed_counts_every_path_despite_rounding() {
+        // In storage order the sum is 1e16 + 2; in order of steps the two 1s vanish into
+        // 1e16 (half an ulp each), so the running sum never reaches the total.
+        let paths = store(&[(4, 1.0), (4, 1.0), (1, 1e16)]);
+        assert_eq!(paths.steps_needed(0.0), 4);
+        // With a share to leave out, the long paths' light is not needed.
+        assert_eq!(paths.steps_needed(0.01), 1);
+        // Without light, one step.
+        assert_eq!(store(&[]).steps_needed(0.0), 1);
+        assert_eq!(store(&[(3, 1.0), (2, 1.0)]).steps_needed(0.4), 3);
     }
 }
