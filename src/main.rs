@@ -144,8 +144,9 @@ struct SweepArgs {
     /// The reference (EXR), e.g. from `genpath reference`, of the size rendered.
     #[arg(long = "ref", value_name = "REF.exr")]
     reference: PathBuf,
-    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, or
-    /// ga:key=value:… with keys m, pop, gen, s, e, grid, extra, neighbours (e.g. ga:m=10000:grid=32).
+    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, or
+    /// ga:key=value:… (ga-pt:…) with keys m, l, pop, gen, s, e, grid, extra, neighbours, cw,
+    /// gate, warm, da (e.g. ga:m=10000:grid=32, ga-pt:gate=0; an unknown key lists them).
     #[arg(long, value_delimiter = ',', default_value = "pt,srt,ga")]
     methods: Vec<String>,
     /// Budgets, comma-separated: samples per pixel, or seconds per image with --time.

@@ -24,8 +24,8 @@ pub struct MethodSpec {
 }
 
 /// Keys of `ga:key=value:…` specs.
-pub const GA_KEYS: &str = "m (test paths), pop (population), gen (generations), s (generators), \
-    grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
+pub const GA_KEYS: &str = "m (test paths), l (max light-carrying test paths), pop (population), \
+    gen (generations), s (generators), grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
     gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1])";
 
 impl MethodSpec {
@@ -64,6 +64,7 @@ impl MethodSpec {
             let (ga, plan): (&mut GaConfig, &mut PlanConfig) = (&mut config.ga, &mut config.plan);
             match key {
                 "m" => ga.test_paths = int()?,
+                "l" => ga.max_light_paths = int()?,
                 "pop" => ga.population = int()?,
                 "gen" => ga.generations = int()?,
                 "s" => ga.generators = int()?,
