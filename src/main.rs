@@ -146,7 +146,7 @@ struct SweepArgs {
     reference: PathBuf,
     /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, or
     /// ga:key=value:… (ga-pt:…) with keys m, l, pop, gen, s, e, grid, extra, neighbours, cw,
-    /// gate, warm, da (e.g. ga:m=10000:grid=32, ga-pt:gate=0; an unknown key lists them).
+    /// gate, warm, da, gs (e.g. ga:m=10000:grid=32, ga-pt:gate=0; an unknown key lists them).
     #[arg(long, value_delimiter = ',', default_value = "pt,srt,ga")]
     methods: Vec<String>,
     /// Budgets, comma-separated: samples per pixel, or seconds per image with --time.
@@ -283,6 +283,10 @@ struct GaArgs {
     /// left out. The plan then depends on timing, not only on the seed.
     #[arg(long, value_name = "SECONDS")]
     ga_time_limit: Option<f64>,
+    /// ga-pt: vertices the evolved guide steers (the GA evolves that many directional steps,
+    /// at most as many as the test paths need); path tracing's own sampling beyond.
+    #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    guide_steps: u32,
 }
 
 impl GaArgs {
@@ -317,6 +321,7 @@ impl GaArgs {
             gate: !self.no_gate,
             warm_start: self.warm_start,
             time_limit: self.ga_time_limit,
+            guide_steps: self.guide_steps as usize,
         };
         ga.validate()?;
         plan.validate()?;

@@ -816,11 +816,13 @@ fn check_passes_on_fig5() {
 #[test]
 fn pruning_is_listed_and_can_be_turned_off() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |extra: &[&str]| {
-        let out = dir.path().join(format!("p{}.exr", extra.len()));
+    let run_scene = |scene: &str, extra: &[&str]| {
+        let out = dir
+            .path()
+            .join(format!("p{}-{}.exr", extra.len(), scene.len()));
         let mut args = vec![
             "render",
-            "scenes/cbox/scene.toml",
+            scene,
             "-o",
             out.to_str().unwrap(),
             "--method",
@@ -856,6 +858,7 @@ fn pruning_is_listed_and_can_be_turned_off() {
             serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
         v["ga"].clone()
     };
+    let run = |extra: &[&str]| run_scene("scenes/cbox/scene.toml", extra);
     let pruned = run(&[]);
     let full = run(&["--no-prune"]);
     let text = |v: &serde_json::Value| v["left_out"].to_string();
@@ -883,11 +886,38 @@ fn pruning_is_listed_and_can_be_turned_off() {
         "{:?}",
         max_steps(&full)
     );
+    // Under a lone light facing a floor, a light-carrying path samples one direction at
+    // most (the one that hits the light; none before next-event estimation at the floor):
+    // pruned generators get that one step.
+    let scene = dir.path().join("lamp.toml");
+    std::fs::write(
+        dir.path().join("lamp.mtl"),
+        "newmtl white\nKd 0.8 0.8 0.8\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("lamp.obj"),
+        "mtllib lamp.mtl\nusemtl white\nv -1 0 -1\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nf 1 2 3 4\n\
+         usemtl light\nv -0.2 1 -0.2\nv 0.2 1 -0.2\nv 0.2 1 0.2\nv -0.2 1 0.2\nf 5 6 7 8\n",
+    )
+    .unwrap();
+    std::fs::write(
+        &scene,
+        "mesh = \"lamp.obj\"\n[camera]\norigin = [0.0, 0.8, 1.5]\ntarget = [0.0, 0.0, 0.0]\n\
+         up = [0.0, 1.0, 0.0]\nfov_x_deg = 60.0\nwidth = 32\nheight = 32\n[render]\nmax_bounces = 5\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    // Every cell keeps its GA pixel (prune variance 0); only steps are pruned.
+    let pruned = run_scene(scene, &["--prune-variance", "0"]);
+    let full = run_scene(scene, &["--prune-variance", "0", "--no-prune"]);
+    let (pruned, full) = (max_steps(&pruned), max_steps(&full));
     assert!(
-        max_steps(&pruned).iter().any(|&s| s < 4),
-        "{:?}",
-        max_steps(&pruned)
+        pruned.len() >= 9 && pruned.len() == full.len(),
+        "{pruned:?} {full:?}"
     );
+    assert!(pruned.iter().all(|&s| s == 1), "{pruned:?}");
+    assert!(full.iter().all(|&s| s == 4), "{full:?}");
 }
 
 /// `--accel embree` and `--accel bvh` give the same image up to the cross-check's tolerance

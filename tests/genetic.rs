@@ -9,7 +9,7 @@ use genpath::genetic::operators::{crossover, mutate};
 use genpath::genetic::plan::{Plan, PlanConfig, Target, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
-use genpath::genetic::{luminance, GaConfig};
+use genpath::genetic::{ChannelWeights, GaConfig};
 use genpath::path::generator::{
     DirectionSampler, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
 };
@@ -429,11 +429,12 @@ fn packet_tracing_time() {
     );
 }
 
-/// Mean of `L²` and the variance of that mean, `L` the luminance of one sample of eq. 8 at
-/// `pixel` with `mixture` (the render loop of one pixel, emission seen directly excluded).
+/// Mean of `F²` and the variance of that mean, `F² = Σ_c w_c v_c²` for one sample `v` of
+/// eq. 8 at `pixel` with `mixture` (the render loop of one pixel, emission seen directly
+/// excluded) and the test paths' channel weights `w`.
 fn measured_second_moment(
     view: &SceneView,
-    mixture: &Mixture,
+    (mixture, weights): (&Mixture, ChannelWeights),
     (x, y): (u32, u32),
     n: u64,
 ) -> (f64, f64) {
@@ -444,20 +445,23 @@ fn measured_second_moment(
     for s in 0..n {
         let mut rng = sample_rng(99, (y * SIZE + x) as u64, s);
         let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-        let l = match view.trace(&ray, &mut counts) {
-            Some(x1) => luminance(mixture.estimate(
-                view,
-                ray.origin,
-                x1,
-                MAX_BOUNCES,
-                &mut rng,
-                &mut counts,
-                &mut scratch,
-            )),
+        let f2 = match view.trace(&ray, &mut counts) {
+            Some(x1) => {
+                let v = mixture.estimate(
+                    view,
+                    ray.origin,
+                    x1,
+                    MAX_BOUNCES,
+                    &mut rng,
+                    &mut counts,
+                    &mut scratch,
+                );
+                weights.weigh(v * v)
+            }
             None => 0.0,
         };
-        s2 += l * l;
-        s4 += l * l * l * l;
+        s2 += f2;
+        s4 += f2 * f2;
     }
     let n = n as f64;
     let mean = s2 / n;
@@ -505,7 +509,8 @@ fn eq10_matches_the_measured_second_moment() {
     good.weights = vec![0.5, 0.25, 0.25];
     for (name, mixture) in [("srt", &srt), ("anchors", &good)] {
         let (v, v_var) = eq10_with_variance(&view, &paths, mixture);
-        let (measured, m_var) = measured_second_moment(&view, mixture, FLOOR_PIXEL, 2_000_000);
+        let (measured, m_var) =
+            measured_second_moment(&view, (mixture, paths.weights()), FLOOR_PIXEL, 2_000_000);
         let se = (v_var + m_var).sqrt();
         let z = (v - measured) / se;
         eprintln!(
@@ -610,7 +615,9 @@ fn ga_improves_on_srt() {
     let evolution = evolve(&config, &paths, &view, &mut Rng::seed_from_u64(11));
     let elapsed = start.elapsed().as_secs_f64();
     let v_srt = second_moment(&view, &paths, &srt);
-    let (fresh, _) = TestPaths::sample(&view, &srt, FLOOR_PIXEL, 200_000, MAX_BOUNCES, 12);
+    let (mut fresh, _) = TestPaths::sample(&view, &srt, FLOOR_PIXEL, 200_000, MAX_BOUNCES, 12);
+    // The variance the GA minimised: the training paths' channel weights.
+    fresh.weigh(paths.weights());
     let best = evolution.best.to_mixture();
     let (fresh_best, fresh_srt) = (
         second_moment(&view, &fresh, &best),
@@ -647,8 +654,11 @@ fn ga_improves_on_srt() {
         "GA {} vs srt {v_srt}",
         evolution.best_v
     );
+    // On 103 light-carrying paths the GA overfits: V 0.26 × srt's on its own paths, 0.65 ×
+    // on fresh ones (V over the RGB channels with the pixel's weights; with luminance it was
+    // below 0.6).
     assert!(
-        fresh_best < 0.6 * fresh_srt,
+        fresh_best < 0.7 * fresh_srt,
         "fresh paths: GA {fresh_best} vs srt {fresh_srt}"
     );
     let again = evolve(&config, &paths, &view, &mut Rng::seed_from_u64(11));

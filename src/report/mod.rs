@@ -26,7 +26,8 @@ pub struct MethodSpec {
 /// Keys of `ga:key=value:…` specs.
 pub const GA_KEYS: &str = "m (test paths), l (max light-carrying test paths), pop (population), \
     gen (generations), s (generators), grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
-    gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1])";
+    gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1]), \
+    gs (ga-pt: guide steps)";
 
 impl MethodSpec {
     /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
@@ -72,6 +73,7 @@ impl MethodSpec {
                 "grid" => plan.grid = u32::try_from(int()?).map_err(|e| bad(&e))?,
                 "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
                 "neighbours" => plan.neighbours = int()?,
+                "gs" => plan.guide_steps = int()?,
                 "cw" => ga.convex_weights = flag()?,
                 "gate" => plan.gate = flag()?,
                 "warm" => plan.warm_start = flag()?,
