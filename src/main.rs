@@ -264,7 +264,8 @@ struct GaArgs {
     #[arg(long, default_value_t = PlanConfig::default().neighbours)]
     ga_neighbours: usize,
     /// Run the GA everywhere and with every step: no cells left out for low baseline
-    /// variance, no generator steps cut at the depth the test paths need.
+    /// variance, no generator steps cut at the depth the test paths need (ga-pt: still at
+    /// most --guide-steps).
     #[arg(long)]
     no_prune: bool,
     /// Grid cells whose pooled baseline relative variance (of one srt sample, Var/(mean² +

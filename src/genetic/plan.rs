@@ -112,7 +112,8 @@ pub struct PlanConfig {
     pub neighbours: usize,
     /// Leave out what the scene does not need: cells whose baseline relative variance is
     /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
-    /// test paths need (`TestPaths::steps_needed`).
+    /// test paths need (`TestPaths::steps_needed`; for `ga-pt` also at most `guide_steps`,
+    /// pruning or not).
     pub prune: bool,
     pub prune_variance: f64,
     /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
