@@ -25,7 +25,9 @@ use crate::sampling::brdf;
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
-/// One weighted anchor cone of a level, as sampling needs it.
+/// One weighted anchor cone of a level, with what its density and its sampling need
+/// precomputed: the guide evaluates every cone of a level twice per vertex (light sample and
+/// guided sample).
 #[derive(Clone, Copy, Debug)]
 struct GuideAnchor {
     weight: f64,
@@ -65,63 +67,6 @@ impl GuideAnchor {
     }
 }
 
-/// Cones per [`ConeBlock`].
-const LANES: usize = 4;
-
-/// [`LANES`] cones of a level in structure-of-arrays form, for the density loop: the guide
-/// evaluates every cone of a level for each of its samples and each light sample, and
-/// fixed-width arrays let the compiler evaluate lanes side by side. Unused lanes have zero
-/// densities.
-#[derive(Clone, Copy, Debug, Default)]
-struct ConeBlock {
-    x: [f64; LANES],
-    y: [f64; LANES],
-    z: [f64; LANES],
-    tan2: [f64; LANES],
-    wide: [bool; LANES],
-    inside: [f64; LANES],
-    outside: [f64; LANES],
-}
-
-impl ConeBlock {
-    fn set(&mut self, lane: usize, a: &GuideAnchor) {
-        let p = a.sampler.anchor;
-        (self.x[lane], self.y[lane], self.z[lane]) = (p.x, p.y, p.z);
-        (self.tan2[lane], self.wide[lane]) = (a.test.tan2(), a.test.wide());
-        (self.inside[lane], self.outside[lane]) = (a.inside, a.outside);
-    }
-
-    /// The summed weighted densities of the block's cones at `wi` from `x`, with the same
-    /// arithmetic as [`ConeTest::inside`], and whether a lane's `anchor − x` is too short
-    /// or long to square (the caller then takes [`GuideAnchor::weighted_pdf`]).
-    #[inline]
-    fn weighted_pdf(&self, x: DVec3, wi: DVec3) -> (f64, bool) {
-        let mut value = [0.0; LANES];
-        let mut degenerate = [false; LANES];
-        for lane in 0..LANES {
-            let d = DVec3::new(self.x[lane], self.y[lane], self.z[lane]) - x;
-            let l2 = d.length_squared();
-            degenerate[lane] = !(l2 > 1e-150 && l2 < 1e150);
-            let c = wi.dot(d);
-            let near_axis = wi.cross(d).length_squared() < self.tan2[lane] * (c * c);
-            let inside = if self.wide[lane] {
-                c > 0.0 || !near_axis
-            } else {
-                c > 0.0 && near_axis
-            };
-            value[lane] = if inside {
-                self.inside[lane]
-            } else {
-                self.outside[lane]
-            };
-        }
-        (
-            (value[0] + value[1]) + (value[2] + value[3]),
-            degenerate.iter().any(|&b| b),
-        )
-    }
-}
-
 /// The samplers of one vertex index.
 #[derive(Clone, Debug, Default)]
 struct Level {
@@ -129,8 +74,6 @@ struct Level {
     brdf: f64,
     /// Anchor cones and their weights.
     anchors: Vec<GuideAnchor>,
-    /// The same cones for the density loop.
-    blocks: Vec<ConeBlock>,
 }
 
 impl Level {
@@ -138,14 +81,6 @@ impl Level {
         self.anchors.clear();
         self.anchors
             .extend(cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)));
-        self.blocks.clear();
-        for chunk in self.anchors.chunks(LANES) {
-            let mut block = ConeBlock::default();
-            for (lane, a) in chunk.iter().enumerate() {
-                block.set(lane, a);
-            }
-            self.blocks.push(block);
-        }
     }
 }
 
@@ -251,15 +186,7 @@ impl Guide {
             return brdf_pdf;
         };
         let scale = self.pdf_error.unwrap_or(1.0);
-        let (mut anchors, mut degenerate) = (0.0, false);
-        for block in &level.blocks {
-            let (sum, d) = block.weighted_pdf(x, wi);
-            anchors += sum;
-            degenerate |= d;
-        }
-        if degenerate {
-            anchors = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
-        }
+        let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
         level.brdf * brdf_pdf + scale * anchors
     }
 
@@ -431,8 +358,8 @@ mod tests {
     }
 
     /// The largest relative difference of `a`'s and `b`'s level-0 densities over random
-    /// directions from points near the origin, one of them on an anchor (where the block
-    /// loop must hand over to the scalar test).
+    /// directions from points near the origin, one of them on an anchor (where the cone
+    /// test takes its degenerate branch).
     fn max_difference(a: &Guide, b: &Guide) -> f64 {
         let mut rng = sample_rng(8, 0, 0);
         let mut worst: f64 = 0.0;
@@ -453,42 +380,10 @@ mod tests {
         worst
     }
 
-    /// The density loop over cone blocks against one `ConeTest` per cone, and a guide
-    /// rebuilt in the storage of a deeper one against a fresh guide of the union.
+    /// A guide rebuilt in the storage of a deeper one against a fresh guide of the union.
     #[test]
-    fn blocks_and_rebuilt_guides_agree_with_the_scalar_densities() {
+    fn rebuilt_guides_agree_with_a_fresh_guide_of_the_union() {
         let (m1, m2) = (ring(7, 1), ring(6, 2));
-        let scalar = |g: &Guide, x: DVec3, wi: DVec3| -> f64 {
-            let level = &g.levels[0];
-            level.brdf * 0.3
-                + level
-                    .anchors
-                    .iter()
-                    .map(|a| a.weighted_pdf(x, wi))
-                    .sum::<f64>()
-        };
-        // Blocks (two of four lanes, one partly filled) against the per-cone test.
-        let guide = Guide::new(&m1);
-        assert_eq!((guide.cones(0), guide.levels[0].blocks.len()), (7, 2));
-        let mut rng = sample_rng(9, 0, 0);
-        for i in 0..20_000 {
-            let x = if i % 10 == 0 {
-                DVec3::new(2.0, 1.0, 0.0) // on the first anchor: d = 0
-            } else {
-                DVec3::new(uniform(&mut rng) as f64, 0.0, uniform(&mut rng) as f64)
-            };
-            let wi = DVec3::new(
-                uniform(&mut rng) as f64 - 0.5,
-                uniform(&mut rng) as f64 - 0.5,
-                uniform(&mut rng) as f64 - 0.5,
-            )
-            .normalize();
-            let (block, reference) = (guide.pdf_with(0, x, wi, 0.3), scalar(&guide, x, wi));
-            assert!(
-                (block - reference).abs() <= 1e-12 * reference,
-                "{block} vs {reference} at {x}, {wi}"
-            );
-        }
         // A guide rebuilt from parts, in storage that held a two-level guide.
         let mut rebuilt = Guide::new(&mixture());
         rebuilt.rebuild(&[(0.25, &m1), (0.75, &m2)]);

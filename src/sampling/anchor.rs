@@ -192,16 +192,6 @@ impl ConeTest {
         self.test(d.try_normalize().unwrap_or(DVec3::Z), dir)
     }
 
-    /// `tan² θc` (infinite at `θc = π/2`).
-    pub fn tan2(&self) -> f64 {
-        self.tan2
-    }
-
-    /// Whether `θc > π/2`: the test is then "not in the opposite cone".
-    pub fn wide(&self) -> bool {
-        self.wide
-    }
-
     #[inline(always)]
     fn test(&self, d: DVec3, dir: DVec3) -> bool {
         let c = dir.dot(d);
