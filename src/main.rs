@@ -248,6 +248,11 @@ struct GaArgs {
     /// paper's, uniform by area on all surfaces).
     #[arg(long, default_value_t = GaConfig::default().data_anchors, value_parser = parse_probability)]
     data_anchors: f64,
+    /// Share of data-driven directional samplers that are patches (parallelograms where the
+    /// light-carrying test paths' directions arrived on one plane) rather than cones (0:
+    /// the paper's cones only).
+    #[arg(long, default_value_t = GaConfig::default().patches, value_parser = parse_probability)]
+    patches: f64,
     /// Stop sampling a pixel's test paths once this many carry light.
     #[arg(long, value_name = "L", default_value_t = GaConfig::default().max_light_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     max_light_paths: u32,
@@ -310,6 +315,7 @@ impl GaArgs {
             convex_weights: self.convex_weights,
             max_light_paths: self.max_light_paths as usize,
             data_anchors: self.data_anchors,
+            patches: self.patches,
             directions_only: false,
         };
         let plan = PlanConfig {

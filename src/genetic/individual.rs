@@ -14,6 +14,7 @@ use crate::path::mixture::Mixture;
 use crate::path::mixture_file;
 use crate::sampling::anchor::AnchorSampler;
 use crate::sampling::light_point::{LightPointSampler, LightRegion};
+use crate::sampling::patch::PatchSampler;
 use crate::scene::{triangle_area, Scene};
 use glam::DVec3;
 use rand::Rng as _;
@@ -31,6 +32,24 @@ pub const FOLLOW_ALPHA: (f64, f64) = (0.5, 0.95);
 pub const ALPHA_RANGE: (f64, f64) = (0.05, 0.95);
 /// Random light-region probabilities `β` are uniform in `[0, BETA_MAX)`.
 pub const BETA_MAX: f64 = 0.95;
+/// A data-driven patch spans the light-carrying test paths' arrival points on its plane
+/// between these weighted quantiles along each of its axes.
+const PATCH_QUANTILES: (f64, f64) = (0.1, 0.9);
+/// Half-edges of patches stay between these fractions of the scene's size.
+pub const PATCH_HALF_RANGE: (f64, f64) = (0.005, 2.0);
+/// Radius of the points a local patch is fitted to, relative to the scene's size:
+/// log-uniform in this range.
+const PATCH_LOCAL_RADIUS: (f64, f64) = (0.05, 0.5);
+
+/// Where a light-carrying test path's `k`-th direction arrived, on a plane.
+#[derive(Clone, Copy, Debug)]
+struct Arrival {
+    point: DVec3,
+    /// Unit geometric normal of the triangle there.
+    normal: DVec3,
+    /// `sqrt(F²/q)` of the path: how much its arrival point counts in a patch's extent.
+    weight: f64,
+}
 
 /// A generator with an identity: copies (crossover, elitism) keep the id, any change gets a
 /// new one, so the fitness cache evaluates each distinct generator once.
@@ -99,6 +118,10 @@ pub struct GenePool<'a> {
     /// their `F²/q`, and the share of anchors drawn from them (`GaConfig::data_anchors`).
     paths: Option<(&'a TestPaths, Vec<f64>)>,
     data_anchors: f64,
+    /// Per step, where the light-carrying test paths' directions arrived; and the share of
+    /// data-driven samplers that are patches (`GaConfig::patches`).
+    arrivals: Vec<Vec<Arrival>>,
+    patches: f64,
     /// `GaConfig::directions_only`: the absorption of every step.
     fixed_absorption: Option<f64>,
 }
@@ -138,6 +161,8 @@ impl<'a> GenePool<'a> {
             next_id: 1,
             paths: None,
             data_anchors: config.data_anchors,
+            arrivals: Vec::new(),
+            patches: config.patches,
             fixed_absorption: config.directions_only.then_some(config.srt_absorption),
         }
     }
@@ -154,7 +179,114 @@ impl<'a> GenePool<'a> {
             })
             .collect();
         self.paths = Some((paths, cdf));
+        self.arrivals = (0..self.steps)
+            .map(|k| {
+                (0..paths.len())
+                    .filter_map(|i| {
+                        let (point, prim) = paths.step_target(i, k)?;
+                        let normal = self.normal(prim)?;
+                        let weight = paths.f2_over_q[i].sqrt();
+                        (weight > 0.0 && weight.is_finite()).then_some(Arrival {
+                            point,
+                            normal,
+                            weight,
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
         self
+    }
+
+    /// A patch over where light-carrying test paths' `k`-th directions arrived on the plane
+    /// of `point` (normal `normal`): all of them there, or with probability ½ those within
+    /// a random radius of `point`. Its axes are the principal axes of those points (weights
+    /// `sqrt(F²/q)`), its extent their weighted `PATCH_QUANTILES` along each axis. `None`
+    /// without test paths there.
+    pub fn data_patch(
+        &self,
+        k: usize,
+        (point, normal): (DVec3, DVec3),
+        rng: &mut crate::sampling::Rng,
+    ) -> Option<PatchSampler> {
+        let arrivals = self.arrivals.get(k)?;
+        let extent = f64::from(self.scene.extent);
+        let radius = match rng.random::<f64>() < 0.5 {
+            true => log_uniform(rng, PATCH_LOCAL_RADIUS) * extent,
+            false => f64::INFINITY,
+        };
+        let (e1, e2) = crate::sampling::basis(normal);
+        // In-plane coordinates about `point` of the arrivals on the plane.
+        let plane_tolerance = 1e-4 * extent;
+        let near: Vec<(f64, f64, f64)> = arrivals
+            .iter()
+            .filter(|a| {
+                let d = a.point - point;
+                a.normal.dot(normal).abs() > 0.99
+                    && normal.dot(d).abs() <= plane_tolerance
+                    && d.length() <= radius
+            })
+            .map(|a| {
+                let d = a.point - point;
+                (d.dot(e1), d.dot(e2), a.weight)
+            })
+            .collect();
+        if near.is_empty() {
+            return None;
+        }
+        let total: f64 = near.iter().map(|p| p.2).sum();
+        let (mx, my) = near
+            .iter()
+            .fold((0.0, 0.0), |(x, y), p| (x + p.0 * p.2, y + p.1 * p.2));
+        let (mx, my) = match total > 0.0 {
+            true => (mx / total, my / total),
+            false => (0.0, 0.0),
+        };
+        let (cxx, cxy, cyy) = near.iter().fold((0.0, 0.0, 0.0), |(a, b, c), p| {
+            let (dx, dy) = (p.0 - mx, p.1 - my);
+            (a + p.2 * dx * dx, b + p.2 * dx * dy, c + p.2 * dy * dy)
+        });
+        let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+        let (s, c) = angle.sin_cos();
+        let axes = [e1 * c + e2 * s, e2 * c - e1 * s];
+        let (lo, hi) = PATCH_HALF_RANGE;
+        let mut center = point;
+        let mut half = [DVec3::ZERO; 2];
+        for (axis, half) in axes.iter().zip(&mut half) {
+            let mut along: Vec<(f64, f64)> = near
+                .iter()
+                .map(|p| (p.0 * axis.dot(e1) + p.1 * axis.dot(e2), p.2))
+                .collect();
+            along.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let quantile = |q: f64| {
+                let mut sum = 0.0;
+                along
+                    .iter()
+                    .find(|p| {
+                        sum += p.1;
+                        sum >= q * total
+                    })
+                    .map_or(0.0, |p| p.0)
+            };
+            let (a, b) = (quantile(PATCH_QUANTILES.0), quantile(PATCH_QUANTILES.1));
+            center += *axis * (0.5 * (a + b));
+            *half = *axis * (0.5 * (b - a)).clamp(lo * extent, hi * extent);
+        }
+        PatchSampler::new(center, half[0], half[1], range(rng, FOLLOW_ALPHA)).ok()
+    }
+
+    /// A data-driven patch for step `k` about the arrival of a light-carrying test path
+    /// picked ∝ its `F²/q` ([`Self::data_patch`]); `None` without test paths.
+    fn random_patch(&self, k: usize, rng: &mut crate::sampling::Rng) -> Option<PatchSampler> {
+        let (paths, i) = self.pick_path(rng)?;
+        let (point, prim) = paths.step_target(i, k)?;
+        self.data_patch(k, (point, self.normal(prim)?), rng)
+    }
+
+    /// The unit geometric normal of triangle `prim` (`None` for a degenerate one).
+    fn normal(&self, prim: u32) -> Option<DVec3> {
+        let [a, b, c] = self.scene.mesh.vertices(prim).map(|v| v.as_dvec3());
+        (b - a).cross(c - a).try_normalize()
     }
 
     /// A light-carrying test path picked with probability ∝ its `F²/q` (`None` without).
@@ -179,8 +311,13 @@ impl<'a> GenePool<'a> {
         let (paths, i) = self.pick_path(rng)?;
         let mut gene = self.random_gene(rng);
         for k in 0..gene.generator.steps.len() {
-            let (sampler, prim) = match paths.step_target(i, k) {
-                Some((anchor, prim)) => {
+            let target = paths.step_target(i, k);
+            let patch = target
+                .filter(|_| rng.random::<f64>() < self.patches)
+                .and_then(|(p, prim)| self.data_patch(k, (p, self.normal(prim)?), rng));
+            let (sampler, prim) = match (patch, target) {
+                (Some(patch), _) => (DirectionSampler::Patch(patch), None),
+                (None, Some((anchor, prim))) => {
                     let sampler = AnchorSampler {
                         anchor,
                         theta_c: log_uniform(rng, FOLLOW_THETA_C),
@@ -188,7 +325,7 @@ impl<'a> GenePool<'a> {
                     };
                     (DirectionSampler::Anchor(sampler), Some(prim))
                 }
-                None => (DirectionSampler::Brdf, None),
+                (None, None) => (DirectionSampler::Brdf, None),
             };
             gene.generator.steps[k].sampler = sampler;
             gene.anchor_prims[k] = prim;
@@ -257,6 +394,11 @@ impl<'a> GenePool<'a> {
     ) -> (DirectionSampler, Option<u32>) {
         if rng.random::<f64>() < 0.5 {
             return (DirectionSampler::Brdf, None);
+        }
+        if self.paths.is_some() && rng.random::<f64>() < self.data_anchors * self.patches {
+            if let Some(patch) = self.random_patch(k, rng) {
+                return (DirectionSampler::Patch(patch), None);
+            }
         }
         let (anchor, prim) = self.random_anchor(k, rng);
         let sampler = AnchorSampler {

@@ -64,6 +64,12 @@ pub struct GaConfig {
     /// Share of random anchor points drawn where light-carrying test paths went (beyond
     /// the paper, which draws them uniformly by area on all surfaces: 0).
     pub data_anchors: f64,
+    /// Share of data-driven directional samplers that are patches ([`PatchSampler`]: the
+    /// region where light-carrying test paths' directions arrived on one plane) rather than
+    /// cones (beyond the paper, whose samplers are cones: 0).
+    ///
+    /// [`PatchSampler`]: crate::sampling::patch::PatchSampler
+    pub patches: f64,
     /// Evolve directional samplers only: every generator keeps `srt`'s absorption and light
     /// sampler, so that `V` measures exactly what a guide for path tracing takes from the
     /// mixture (`ga-pt` sets it).
@@ -100,6 +106,7 @@ impl Default for GaConfig {
             convex_weights: true,
             max_light_paths: 1_000,
             data_anchors: 0.5,
+            patches: 0.5,
             directions_only: false,
         }
     }
@@ -117,11 +124,13 @@ impl GaConfig {
         if self.population == 0 || self.generations == 0 || self.generators == 0 {
             return fail("population, generations and generators must be at least 1".into());
         }
-        if !(self.data_anchors.is_finite() && (0.0..=1.0).contains(&self.data_anchors)) {
-            return fail(format!(
-                "data_anchors {} is not in [0, 1]",
-                self.data_anchors
-            ));
+        for (name, share) in [
+            ("data_anchors", self.data_anchors),
+            ("patches", self.patches),
+        ] {
+            if !(share.is_finite() && (0.0..=1.0).contains(&share)) {
+                return fail(format!("{name} {share} is not in [0, 1]"));
+            }
         }
         if self.max_light_paths == 0 {
             return fail("max_light_paths must be at least 1".into());

@@ -5,7 +5,7 @@
 //! β ∈ [0, 1), θc ∈ (0, π), anchors on the triangle they were drawn on); the defensive
 //! component 0 is never touched. A changed generator gets a fresh id.
 
-use super::individual::{clamp_theta_c, Gene, GenePool, Individual, BETA_MAX};
+use super::individual::{clamp_theta_c, Gene, GenePool, Individual, BETA_MAX, PATCH_HALF_RANGE};
 use super::GaConfig;
 use crate::path::generator::{DirectionSampler, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::sampling::light_point::barycentric;
@@ -18,8 +18,11 @@ use std::f64::consts::PI;
 const WEIGHT_SIGMA: f64 = 0.5;
 /// Standard deviation, in logit space, of α, β and absorption mutations.
 const LOGIT_SIGMA: f64 = 0.7;
-/// Standard deviation of the log of θc in a cone-angle mutation.
+/// Standard deviation of the log of θc in a cone-angle mutation, and of a patch edge's
+/// length in a patch-scale mutation.
 const THETA_SIGMA: f64 = 0.3;
+/// Standard deviation of a patch shift along each edge, relative to the half-edge.
+const ANCHOR_SHIFT_IN_PATCH: f64 = 0.3;
 
 /// A standard normal number (Box–Muller).
 fn normal(rng: &mut Rng) -> f64 {
@@ -59,12 +62,38 @@ fn shift_anchor(pool: &GenePool, prim: u32, anchor: DVec3, sigma: f64, rng: &mut
     a * w.x + b * w.y + c * w.z
 }
 
-/// Mutates step `k`'s directional sampler of `gene`: shift, re-draw or re-aim its anchor,
-/// change θc or α, or replace it by a random sampler of any type.
+/// A patch's half-edge scaled by a log-normal factor, its length kept in
+/// `PATCH_HALF_RANGE` of the scene's size.
+fn scale_half(pool: &GenePool, half: DVec3, rng: &mut Rng) -> DVec3 {
+    let extent = f64::from(pool.scene.extent);
+    let (lo, hi) = PATCH_HALF_RANGE;
+    let length = half.length();
+    let scaled = (length * (THETA_SIGMA * normal(rng)).exp()).clamp(lo * extent, hi * extent);
+    half * (scaled / length)
+}
+
+/// Mutates step `k`'s directional sampler of `gene`: for a cone, shift, re-draw or re-aim
+/// its anchor, change θc or α; for a patch, shift it in its plane, scale an edge, change α
+/// or fit a new one to the test paths; or replace it by a random sampler of any type.
 fn mutate_sampler(pool: &GenePool, config: &GaConfig, gene: &mut Gene, k: usize, rng: &mut Rng) {
     let choice = rng.random_range(0..6u32);
     let prim = gene.anchor_prims[k];
     match (&mut gene.generator.steps[k].sampler, prim) {
+        (DirectionSampler::Patch(p), _) if choice < 5 => match choice {
+            0 => {
+                let shift = ANCHOR_SHIFT_IN_PATCH;
+                p.center += p.half_u * (shift * normal(rng)) + p.half_v * (shift * normal(rng));
+            }
+            1 => p.half_u = scale_half(pool, p.half_u, rng),
+            2 => p.half_v = scale_half(pool, p.half_v, rng),
+            3 => p.alpha = perturb_probability(p.alpha, rng, 1e-3, 1.0 - 1e-3),
+            _ => {
+                let at = (p.center, p.half_u.cross(p.half_v).normalize());
+                if let Some(fitted) = pool.data_patch(k, at, rng) {
+                    *p = fitted;
+                }
+            }
+        },
         (DirectionSampler::Anchor(s), Some(prim)) if choice < 5 => match choice {
             0 | 1 => s.anchor = shift_anchor(pool, prim, s.anchor, config.anchor_shift, rng),
             2 => {

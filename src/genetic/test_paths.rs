@@ -501,6 +501,7 @@ impl TestPaths {
                 let direction = match &g.steps[k].sampler {
                     DirectionSampler::Brdf => self.brdf_pdf[j],
                     DirectionSampler::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
+                    DirectionSampler::Patch(s) => s.pdf(self.point[j], self.wi[j]),
                 };
                 pdf *= (1.0 - a) * direction;
                 k += 1;

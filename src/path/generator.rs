@@ -17,6 +17,7 @@ use crate::accel::Ray;
 use crate::sampling::anchor::AnchorSampler;
 use crate::sampling::brdf;
 use crate::sampling::light_point::LightPointSampler;
+use crate::sampling::patch::PatchSampler;
 use crate::sampling::{uniform, Rng};
 use glam::{DVec3, Vec3};
 
@@ -33,6 +34,9 @@ pub enum DirectionSampler {
     Brdf,
     /// A cone towards an anchor point (paper §5.2).
     Anchor(AnchorSampler),
+    /// Points on a parallelogram in space (beyond the paper: light that arrives from a
+    /// long, thin region, which cones cover poorly).
+    Patch(PatchSampler),
 }
 
 /// One step of a generator: a directional sampler and the absorption before it.
@@ -124,6 +128,7 @@ impl PathGenerator {
                 brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, v.wi)
             }
             DirectionSampler::Anchor(a) => a.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
+            DirectionSampler::Patch(s) => s.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
         }
     }
 
@@ -383,6 +388,10 @@ impl Walk {
                 DirectionSampler::Anchor(a) => {
                     let wi = a.sample(x.p.as_dvec3(), u).as_vec3().normalize();
                     (wi, a.pdf(x.p.as_dvec3(), wi.as_dvec3()))
+                }
+                DirectionSampler::Patch(s) => {
+                    let wi = s.sample(x.p.as_dvec3(), u).as_vec3().normalize();
+                    (wi, s.pdf(x.p.as_dvec3(), wi.as_dvec3()))
                 }
             };
             vertex.pdf_sampled = (1.0 - absorption) * pdf;

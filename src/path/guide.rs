@@ -8,12 +8,13 @@
 //! At the `k`-th non-delta vertex the guide samples a direction from
 //!
 //! ```text
-//! p_k(ω) = w_brdf,k · p_brdf(ω) + Σ_j w_j,k · p_anchor_j(ω)
+//! p_k(ω) = w_brdf,k · p_brdf(ω) + Σ_j w_j,k · p_j(ω)
 //! ```
 //!
-//! the `k`-th directional samplers of the mixture's generators, each with its generator's
-//! weight (a generator without a `k`-th step, and the defensive `srt` one, count as BRDF
-//! sampling). The weights sum to 1 and every anchor cone covers the whole sphere, so `p_k`
+//! the `k`-th directional samplers of the mixture's generators (anchor cones and patches),
+//! each with its generator's weight (a generator without a `k`-th step, and the defensive
+//! `srt` one, count as BRDF sampling). The weights sum to 1 and every cone and patch sampler
+//! covers the whole sphere, so `p_k`
 //! is a density wherever the BSDF is non-zero: the estimator stays unbiased. Absorptions and
 //! light samplers of the generators are not used: path length is path tracing's (Russian
 //! roulette), light points are sampled by area.
@@ -22,6 +23,7 @@ use super::generator::DirectionSampler;
 use super::mixture::Mixture;
 use crate::sampling::anchor::{AnchorSampler, ConeTest};
 use crate::sampling::brdf;
+use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
@@ -67,6 +69,14 @@ impl GuideAnchor {
     }
 }
 
+/// One weighted patch of a level, with its constants.
+#[derive(Clone, Copy, Debug)]
+struct GuidePatch {
+    weight: f64,
+    sampler: PatchSampler,
+    shape: PatchShape,
+}
+
 /// The samplers of one vertex index.
 #[derive(Clone, Debug, Default)]
 struct Level {
@@ -74,13 +84,36 @@ struct Level {
     brdf: f64,
     /// Anchor cones and their weights.
     anchors: Vec<GuideAnchor>,
+    /// Patches and their weights.
+    patches: Vec<GuidePatch>,
 }
 
 impl Level {
-    fn set_anchors(&mut self, cones: &[(f64, AnchorSampler)]) {
+    fn set(&mut self, cones: &[(f64, AnchorSampler)], patches: &[(f64, PatchSampler)]) {
         self.anchors.clear();
         self.anchors
             .extend(cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)));
+        self.patches.clear();
+        self.patches
+            .extend(patches.iter().map(|&(weight, sampler)| GuidePatch {
+                weight,
+                sampler,
+                shape: PatchShape::new(&sampler),
+            }));
+    }
+
+    /// Whether the level samples anything but the BRDF.
+    fn guides(&self) -> bool {
+        !(self.anchors.is_empty() && self.patches.is_empty())
+    }
+}
+
+/// Adds `weight` to `sampler`'s entry of `list`, or appends it: a sampler that several
+/// generators share is evaluated once.
+fn merge<T: PartialEq + Copy>(list: &mut Vec<(f64, T)>, weight: f64, sampler: &T) {
+    match list.iter_mut().find(|(_, s)| s == sampler) {
+        Some((w, _)) => *w += weight,
+        None => list.push((weight, *sampler)),
     }
 }
 
@@ -90,8 +123,9 @@ pub struct Guide {
     levels: Vec<Level>,
     /// Levels in use; `levels` may keep the storage of an earlier, deeper guide.
     depth: usize,
-    /// Scratch of [`Self::rebuild`]: one level's cones and their summed weights.
+    /// Scratch of [`Self::rebuild`]: one level's cones and patches and their summed weights.
     cones: Vec<(f64, AnchorSampler)>,
+    patches: Vec<(f64, PatchSampler)>,
     /// Fault injection for statistical tests: scales the anchors' densities when evaluated.
     pdf_error: Option<f64>,
 }
@@ -106,8 +140,8 @@ pub struct GuideSample {
 }
 
 impl Guide {
-    /// The guide of `mixture`, whose weights are taken as they are. A cone that several
-    /// generators share at one level (neighbours that adopted one another's individuals,
+    /// The guide of `mixture`, whose weights are taken as they are. A cone or patch that
+    /// several generators share at one level (neighbours that adopted one another's individuals,
     /// generators that differ only later) becomes one cone with the summed weight: the
     /// same density, evaluated once.
     pub fn new(mixture: &Mixture) -> Self {
@@ -137,22 +171,19 @@ impl Guide {
         self.depth = 0;
         for k in 0..depth {
             self.cones.clear();
+            self.patches.clear();
             let mut brdf = 0.0;
             for (g, w) in generators() {
                 match g.steps.get(k).map(|s| &s.sampler) {
-                    Some(DirectionSampler::Anchor(a)) => {
-                        match self.cones.iter_mut().find(|(_, c)| c == a) {
-                            Some((weight, _)) => *weight += w,
-                            None => self.cones.push((w, *a)),
-                        }
-                    }
-                    _ => brdf += w,
+                    Some(DirectionSampler::Anchor(a)) => merge(&mut self.cones, w, a),
+                    Some(DirectionSampler::Patch(p)) => merge(&mut self.patches, w, p),
+                    Some(DirectionSampler::Brdf) | None => brdf += w,
                 }
             }
             let level = &mut self.levels[k];
             level.brdf = brdf;
-            level.set_anchors(&self.cones);
-            if !self.cones.is_empty() {
+            level.set(&self.cones, &self.patches);
+            if level.guides() {
                 self.depth = k + 1;
             }
         }
@@ -170,9 +201,11 @@ impl Guide {
         self
     }
 
-    /// Anchor cones at vertex `k`: the densities one evaluation of `pdf` there costs.
+    /// Anchor cones and patches at vertex `k`: the densities one evaluation of `pdf` there
+    /// costs.
     pub fn cones(&self, k: usize) -> usize {
-        self.level(k).map_or(0, |l| l.anchors.len())
+        self.level(k)
+            .map_or(0, |l| l.anchors.len() + l.patches.len())
     }
 
     /// Whether vertex `k` samples anything but the BRDF.
@@ -187,7 +220,12 @@ impl Guide {
         };
         let scale = self.pdf_error.unwrap_or(1.0);
         let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
-        level.brdf * brdf_pdf + scale * anchors
+        let patches: f64 = level
+            .patches
+            .iter()
+            .map(|p| p.weight * p.shape.pdf(x, wi))
+            .sum();
+        level.brdf * brdf_pdf + scale * (anchors + patches)
     }
 
     /// `p_k(wi)` at the surface point `x` of `material` (normal `n` facing `wo`).
@@ -221,19 +259,23 @@ impl Guide {
         let wi = if target < 0.0 {
             brdf::sample_direction(material, n, wo, rest)?
         } else {
-            let mut chosen = &level.anchors[level.anchors.len() - 1];
-            for a in &level.anchors {
-                if target < a.weight {
-                    chosen = a;
-                    break;
-                }
-                target -= a.weight;
+            // Sampler `i`: the cones, then the patches; rounding past the end takes the
+            // last one.
+            let cones = level.anchors.len();
+            let weight = |i: usize| match i < cones {
+                true => level.anchors[i].weight,
+                false => level.patches[i - cones].weight,
+            };
+            let mut i = 0;
+            while i + 1 < cones + level.patches.len() && target >= weight(i) {
+                target -= weight(i);
+                i += 1;
             }
-            chosen
-                .sampler
-                .sample_with_extents(xd, rest, chosen.extents)
-                .as_vec3()
-                .normalize()
+            let dir = match level.anchors.get(i) {
+                Some(a) => a.sampler.sample_with_extents(xd, rest, a.extents),
+                None => level.patches[i - cones].sampler.sample(xd, rest),
+            };
+            dir.as_vec3().normalize()
         };
         let cos = n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);

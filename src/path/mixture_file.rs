@@ -16,6 +16,7 @@ use super::generator::{DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, AB
 use super::mixture::Mixture;
 use crate::sampling::anchor::AnchorSampler;
 use crate::sampling::light_point::LightPointSampler;
+use crate::sampling::patch::PatchSampler;
 use crate::scene::Scene;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -77,9 +78,16 @@ pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), String> {
                 "step {k}: absorption {a} is not in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]"
             ));
         }
-        if let DirectionSampler::Anchor(a) = &step.sampler {
-            AnchorSampler::new(a.anchor, a.theta_c, a.alpha)
-                .map_err(|e| format!("step {k}: {e}"))?;
+        match &step.sampler {
+            DirectionSampler::Brdf => {}
+            DirectionSampler::Anchor(a) => {
+                AnchorSampler::new(a.anchor, a.theta_c, a.alpha)
+                    .map_err(|e| format!("step {k}: {e}"))?;
+            }
+            DirectionSampler::Patch(p) => {
+                PatchSampler::new(p.center, p.half_u, p.half_v, p.alpha)
+                    .map_err(|e| format!("step {k}: {e}"))?;
+            }
         }
     }
     LightPointSampler::new(g.light.region, g.light.beta, &scene.emitters)

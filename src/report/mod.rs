@@ -27,7 +27,7 @@ pub struct MethodSpec {
 pub const GA_KEYS: &str = "m (test paths), l (max light-carrying test paths), pop (population), \
     gen (generations), s (generators), grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
     gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1]), \
-    gs (ga-pt: guide steps)";
+    pa (patches, share in [0, 1]), gs (ga-pt: guide steps)";
 
 impl MethodSpec {
     /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
@@ -78,6 +78,7 @@ impl MethodSpec {
                 "gate" => plan.gate = flag()?,
                 "warm" => plan.warm_start = flag()?,
                 "da" => ga.data_anchors = value.parse().map_err(|e| bad(&e))?,
+                "pa" => ga.patches = value.parse().map_err(|e| bad(&e))?,
                 _ => return Err(format!("`{text}`: unknown key `{key}` (keys: {GA_KEYS})")),
             }
         }

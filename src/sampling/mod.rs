@@ -7,6 +7,7 @@
 pub mod anchor;
 pub mod brdf;
 pub mod light_point;
+pub mod patch;
 
 use glam::DVec3;
 use rand::Rng as _;
