@@ -23,7 +23,7 @@ for scene in ${SCENES:-fig5 fig1 cbox glossy}; do
     # learn, each addition beyond the paper is also turned off on its own.
     methods="pt,srt,ga,ga-pt,ga:gate=0,ga-pt:gate=0"
     if [ "$scene" = fig5 ]; then
-        methods="$methods,ga-pt:cw=0,ga-pt:warm=0,ga-pt:da=0"
+        methods="$methods,ga-pt:cw=0,ga-pt:warm=0,ga-pt:da=0,ga-pt:pa=0"
     fi
     "$bin" sweep "scenes/$scene/scene.toml" --ref "reports/refs/${scene}_ref.exr" \
         --time --budgets "$budgets" --methods "$methods" --max-bounces 5 --quiet --seed 101 \

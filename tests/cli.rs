@@ -318,11 +318,24 @@ fn one_and_two_threads_give_bit_identical_images() {
 #[test]
 fn srt_and_mixture_methods_render() {
     let dir = tempfile::tempdir().unwrap();
-    for (method, extra) in [
-        ("srt", vec![]),
-        ("mixture", vec!["--generators", "scenes/fig5/anchors.toml"]),
+    // The hand-made mixture with its red-wall cone replaced by a patch over the lit band.
+    let patches = dir.path().join("patches.toml");
+    let anchors = std::fs::read_to_string(fig5().with_file_name("anchors.toml")).unwrap();
+    std::fs::write(&patches, anchors.replacen(RED_CONE, RED_PATCH, 1)).unwrap();
+    for (tag, method, extra) in [
+        ("srt", "srt", vec![]),
+        (
+            "mixture",
+            "mixture",
+            vec!["--generators", "scenes/fig5/anchors.toml"],
+        ),
+        (
+            "patches",
+            "mixture",
+            vec!["--generators", patches.to_str().unwrap()],
+        ),
     ] {
-        let out = dir.path().join(format!("{method}.exr"));
+        let out = dir.path().join(format!("{tag}.exr"));
         let mut args = vec![
             "render",
             "scenes/fig5/scene.toml",
@@ -341,13 +354,21 @@ fn srt_and_mixture_methods_render() {
             "{method}: {}",
             String::from_utf8_lossy(&output.stderr)
         );
-        let json = std::fs::read_to_string(dir.path().join(format!("{method}.exr.json"))).unwrap();
+        let json = std::fs::read_to_string(dir.path().join(format!("{tag}.exr.json"))).unwrap();
         assert!(
             json.contains("\"generators\""),
-            "{method}: the mixture is not in the JSON"
+            "{tag}: the mixture is not in the JSON"
         );
+        if tag == "patches" {
+            assert!(json.contains("\"patch\""), "the patch is not in the JSON");
+        }
     }
 }
+
+/// The first cone of `scenes/fig5/anchors.toml`, and a patch over the band it aims at.
+const RED_CONE: &str =
+    r#"{ type = "anchor", anchor = [-1.0, 1.9, 0.0], theta_c = 0.45, alpha = 0.85 }"#;
+const RED_PATCH: &str = r#"{ type = "patch", center = [-1.0, 1.8, 0.0], half_u = [0.0, 0.2, 0.0], half_v = [0.0, 0.0, 1.0], alpha = 0.9 }"#;
 
 #[test]
 fn bad_generator_files() {
@@ -379,6 +400,18 @@ fn bad_generator_files() {
             "weight -1",
         ),
         (anchors.replace("theta_c", "theta"), "unknown field"),
+        (
+            anchors.replacen(RED_CONE, &RED_PATCH.replace("0.0, 1.0]", "0.0, 0.0]"), 1),
+            "span no area",
+        ),
+        (
+            anchors.replacen(RED_CONE, &RED_PATCH.replace("0.9 }", "1.0 }"), 1),
+            "probability on the patch",
+        ),
+        (
+            anchors.replacen(RED_CONE, &RED_PATCH.replace("[-1.0, 1.8", "[nan, 1.8"), 1),
+            "patch centre",
+        ),
         ("[[generators]\n".to_string(), "generators.toml"),
     ];
     for (text, needle) in cases {

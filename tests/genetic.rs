@@ -4,7 +4,7 @@
 
 use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
-use genpath::genetic::individual::{GenePool, Individual};
+use genpath::genetic::individual::{GenePool, Individual, PATCH_HALF_RANGE};
 use genpath::genetic::operators::{crossover, mutate};
 use genpath::genetic::plan::{Plan, PlanConfig, Target, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
@@ -16,6 +16,7 @@ use genpath::path::generator::{
 use genpath::path::mixture::{Mixture, MixtureScratch};
 use genpath::path::mixture_file::{self, check_generator};
 use genpath::path::{RayCounts, SceneView};
+use genpath::sampling::patch::{PatchSampler, PatchShape};
 use genpath::sampling::{sample_rng, uniform, Rng};
 use genpath::scene::Scene;
 use glam::{DVec3, Vec3};
@@ -133,8 +134,20 @@ fn check_individual(ind: &Individual, pool: &GenePool, config: &GaConfig) {
                     assert!(a.alpha > 0.0 && a.alpha < 1.0, "{}", a.alpha);
                     assert!(a.theta_c > 0.0 && a.theta_c < std::f64::consts::PI);
                     assert!(a.anchor.is_finite());
+                    // Data-driven anchors are ray hits, computed in f32.
                     let d = distance_to_triangle(scene, *prim, a.anchor);
-                    assert!(d < 1e-9, "anchor {} is {d} off triangle {prim}", a.anchor);
+                    let tolerance = 1e-6 * f64::from(scene.extent);
+                    assert!(d < tolerance, "anchor {} is {d} off triangle {prim}", a.anchor);
+                }
+                (DirectionSampler::Patch(p), None) => {
+                    assert!(p.alpha > 0.0 && p.alpha < 1.0, "{}", p.alpha);
+                    assert!(p.center.is_finite());
+                    let extent = f64::from(scene.extent);
+                    let (lo, hi) = PATCH_HALF_RANGE;
+                    for half in [p.half_u, p.half_v] {
+                        let h = half.length() / extent;
+                        assert!(h >= lo * (1.0 - 1e-9) && h <= hi * (1.0 + 1e-9), "{h}");
+                    }
                 }
                 other => panic!("sampler and anchor triangle disagree: {other:?}"),
             }
@@ -162,7 +175,8 @@ fn distance_to_triangle(scene: &Scene, prim: u32, p: DVec3) -> f64 {
 
 #[test]
 fn operators_keep_every_invariant() {
-    let (scene, _accel) = fig5();
+    let (scene, accel) = fig5();
+    let view = SceneView::new(&scene, accel.as_ref());
     // High rates so that 10⁵ applications exercise every branch many times.
     let config = GaConfig {
         p_cross: 0.8,
@@ -172,7 +186,16 @@ fn operators_keep_every_invariant() {
         p_absorb: 0.5,
         ..GaConfig::default()
     };
-    let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config);
+    // Test paths, so that data-driven anchors and patches are drawn too.
+    let (paths, _) = TestPaths::sample(
+        &view,
+        &srt_mixture(&scene),
+        FLOOR_PIXEL,
+        4000,
+        MAX_BOUNCES,
+        3,
+    );
+    let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config).with_test_paths(&paths);
     let mut rng = Rng::seed_from_u64(1);
     let mut population: Vec<Individual> = (0..20)
         .map(|_| pool.random_individual(&config, &mut rng))
@@ -180,7 +203,7 @@ fn operators_keep_every_invariant() {
     population
         .iter()
         .for_each(|i| check_individual(i, &pool, &config));
-    let (mut anchors, mut brdfs) = (0usize, 0usize);
+    let (mut anchors, mut brdfs, mut patches) = (0usize, 0usize, 0usize);
     for round in 0..5000 {
         for i in 0..population.len() {
             let j = (i + 1 + round) % population.len();
@@ -199,12 +222,16 @@ fn operators_keep_every_invariant() {
                 match step.sampler {
                     DirectionSampler::Brdf => brdfs += 1,
                     DirectionSampler::Anchor(_) => anchors += 1,
+                    DirectionSampler::Patch(_) => patches += 1,
                 }
             }
         }
     }
-    // Both sampler types stay in the population (replacement draws either).
-    assert!(anchors > 0 && brdfs > 0, "{anchors} anchors, {brdfs} brdf");
+    // Every sampler type stays in the population (replacement draws any).
+    assert!(
+        anchors > 0 && brdfs > 0 && patches > 0,
+        "{anchors} anchors, {brdfs} brdf, {patches} patches"
+    );
 }
 
 #[test]
@@ -218,7 +245,20 @@ fn stored_paths_give_the_generators_own_densities() {
     let anchors = anchors_mixture(&scene);
     let random = pool.random_individual(&config, &mut rng).to_mixture();
     let sampler = Mixture::combine(&[(1.0, &anchors), (1.0, &random)]);
-    let judges: Vec<_> = (0..8).map(|_| pool.random_gene(&mut rng)).collect();
+    let mut judges: Vec<_> = (0..8).map(|_| pool.random_gene(&mut rng)).collect();
+    // A patch over the red wall's lit top at the first step.
+    let mut patched = judges[0].clone();
+    patched.generator.steps[0].sampler = DirectionSampler::Patch(
+        PatchSampler::new(
+            DVec3::new(-1.0, 1.8, 0.0),
+            DVec3::new(0.0, 0.2, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            0.9,
+        )
+        .unwrap(),
+    );
+    patched.anchor_prims[0] = None;
+    judges.push(patched);
     let mut paths = TestPaths::new(MAX_BOUNCES);
     let mut expected = Vec::new();
     let (mut path, mut contributions) = (PathVertices::default(), Vec::new());
@@ -751,7 +791,10 @@ fn step_targets_lie_along_the_sampled_directions() {
         "{wrong} of {wrong_checked}"
     );
     // A path-following generator's first cone contains a target from its first vertex.
-    let config = GaConfig::default();
+    let config = GaConfig {
+        patches: 0.0,
+        ..GaConfig::default()
+    };
     let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config).with_test_paths(&paths);
     let mut rng = Rng::seed_from_u64(5);
     let gene = pool.path_gene(&mut rng).expect("test paths carry light");
@@ -769,6 +812,43 @@ fn step_targets_lie_along_the_sampled_directions() {
         "anchor {:?} is no stored path's first target",
         cone.anchor
     );
+    // With patches only, its first step is a patch over first-step targets; the same patch
+    // shrunk about its centre to a millionth holds none.
+    let config = GaConfig {
+        patches: 1.0,
+        ..GaConfig::default()
+    };
+    let mut pool = GenePool::new(&scene, MAX_BOUNCES, &config).with_test_paths(&paths);
+    let mut rng = Rng::seed_from_u64(6);
+    let gene = pool.path_gene(&mut rng).expect("test paths carry light");
+    let DirectionSampler::Patch(patch) = gene.generator.steps[0].sampler else {
+        panic!("with --patches 1, a path-following generator's first step is a patch");
+    };
+    let shrunk = PatchSampler {
+        half_u: 1e-6 * patch.half_u,
+        half_v: 1e-6 * patch.half_v,
+        ..patch
+    };
+    let inside = |p: &PatchSampler| {
+        let shape = PatchShape::new(p);
+        (0..paths.len())
+            .filter(|&i| {
+                let (Some((origin, _)), Some((t, _))) =
+                    (paths.step_origin(i, 0), paths.step_target(i, 0))
+                else {
+                    return false;
+                };
+                shape.patch_density(origin, (t - origin).normalize()) > 0.0
+            })
+            .count()
+    };
+    let (held, held_shrunk) = (inside(&patch), inside(&shrunk));
+    println!(
+        "the patch holds {held} of {} first-step targets",
+        paths.len()
+    );
+    assert!(held >= 5, "the patch holds {held} first-step targets");
+    assert_eq!(held_shrunk, 0, "the shrunk patch holds {held_shrunk}");
 }
 
 /// With a time limit the plan has already used up, only the gate's pilot evolves. Where the

@@ -7,7 +7,8 @@
 //!   anchor sampler's anchor point as a dot, coloured by the step it belongs to (first step
 //!   yellow, then cyan, magenta, orange, …), and for the first step also a faint line from
 //!   the pixel to the anchor and the cone's footprint around the anchor as seen from the
-//!   pixel's first hit (radius `distance · tan θc`).
+//!   pixel's first hit (radius `distance · tan θc`); each patch sampler's outline, in its
+//!   step's colour.
 //!
 //! Opacity follows the generator's weight. The result is linear RGB like any other output.
 
@@ -157,10 +158,25 @@ pub fn draw(view: &SceneView, render: &Image, plan: &Plan) -> Image {
             }
             let alpha = (0.3 + 0.7 * w / evolved) as f32;
             for (k, step) in g.steps.iter().enumerate() {
-                let DirectionSampler::Anchor(a) = &step.sampler else {
-                    continue;
-                };
                 let colour = STEP_COLOURS[k % STEP_COLOURS.len()];
+                let a = match &step.sampler {
+                    DirectionSampler::Anchor(a) => a,
+                    DirectionSampler::Patch(p) => {
+                        // The parallelogram's outline, where all four corners project.
+                        let corners =
+                            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(su, sv)| {
+                                camera.project((p.center + su * p.half_u + sv * p.half_v).as_vec3())
+                            });
+                        if let [Some(a), Some(b), Some(c), Some(d)] = corners {
+                            let corners = [a, b, c, d].map(|(x, y, _)| (x * s, y * s));
+                            for i in 0..4 {
+                                canvas.line(corners[i], corners[(i + 1) % 4], colour, 0.5 * alpha);
+                            }
+                        }
+                        continue;
+                    }
+                    DirectionSampler::Brdf => continue,
+                };
                 let anchor = a.anchor.as_vec3();
                 let Some((ax, ay, depth)) = camera.project(anchor) else {
                     continue;

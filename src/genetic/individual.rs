@@ -211,8 +211,8 @@ impl<'a> GenePool<'a> {
     }
 
     /// A patch over where light-carrying test paths' `k`-th directions arrived on the plane
-    /// of `point` (normal `normal`): all of them there, or with probability ½ those within
-    /// a random radius of `point`. Its axes are the principal axes of those points (weights
+    /// of `point` (normal `normal`): all of them there, or with probability
+    /// `PATCH_LOCAL_SHARE` those within a random radius of `point`. Its axes are the principal axes of those points (weights
     /// `sqrt(F²/q)`), its extent their weighted `PATCH_QUANTILES` along each axis. `None`
     /// without test paths there.
     pub fn data_patch(
@@ -250,10 +250,8 @@ impl<'a> GenePool<'a> {
         let (mx, my) = near
             .iter()
             .fold((0.0, 0.0), |(x, y), p| (x + p.0 * p.2, y + p.1 * p.2));
-        let (mx, my) = match total > 0.0 {
-            true => (mx / total, my / total),
-            false => (0.0, 0.0),
-        };
+        // Arrivals have positive weights: `total > 0`.
+        let (mx, my) = (mx / total, my / total);
         let (cxx, cxy, cyy) = near.iter().fold((0.0, 0.0, 0.0), |(a, b, c), p| {
             let (dx, dy) = (p.0 - mx, p.1 - my);
             (a + p.2 * dx * dx, b + p.2 * dx * dy, c + p.2 * dy * dy)

@@ -189,6 +189,8 @@ pub struct SphereBins {
     /// Increasing, from 0 to 2.
     h_edges: Vec<f64>,
     n_phi: usize,
+    /// Depth at which the quadrature first checks convergence ([`Self::resolving`]).
+    min_depth: u32,
 }
 
 /// Adaptive quadrature: depth at which convergence is first checked (so that a small
@@ -217,6 +219,7 @@ impl SphereBins {
             t,
             b: axis.cross(t),
             h_edges,
+            min_depth: MIN_DEPTH,
             n_phi,
         }
     }
@@ -229,6 +232,15 @@ impl SphereBins {
 
     /// `n_in` bins of equal area in the cap `h ≤ h_split` and `n_out` over the rest, each
     /// ring cut into `n_phi` sectors.
+    /// These bins with the quadrature checking convergence only from `min_depth` splits on
+    /// (`4^min_depth` cells per bin): densities whose discontinuities enclose small or thin
+    /// regions (a patch's corner, a sliver seen edge-on) that could hide between the nodes of
+    /// a coarser start.
+    pub fn resolving(mut self, min_depth: u32) -> Self {
+        self.min_depth = min_depth.min(MAX_DEPTH);
+        self
+    }
+
     pub fn split_at(axis: DVec3, h_split: f64, n_in: usize, n_out: usize, n_phi: usize) -> Self {
         assert!(h_split > 0.0 && h_split < 2.0);
         let mut edges: Vec<f64> = (0..n_in)
@@ -282,7 +294,13 @@ fn simpson(f: &dyn Fn(f64, f64) -> f64, [x0, x1, y0, y1]: [f64; 4]) -> f64 {
 }
 
 /// Adaptive quadrature: split in four until the split changes the estimate by at most `tol`.
-fn adaptive(f: &dyn Fn(f64, f64) -> f64, r: [f64; 4], coarse: f64, tol: f64, depth: u32) -> f64 {
+fn adaptive(
+    f: &dyn Fn(f64, f64) -> f64,
+    r: [f64; 4],
+    coarse: f64,
+    (tol, min_depth): (f64, u32),
+    depth: u32,
+) -> f64 {
     let [x0, x1, y0, y1] = r;
     let (xm, ym) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
     let kids = [
@@ -296,13 +314,13 @@ fn adaptive(f: &dyn Fn(f64, f64) -> f64, r: [f64; 4], coarse: f64, tol: f64, dep
     // An infinite or NaN density cannot converge; χ² rejects it anyway.
     if !fine.is_finite()
         || depth >= MAX_DEPTH
-        || (depth >= MIN_DEPTH && (fine - coarse).abs() <= tol)
+        || (depth >= min_depth && (fine - coarse).abs() <= tol)
     {
         return fine;
     }
     kids.iter()
         .zip(parts)
-        .map(|(&k, part)| adaptive(f, k, part, 0.5 * tol, depth + 1))
+        .map(|(&k, part)| adaptive(f, k, part, (0.5 * tol, min_depth), depth + 1))
         .sum()
 }
 
@@ -337,7 +355,7 @@ impl Binning for SphereBins {
             (sector + 1) as f64 * dphi,
         ];
         let f = |h: f64, phi: f64| pdf(&self.direction(h, phi));
-        adaptive(&f, rect, simpson(&f, rect), TOLERANCE, 0)
+        adaptive(&f, rect, simpson(&f, rect), (TOLERANCE, self.min_depth), 0)
     }
 }
 

@@ -179,10 +179,10 @@ mod tests {
     fn rejects_invalid_parameters() {
         let (c, u, v) = (DVec3::ZERO, DVec3::X, DVec3::Z);
         assert!(PatchSampler::new(c, u, v, 0.5).is_ok());
-        assert_eq!(
+        assert!(matches!(
             PatchSampler::new(DVec3::NAN, u, v, 0.5),
-            Err(PatchError::Center(DVec3::NAN))
-        );
+            Err(PatchError::Center(_))
+        ));
         assert!(matches!(
             PatchSampler::new(c, u, 2.0 * u, 0.5),
             Err(PatchError::Edges(..))
@@ -217,10 +217,11 @@ mod tests {
         let from = DVec3::new(0.2, 0.0, -0.1);
         let mut hits = 0;
         for i in 0..1000 {
+            // Points on a grid inside the patch, edges excluded (they hold no area).
             let u = [
                 0.5 * (i % 10) as f64 / 10.0,
-                (i / 10 % 10) as f64 / 10.0,
-                (i / 100) as f64 / 10.0,
+                (0.5 + (i / 10 % 10) as f64) / 10.0,
+                (0.5 + (i / 100) as f64) / 10.0,
             ];
             let d = p.sample(from, u);
             assert!((d.length() - 1.0).abs() < 1e-12);
