@@ -137,7 +137,11 @@ fn check_individual(ind: &Individual, pool: &GenePool, config: &GaConfig) {
                     // Data-driven anchors are ray hits, computed in f32.
                     let d = distance_to_triangle(scene, *prim, a.anchor);
                     let tolerance = 1e-6 * f64::from(scene.extent);
-                    assert!(d < tolerance, "anchor {} is {d} off triangle {prim}", a.anchor);
+                    assert!(
+                        d < tolerance,
+                        "anchor {} is {d} off triangle {prim}",
+                        a.anchor
+                    );
                 }
                 (DirectionSampler::Patch(p), None) => {
                     assert!(p.alpha > 0.0 && p.alpha < 1.0, "{}", p.alpha);

@@ -18,7 +18,7 @@
 //!
 //! 5. **Gate** (beyond the paper; off with `PlanConfig::gate = false`). The GA pays for
 //!    itself only where its estimator beats path tracing at equal time, so each GA pixel
-//!    measures it: `GATE_SAMPLES` samples of `pt` and of the evolved estimator (the mixture
+//!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of `pt` and of the evolved estimator (the mixture
 //!    for `ga`, the guided path tracer for `ga-pt`), and the predicted gain
 //!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
@@ -27,7 +27,12 @@
 //!    half of them predict a gain, the other GA pixels are not evolved and become `pt`
 //!    points: the image renders with `pt` except near a pilot pixel that does not predict a
 //!    loss. Where they do, the pilot pixels go on from their best individuals (with a fresh
-//!    random stream). Low-variance cells (pruning) render with `pt` too.
+//!    random stream). For a guide the other GA pixels then run no trial and keep their
+//!    guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so it rarely
+//!    loses much, and on fig5 the trials cost 40 % of the GA phase while the pixels they
+//!    sent to `pt` made the image no better. A mixture's variance can exceed `pt`'s many
+//!    times, so there every GA pixel runs its trial. Low-variance cells (pruning) render
+//!    with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -287,9 +292,13 @@ impl GaPixel {
     }
 
     /// Whether this pixel's estimator should be `pt`: it kept `srt`, or its trial predicts
-    /// a loss below the losing margin ([`gate_margins`]).
+    /// a loss below the losing margin ([`gate_margins`]) (a NaN gain counts as a loss). A
+    /// pixel without a trial (a guide's pixel outside the pilot) keeps its estimator.
     pub fn prefers_pt(&self, target: Target) -> bool {
-        self.kept_srt || !self.trial.is_some_and(|t| t.gain >= gate_margins(target).0)
+        self.kept_srt
+            || self
+                .trial
+                .is_some_and(|t| !(t.gain >= gate_margins(target).0))
     }
 }
 
@@ -530,7 +539,7 @@ fn run_pixel(
     max_bounces: u32,
     seed: u64,
     (config, target): (&PlanConfig, Target),
-    (seeds, generations, stream): (&[Individual], usize, u64),
+    (seeds, generations, stream, trial): (&[Individual], usize, u64, bool),
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
     let (paths, mut counts) = TestPaths::sample_until(
@@ -617,7 +626,7 @@ fn run_pixel(
             )
         }
     };
-    let trial = (config.gate && !kept_srt).then(|| {
+    let trial = (config.gate && trial && !kept_srt).then(|| {
         let evolved = (ga, &mixture);
         run_trial(
             view,
@@ -866,11 +875,14 @@ impl Plan {
         // A wave: GA pixels, the individuals each starts from, its generations and its GA
         // random stream (a pilot pixel that goes on takes a fresh one: its scouting run's
         // would replay the same random individuals and breeding).
-        type Job = (usize, Vec<Individual>, usize, u64);
+        // The last field: whether the pixel runs the gate's trial. For a mixture every GA
+        // pixel does; for a guide only the pilot (see `trials_everywhere`).
+        type Job = (usize, Vec<Individual>, usize, u64, bool);
+        let trials_everywhere = target == Target::Mixture;
         let evolve_wave = |wave: &[Job], done: &mut Vec<Option<_>>| {
             let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                 .par_iter()
-                .map(|(i, seeds, generations, stream)| {
+                .map(|(i, seeds, generations, stream, trial)| {
                     let i = *i;
                     let r = run_pixel(
                         view,
@@ -880,7 +892,7 @@ impl Plan {
                         max_bounces,
                         seed,
                         (config, target),
-                        (seeds, *generations, *stream),
+                        (seeds, *generations, *stream, *trial),
                     );
                     bar.inc(1);
                     (i, r)
@@ -892,11 +904,14 @@ impl Plan {
         };
         let cold = |wave: &[usize]| -> Vec<Job> {
             wave.iter()
-                .map(|&i| (i, Vec::new(), ga.generations, 0))
+                .map(|&i| (i, Vec::new(), ga.generations, 0, trials_everywhere))
                 .collect()
         };
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        let pilot_jobs: Vec<Job> = pilot.iter().map(|&i| (i, Vec::new(), scout, 0)).collect();
+        let pilot_jobs: Vec<Job> = pilot
+            .iter()
+            .map(|&i| (i, Vec::new(), scout, 0, true))
+            .collect();
         evolve_wave(&pilot_jobs, &mut done);
         let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
         let mut pt_points = Vec::new();
@@ -943,7 +958,7 @@ impl Plan {
                     match p.best.clone() {
                         Some(best) if rest > 0 => {
                             scouted.push((p, counts));
-                            Some((i, vec![best], rest, 1))
+                            Some((i, vec![best], rest, 1, true))
                         }
                         _ => {
                             done[i] = Some((p, counts));
@@ -961,8 +976,14 @@ impl Plan {
             let second: Vec<Job> = second
                 .iter()
                 .map(|&i| match config.warm_start {
-                    true => (i, neighbour_seeds(&done, chosen[i], config), warm, 0),
-                    false => (i, Vec::new(), ga.generations, 0),
+                    true => (
+                        i,
+                        neighbour_seeds(&done, chosen[i], config),
+                        warm,
+                        0,
+                        trials_everywhere,
+                    ),
+                    false => (i, Vec::new(), ga.generations, 0, trials_everywhere),
                 })
                 .collect();
             run_chunks(&second, &mut done);
