@@ -298,7 +298,7 @@ impl GaPixel {
         self.kept_srt
             || self
                 .trial
-                .is_some_and(|t| !(t.gain >= gate_margins(target).0))
+                .is_some_and(|t| t.gain.is_nan() || t.gain < gate_margins(target).0)
     }
 }
 
