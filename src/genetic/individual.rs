@@ -212,9 +212,9 @@ impl<'a> GenePool<'a> {
 
     /// A patch over where light-carrying test paths' `k`-th directions arrived on the plane
     /// of `point` (normal `normal`): all of them there, or with probability
-    /// `PATCH_LOCAL_SHARE` those within a random radius of `point`. Its axes are the principal axes of those points (weights
-    /// `sqrt(F²/q)`), its extent their weighted `PATCH_QUANTILES` along each axis. `None`
-    /// without test paths there.
+    /// `PATCH_LOCAL_SHARE` those within a random radius of `point`. Its axes are the
+    /// principal axes of those points (weights `sqrt(F²/q)`), its extent their weighted
+    /// `PATCH_QUANTILES` along each axis. `None` without test paths there.
     pub fn data_patch(
         &self,
         k: usize,

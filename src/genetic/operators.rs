@@ -22,7 +22,7 @@ const LOGIT_SIGMA: f64 = 0.7;
 /// length in a patch-scale mutation.
 const THETA_SIGMA: f64 = 0.3;
 /// Standard deviation of a patch shift along each edge, relative to the half-edge.
-const ANCHOR_SHIFT_IN_PATCH: f64 = 0.3;
+const PATCH_SHIFT: f64 = 0.3;
 
 /// A standard normal number (Box–Muller).
 fn normal(rng: &mut Rng) -> f64 {
@@ -81,8 +81,8 @@ fn mutate_sampler(pool: &GenePool, config: &GaConfig, gene: &mut Gene, k: usize,
     match (&mut gene.generator.steps[k].sampler, prim) {
         (DirectionSampler::Patch(p), _) if choice < 5 => match choice {
             0 => {
-                let shift = ANCHOR_SHIFT_IN_PATCH;
-                p.center += p.half_u * (shift * normal(rng)) + p.half_v * (shift * normal(rng));
+                let (u, v) = (PATCH_SHIFT * normal(rng), PATCH_SHIFT * normal(rng));
+                p.center += p.half_u * u + p.half_v * v;
             }
             1 => p.half_u = scale_half(pool, p.half_u, rng),
             2 => p.half_v = scale_half(pool, p.half_v, rng),

@@ -73,7 +73,6 @@ impl GuideAnchor {
 #[derive(Clone, Copy, Debug)]
 struct GuidePatch {
     weight: f64,
-    sampler: PatchSampler,
     shape: PatchShape,
 }
 
@@ -95,10 +94,9 @@ impl Level {
             .extend(cones.iter().map(|&(w, a)| GuideAnchor::new(w, a)));
         self.patches.clear();
         self.patches
-            .extend(patches.iter().map(|&(weight, sampler)| GuidePatch {
-                weight,
-                sampler,
-                shape: PatchShape::new(&sampler),
+            .extend(patches.iter().map(|(weight, sampler)| GuidePatch {
+                weight: *weight,
+                shape: PatchShape::new(sampler),
             }));
     }
 
@@ -126,7 +124,8 @@ pub struct Guide {
     /// Scratch of [`Self::rebuild`]: one level's cones and patches and their summed weights.
     cones: Vec<(f64, AnchorSampler)>,
     patches: Vec<(f64, PatchSampler)>,
-    /// Fault injection for statistical tests: scales the anchors' densities when evaluated.
+    /// Fault injection for statistical tests: scales the cones' and patches' densities when
+    /// evaluated.
     pdf_error: Option<f64>,
 }
 
@@ -142,7 +141,7 @@ pub struct GuideSample {
 impl Guide {
     /// The guide of `mixture`, whose weights are taken as they are. A cone or patch that
     /// several generators share at one level (neighbours that adopted one another's individuals,
-    /// generators that differ only later) becomes one cone with the summed weight: the
+    /// generators that differ only later) becomes one sampler with the summed weight: the
     /// same density, evaluated once.
     pub fn new(mixture: &Mixture) -> Self {
         let mut guide = Self::default();
@@ -194,7 +193,7 @@ impl Guide {
         self.levels[..self.depth].get(k)
     }
 
-    /// This guide with every anchor density scaled by `factor` when evaluated (not when
+    /// This guide with every cone and patch density scaled by `factor` when evaluated (not when
     /// sampled): a wrong input that unbiasedness tests must reject.
     pub fn with_pdf_error(mut self, factor: f64) -> Self {
         self.pdf_error = Some(factor);
@@ -203,7 +202,7 @@ impl Guide {
 
     /// Anchor cones and patches at vertex `k`: the densities one evaluation of `pdf` there
     /// costs.
-    pub fn cones(&self, k: usize) -> usize {
+    pub fn samplers(&self, k: usize) -> usize {
         self.level(k)
             .map_or(0, |l| l.anchors.len() + l.patches.len())
     }
@@ -273,7 +272,7 @@ impl Guide {
             }
             let dir = match level.anchors.get(i) {
                 Some(a) => a.sampler.sample_with_extents(xd, rest, a.extents),
-                None => level.patches[i - cones].sampler.sample(xd, rest),
+                None => level.patches[i - cones].shape.sampler.sample(xd, rest),
             };
             dir.as_vec3().normalize()
         };
@@ -451,7 +450,7 @@ mod tests {
         let mut rebuilt = Guide::new(&mixture());
         rebuilt.rebuild(&[(0.25, &m1), (0.75, &m2)]);
         let fresh = Guide::new(&Mixture::union(&[(0.25, &m1), (0.75, &m2)]));
-        assert!(!rebuilt.guides(1) && rebuilt.cones(0) == fresh.cones(0));
+        assert!(!rebuilt.guides(1) && rebuilt.samplers(0) == fresh.samplers(0));
         let same = max_difference(&rebuilt, &fresh);
         assert!(same < 1e-12, "rebuilt guide differs by {same}");
         // The comparison tells other weights apart.

@@ -70,7 +70,7 @@ pub fn radiance_guided(
         let guide = guide.filter(|g| !material.mirror && g.guides(k));
         if let Some(g) = guide {
             // The light sample's and the guided sample's densities.
-            counts.densities += 2 * g.cones(k) as u64;
+            counts.densities += 2 * g.samplers(k) as u64;
         }
 
         // Next-event estimation (impossible through a mirror's delta).

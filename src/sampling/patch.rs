@@ -108,20 +108,17 @@ impl PatchSampler {
     }
 }
 
-/// A patch's constants for repeated density evaluations: the guide evaluates each of its
-/// patches twice per vertex.
+/// A patch with the constants of its density, for repeated evaluations: the guide evaluates
+/// each of its patches twice per vertex.
 #[derive(Clone, Copy, Debug)]
 pub struct PatchShape {
-    center: DVec3,
+    pub sampler: PatchSampler,
     /// `half_u × half_v`, not normalised.
     n: DVec3,
     /// Rows of the inverse Gram matrix of the edges, mapping `(q·u, q·v)` to `(s, r)`.
     to_s: (f64, f64),
     to_r: (f64, f64),
-    half_u: DVec3,
-    half_v: DVec3,
-    /// `α`, and the uniform part `(1 − α)/4π`.
-    alpha: f64,
+    /// The uniform part `(1 − α)/4π`.
     outside: f64,
 }
 
@@ -132,13 +129,10 @@ impl PatchShape {
         // det = |u × v|², positive for a valid patch.
         let det = uu * vv - uv * uv;
         Self {
-            center: p.center,
+            sampler: *p,
             n: u.cross(v),
             to_s: (vv / det, -uv / det),
             to_r: (-uv / det, uu / det),
-            half_u: u,
-            half_v: v,
-            alpha: p.alpha,
             outside: (1.0 - p.alpha) * UNIFORM,
         }
     }
@@ -147,14 +141,15 @@ impl PatchShape {
     /// meets the patch, 0 where it does not.
     #[inline]
     pub fn patch_density(&self, from: DVec3, dir: DVec3) -> f64 {
+        let p = &self.sampler;
         let dn = self.n.dot(dir);
-        let t = self.n.dot(self.center - from) / dn;
+        let t = self.n.dot(p.center - from) / dn;
         // A ray in the plane (dn = 0) gives ±∞ or NaN: not a hit.
         if !(t > 0.0 && t.is_finite()) {
             return 0.0;
         }
-        let q = from + t * dir - self.center;
-        let (qu, qv) = (q.dot(self.half_u), q.dot(self.half_v));
+        let q = from + t * dir - p.center;
+        let (qu, qv) = (q.dot(p.half_u), q.dot(p.half_v));
         let s = self.to_s.0 * qu + self.to_s.1 * qv;
         let r = self.to_r.0 * qu + self.to_r.1 * qv;
         if s.abs() <= 1.0 && r.abs() <= 1.0 {
@@ -167,7 +162,7 @@ impl PatchShape {
     /// [`PatchSampler::pdf`].
     #[inline]
     pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
-        self.alpha * self.patch_density(from, dir) + self.outside
+        self.sampler.alpha * self.patch_density(from, dir) + self.outside
     }
 }
 
