@@ -902,3 +902,80 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     let cells = PILOT_PIXELS * 64;
     assert!(guided > 2 * cells, "{guided} guided pixels");
 }
+
+/// cbox has nothing for a mixture to learn: its pilot fails. On one thread the pilot pixels
+/// run in order and stop once the pilot cannot pay (after `PILOT_PIXELS / 2 + 1` failures),
+/// no baseline runs (no cell is judged by its variance) and every pixel renders with `pt`,
+/// even next to the pilot pixels. The same pilot for a guide runs all its pixels, and without
+/// the gate every pixel gets a mixture: the stop and the closure come from the failed pilot.
+#[test]
+fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
+    let mut scene =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox/scene.toml"))
+            .expect("cbox loads");
+    scene.resize(48, 48);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = GaConfig {
+        population: 12,
+        generations: 8,
+        test_paths: 3000,
+        ..GaConfig::default()
+    };
+    let config = PlanConfig {
+        grid: 8,
+        ..PlanConfig::default()
+    };
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let build = |config: &PlanConfig, target| {
+        one_thread.install(|| {
+            Plan::build(&view, &ga, config, (MAX_BOUNCES, target), 3, false).expect("plan")
+        })
+    };
+    let mixture = build(&config, Target::Mixture);
+    let gains: Vec<f64> = mixture
+        .pixels
+        .iter()
+        .map(|p| p.trial.map_or(0.0, |t| t.gain))
+        .collect();
+    eprintln!("mixture pilot gains {gains:?}");
+    assert!(
+        gains.iter().all(|&g| g < 2.0),
+        "the pilot must fail on cbox for this test"
+    );
+    assert_eq!(mixture.pixels.len(), PILOT_PIXELS / 2 + 1);
+    let stats = &mixture.stats;
+    assert_eq!(
+        stats.gated_pixels + mixture.pixels.len() + stats.empty_cells,
+        36
+    );
+    assert_eq!(mixture.stats.low_variance_cells, 0, "no baseline ran");
+    for p in &mixture.pixels {
+        assert!(
+            mixture.local(p.x, p.y).is_none(),
+            "({}, {}) keeps a mixture",
+            p.x,
+            p.y
+        );
+    }
+    assert!((0..48).all(|y| (0..48).all(|x| mixture.local(x, y).is_none())));
+
+    let guide = build(&config, Target::Guide);
+    assert!(
+        guide.pixels.len() >= PILOT_PIXELS,
+        "a guide's pilot does not stop early"
+    );
+
+    let ungated = build(
+        &PlanConfig {
+            gate: false,
+            ..config.clone()
+        },
+        Target::Mixture,
+    );
+    assert!(ungated.pixels.len() > PILOT_PIXELS);
+    assert!((0..48).all(|y| (0..48).all(|x| ungated.local(x, y).is_some())));
+}

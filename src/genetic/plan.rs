@@ -1,12 +1,13 @@
 //! The pixel plan of `--method ga` (design §7): which pixels run the genetic algorithm, and
 //! which mixture every pixel renders with.
 //!
-//! 1. **Baseline.** A few `srt` samples per pixel estimate its relative variance and whether
-//!    it sees any scattering surface at all (pixels that see only background or an emitter
-//!    need no GA: their value is emission seen directly).
-//! 2. **GA pixels.** One per cell of a regular grid (`grid` pixels apart, at the cell's
-//!    centre or the scattering pixel closest to it), plus extra pixels in the cells with the
-//!    highest baseline relative variance, at their noisiest pixel.
+//! 1. **Grid.** One ray through each pixel's centre tells whether it sees a scattering
+//!    surface at all (pixels that see only background or an emitter need no GA: their value
+//!    is emission seen directly). Each cell of a regular grid (`grid` pixels apart) gets a GA
+//!    pixel at its centre or the scattering pixel closest to it.
+//! 2. **Baseline and extra GA pixels.** A few `srt` samples per pixel estimate its relative
+//!    variance; extra GA pixels go to the cells with the highest baseline relative variance,
+//!    at their noisiest pixel.
 //! 3. **Evolution.** Per GA pixel, `M` test paths from the defensive `srt` density and the
 //!    genetic algorithm on them, in parallel; every pixel has its own random streams, derived
 //!    from the seed and the pixel alone, so the result does not depend on the thread count.
@@ -23,10 +24,13 @@
 //!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
-//!    pixels spread over the image, for `1 / PILOT_SHARE` of the generations; unless at least
-//!    half of them predict a gain, the other GA pixels are not evolved and become `pt`
-//!    points: the image renders with `pt` except near a pilot pixel that does not predict a
-//!    loss. Where they do, the pilot pixels go on from their best individuals (with a fresh
+//!    grid pixels spread over the image, for `1 / PILOT_SHARE` of the generations, before the
+//!    baseline; unless at least half of them predict a gain, the other grid pixels are not
+//!    evolved and become `pt` points, and the baseline is not run: the image renders with
+//!    `pt` (for a guide, except near a pilot pixel that does not predict a loss; a mixture's
+//!    pilot stops starting pixels once it cannot pay, so there it is `pt` everywhere) (cbox, `ga`, 64 spp: the
+//!    plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA before, 0.01 s of grid rays
+//!    and 0.16 s of GA with the pilot first). Where they do, the pilot pixels go on from their best individuals (with a fresh
 //!    random stream). For a guide the other GA pixels then run no trial and keep their
 //!    guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so it rarely
 //!    loses much, and on fig5 the trials cost 40 % of the GA phase while the pixels they
@@ -50,6 +54,7 @@ use crate::sampling::{sample_rng, uniform};
 use crate::scene::SceneAnalysis;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -305,20 +310,22 @@ impl GaPixel {
 /// Per-phase totals of a plan.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct PlanStats {
-    /// Wall-clock seconds of the baseline pass and of the GA phase (test paths included).
+    /// Wall-clock seconds of the grid rays and the baseline pass (none where the gate's
+    /// pilot closes the GA), and of the GA phase (test paths included).
     pub baseline_seconds: f64,
     pub ga_seconds: f64,
     /// Summed over GA pixels (CPU seconds): tracing test paths, and evolving.
     pub test_path_cpu_seconds: f64,
     pub evolve_cpu_seconds: f64,
-    /// Pixels that see no scattering surface in the baseline (background or emitters only).
+    /// Pixels whose centre ray sees no scattering surface (background or emitters only).
     pub skipped_pixels: usize,
     /// Grid cells without a scattering pixel, hence without a GA pixel.
     pub empty_cells: usize,
-    /// Grid cells left without a GA pixel because their baseline variance is low (pruning).
+    /// Grid cells left without a GA pixel because their baseline variance is low (pruning;
+    /// 0 where the pilot closed the GA and no baseline ran).
     pub low_variance_cells: usize,
-    /// GA pixels not evolved because fewer than half the pilot pixels predicted a gain over
-    /// `pt` (gate).
+    /// Grid pixels not evolved because fewer than half the pilot pixels predicted a gain
+    /// over `pt` (gate).
     pub gated_pixels: usize,
     /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
     pub pt_pixels: usize,
@@ -342,6 +349,9 @@ pub struct Plan {
     /// low-variance cell, and the GA pixels the pilot left out), interpolated like GA pixels.
     pub pt_points: Vec<(u32, u32)>,
     gate: bool,
+    /// The gate's pilot showed that the mixture does not pay: every pixel renders with `pt`.
+    /// (A guide's failed pilot keeps its guides near pilot pixels that predict no loss.)
+    closed: bool,
     pub target: Target,
     /// The defensive density alone: the mixture of an image without any GA pixel.
     pub srt: Mixture,
@@ -371,6 +381,59 @@ fn derived_seed(seed: u64, stream: u64) -> u64 {
     // One sample_rng draw mixes the two into a fresh 64-bit seed.
     let mut rng = sample_rng(seed, stream, u64::MAX);
     rand::Rng::random::<u64>(&mut rng)
+}
+
+/// Each grid cell's GA pixel: the pixel closest to the cell's centre whose centre ray sees a
+/// scattering surface (`None`: the cell has none), in row-major cell order; and the pixels
+/// whose centre ray sees none. One ray per pixel, no random numbers: the pilot can run
+/// before (and without) the baseline.
+fn grid_pixels(
+    view: &SceneView,
+    grid: u32,
+    counts: &mut RayCounts,
+) -> (Vec<Option<(u32, u32)>>, usize) {
+    let camera = &view.scene.camera;
+    let (width, height) = (camera.width, camera.height);
+    let rows: Vec<(Vec<bool>, RayCounts)> = (0..height)
+        .into_par_iter()
+        .map(|y| {
+            let mut c = RayCounts::default();
+            let row = (0..width)
+                .map(|x| {
+                    let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                    view.trace(&ray, &mut c)
+                        .is_some_and(|hit| view.material(hit.prim).scatters())
+                })
+                .collect();
+            (row, c)
+        })
+        .collect();
+    let mut scatters = Vec::with_capacity((width * height) as usize);
+    for (row, c) in rows {
+        scatters.extend(row);
+        counts.add(c);
+    }
+    let mut cells = Vec::new();
+    for cy in (0..height).step_by(grid as usize) {
+        for cx in (0..width).step_by(grid as usize) {
+            let (x1, y1) = ((cx + grid).min(width), (cy + grid).min(height));
+            let centre = ((cx + x1 - 1) as f64 / 2.0, (cy + y1 - 1) as f64 / 2.0);
+            let mut best: Option<(f64, u32, u32)> = None;
+            for y in cy..y1 {
+                for x in cx..x1 {
+                    if !scatters[(y * width + x) as usize] {
+                        continue;
+                    }
+                    let d = (x as f64 - centre.0).powi(2) + (y as f64 - centre.1).powi(2);
+                    if best.is_none_or(|(bd, ..)| d < bd) {
+                        best = Some((d, x, y));
+                    }
+                }
+            }
+            cells.push(best.map(|(_, x, y)| (x, y)));
+        }
+    }
+    (cells, scatters.iter().filter(|s| !**s).count())
 }
 
 fn baseline(
@@ -445,78 +508,74 @@ fn baseline(
 /// What [`choose_pixels`] chose and left out.
 struct Choice {
     pixels: Vec<(u32, u32, Origin)>,
-    /// A scattering pixel of each low-variance cell (pruning).
+    /// The GA pixel of each low-variance cell (pruning).
     low: Vec<(u32, u32)>,
-    empty_cells: usize,
-    /// Pooled baseline relative variance of every cell with a scattering pixel.
+    /// Pooled baseline relative variance of every cell with a GA pixel.
     cell_variance: Vec<f64>,
 }
 
-/// The GA pixels: one per grid cell, then extras in the noisiest cells; with pruning, none
-/// in cells whose pooled baseline relative variance is below `config.prune_variance`.
-fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig) -> Choice {
+/// The GA pixels: each cell's grid pixel ([`grid_pixels`]), then extras in the noisiest
+/// cells; with pruning, none in cells whose pooled baseline relative variance is below
+/// `config.prune_variance`, except at `keep` (the pilot, already evolved).
+fn choose_pixels(
+    base: &[Baseline],
+    cells: &[Option<(u32, u32)>],
+    (width, height): (u32, u32),
+    config: &PlanConfig,
+    keep: &[(u32, u32)],
+) -> Choice {
     let g = config.grid;
     let mut chosen = Vec::new();
     let mut low_cells = Vec::new();
-    let mut cells = Vec::new();
-    let mut empty = 0;
+    let mut noisy = Vec::new();
     let mut cell_variance = Vec::new();
-    for cy in (0..height).step_by(g as usize) {
-        for cx in (0..width).step_by(g as usize) {
-            let (x1, y1) = ((cx + g).min(width), (cy + g).min(height));
-            let centre = ((cx + x1 - 1) as f64 / 2.0, (cy + y1 - 1) as f64 / 2.0);
-            let mut best: Option<(f64, u32, u32)> = None;
-            let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0usize);
-            let mut noisiest = None::<(f64, u32, u32)>;
-            for y in cy..y1 {
-                for x in cx..x1 {
-                    let b = base[(y * width + x) as usize];
-                    if !b.scatters {
-                        continue;
-                    }
-                    let d = (x as f64 - centre.0).powi(2) + (y as f64 - centre.1).powi(2);
-                    if best.is_none_or(|(bd, ..)| d < bd) {
-                        best = Some((d, x, y));
-                    }
-                    sum += b.sum;
-                    sum_sq += b.sum_sq;
-                    n += config.baseline_spp as usize;
-                    if noisiest.is_none_or(|(v, ..)| b.rel_variance > v) {
-                        noisiest = Some((b.rel_variance, x, y));
-                    }
+    let corners = (0..height)
+        .step_by(g as usize)
+        .flat_map(|cy| (0..width).step_by(g as usize).map(move |cx| (cx, cy)));
+    for ((cx, cy), cell) in corners.zip(cells) {
+        let Some((x, y)) = *cell else {
+            continue;
+        };
+        let (x1, y1) = ((cx + g).min(width), (cy + g).min(height));
+        let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0usize);
+        let mut noisiest = None::<(f64, u32, u32)>;
+        for py in cy..y1 {
+            for px in cx..x1 {
+                let b = base[(py * width + px) as usize];
+                if !b.scatters {
+                    continue;
+                }
+                sum += b.sum;
+                sum_sq += b.sum_sq;
+                n += config.baseline_spp as usize;
+                if noisiest.is_none_or(|(v, ..)| b.rel_variance > v) {
+                    noisiest = Some((b.rel_variance, px, py));
                 }
             }
-            // The cell's samples pooled: rare bright paths, which a few samples per pixel
-            // mostly miss, still show up in the cell's variance.
-            let mean_noise = if n > 1 {
-                let mean = sum / n as f64;
-                let var = ((sum_sq - sum * mean) / (n - 1) as f64).max(0.0);
-                var / (mean * mean + 0.01)
-            } else {
-                0.0
-            };
-            match best {
-                Some((_, x, y)) if config.prune && mean_noise < config.prune_variance => {
-                    cell_variance.push(mean_noise);
-                    low_cells.push((x, y));
-                }
-                Some((_, x, y)) => {
-                    cell_variance.push(mean_noise);
-                    chosen.push((x, y, Origin::Grid));
-                    if let Some((_, nx, ny)) = noisiest {
-                        if (nx, ny) != (x, y) {
-                            cells.push((mean_noise, nx, ny));
-                        }
-                    }
-                }
-                None => empty += 1,
-            }
+        }
+        // The cell's samples pooled: rare bright paths, which a few samples per pixel
+        // mostly miss, still show up in the cell's variance.
+        let mean_noise = if n > 1 {
+            let mean = sum / n as f64;
+            let var = ((sum_sq - sum * mean) / (n - 1) as f64).max(0.0);
+            var / (mean * mean + 0.01)
+        } else {
+            0.0
+        };
+        cell_variance.push(mean_noise);
+        if config.prune && mean_noise < config.prune_variance && !keep.contains(&(x, y)) {
+            low_cells.push((x, y));
+            continue;
+        }
+        chosen.push((x, y, Origin::Grid));
+        if let Some((_, nx, ny)) = noisiest.filter(|&(_, nx, ny)| (nx, ny) != (x, y)) {
+            noisy.push((mean_noise, nx, ny));
         }
     }
     let extra = (config.extra * chosen.len() as f64).round() as usize;
-    cells.sort_by(|a, b| b.0.total_cmp(&a.0).then((a.2, a.1).cmp(&(b.2, b.1))));
+    noisy.sort_by(|a, b| b.0.total_cmp(&a.0).then((a.2, a.1).cmp(&(b.2, b.1))));
     chosen.extend(
-        cells
+        noisy
             .iter()
             .take(extra)
             .map(|&(_, x, y)| (x, y, Origin::Extra)),
@@ -524,7 +583,6 @@ fn choose_pixels(base: &[Baseline], width: u32, height: u32, config: &PlanConfig
     Choice {
         pixels: chosen,
         low: low_cells,
-        empty_cells: empty,
         cell_variance,
     }
 }
@@ -818,9 +876,10 @@ fn neighbour_seeds(
 }
 
 impl Plan {
-    /// Runs the baseline, picks the GA pixels and evolves each of them (in parallel on the
-    /// current rayon pool), with progress bars on stderr when `progress`; with the gate,
-    /// compares the evolved estimator for `target` with `pt` at each.
+    /// Picks the GA pixels (the grid's, then, after the baseline, the extras) and evolves
+    /// each of them (in parallel on the current rayon pool), with progress bars on stderr
+    /// when `progress`; with the gate, runs the pilot first and compares the evolved
+    /// estimator for `target` with `pt` at each pixel that runs a trial.
     pub fn build(
         view: &SceneView,
         ga: &GaConfig,
@@ -837,87 +896,98 @@ impl Plan {
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();
-        let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
+        let mut counts = RayCounts::default();
+        let (cells, skipped) = grid_pixels(view, config.grid, &mut counts);
         stats.rays.add(counts);
-        stats.skipped_pixels = base.iter().filter(|b| !b.scatters).count();
-        let choice = choose_pixels(&base, width, height, config);
-        stats.empty_cells = choice.empty_cells;
-        stats.low_variance_cells = choice.low.len();
-        let mut v = choice.cell_variance;
-        v.sort_by(f64::total_cmp);
-        if !v.is_empty() {
-            stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
-        }
-        let chosen = &choice.pixels;
-        stats.baseline_seconds = t0.elapsed().as_secs_f64();
+        stats.skipped_pixels = skipped;
+        stats.empty_cells = cells.iter().filter(|c| c.is_none()).count();
+        let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
+        let mut baseline_seconds = t0.elapsed().as_secs_f64();
 
         let t1 = Instant::now();
-        let bar = progress_bar(chosen.len() as u64, "GA", progress);
-        // Waves, each evolved in parallel: with the gate, a pilot of grid pixels spread
-        // evenly over the list; with warm starts, the grid pixels of "white" cells (in a
-        // checkerboard of cells), then the rest, seeded from their evolved neighbours.
-        let n = chosen.len();
-        let pilot: Vec<usize> = if config.gate {
-            let k = PILOT_PIXELS.min(n);
-            (0..k).map(|j| j * n / k).collect()
+        // With the gate, a pilot of grid pixels spread evenly over the image runs first,
+        // before the baseline: where it predicts no gain, the plan costs no baseline.
+        let mut chosen: Vec<(u32, u32, Origin)> = if config.gate {
+            let k = PILOT_PIXELS.min(grid.len());
+            (0..k)
+                .map(|j| {
+                    let (x, y) = grid[j * grid.len() / k];
+                    (x, y, Origin::Grid)
+                })
+                .collect()
         } else {
             Vec::new()
         };
-        let g = config.grid;
-        let white = |i: usize| {
-            let (x, y, origin) = chosen[i];
-            origin == Origin::Grid && (x / g + y / g) % 2 == 0
-        };
-        let (first, second): (Vec<usize>, Vec<usize>) = (0..n)
-            .filter(|i| !pilot.contains(i))
-            .partition(|&i| !config.warm_start || white(i));
-        let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; n];
-        // A wave: GA pixels, the individuals each starts from, its generations and its GA
-        // random stream (a pilot pixel that goes on takes a fresh one: its scouting run's
-        // would replay the same random individuals and breeding).
+        let pilot = chosen.len();
+        let bar = progress_bar(pilot as u64, "GA", progress);
+        let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; pilot];
+        // A wave: GA pixels (indices into `chosen`), the individuals each starts from, its
+        // generations and its GA random stream (a pilot pixel that goes on takes a fresh
+        // one: its scouting run's would replay the same random individuals and breeding).
         // The last field: whether the pixel runs the gate's trial. For a mixture every GA
         // pixel does; for a guide only the pilot (see `trials_everywhere`).
         type Job = (usize, Vec<Individual>, usize, u64, bool);
         let trials_everywhere = target == Target::Mixture;
-        let evolve_wave = |wave: &[Job], done: &mut Vec<Option<_>>| {
-            let results: Vec<(usize, (GaPixel, RayCounts))> = wave
-                .par_iter()
-                .map(|(i, seeds, generations, stream, trial)| {
-                    let i = *i;
-                    let r = run_pixel(
-                        view,
-                        &srt,
-                        ga,
-                        chosen[i],
-                        max_bounces,
-                        seed,
-                        (config, target),
-                        (seeds, *generations, *stream, *trial),
-                    );
-                    bar.inc(1);
-                    (i, r)
-                })
-                .collect();
-            for (i, r) in results {
-                done[i] = Some(r);
-            }
-        };
-        let cold = |wave: &[usize]| -> Vec<Job> {
-            wave.iter()
-                .map(|&i| (i, Vec::new(), ga.generations, 0, trials_everywhere))
-                .collect()
-        };
+        let evolve_wave =
+            |wave: &[Job], chosen: &[(u32, u32, Origin)], done: &mut Vec<Option<_>>| {
+                let results: Vec<(usize, (GaPixel, RayCounts))> = wave
+                    .par_iter()
+                    .map(|(i, seeds, generations, stream, trial)| {
+                        let i = *i;
+                        let r = run_pixel(
+                            view,
+                            &srt,
+                            ga,
+                            chosen[i],
+                            max_bounces,
+                            seed,
+                            (config, target),
+                            (seeds, *generations, *stream, *trial),
+                        );
+                        bar.inc(1);
+                        (i, r)
+                    })
+                    .collect();
+                for (i, r) in results {
+                    done[i] = Some(r);
+                }
+            };
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        let pilot_jobs: Vec<Job> = pilot
-            .iter()
-            .map(|&i| (i, Vec::new(), scout, 0, true))
+        // For a mixture, a pilot pixel is not started once so many others failed to pay
+        // that the pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips
+        // depends on the threads' timing, so a mixture's pilot that fails leaves the whole
+        // image to `pt` (see `Plan::closed`), whichever of its pixels ran.
+        let losing = AtomicUsize::new(0);
+        let settled =
+            || target == Target::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+        let scouted_pilot: Vec<(usize, (GaPixel, RayCounts))> = (0..pilot)
+            .into_par_iter()
+            .filter_map(|i| {
+                if settled() {
+                    return None;
+                }
+                let r = run_pixel(
+                    view,
+                    &srt,
+                    ga,
+                    chosen[i],
+                    max_bounces,
+                    seed,
+                    (config, target),
+                    (&[], scout, 0, true),
+                );
+                if !r.0.pays(target) {
+                    losing.fetch_add(1, Ordering::Relaxed);
+                }
+                bar.inc(1);
+                Some((i, r))
+            })
             .collect();
-        evolve_wave(&pilot_jobs, &mut done);
+        for (i, r) in scouted_pilot {
+            done[i] = Some(r);
+        }
         let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
         let mut pt_points = Vec::new();
-        if config.gate {
-            pt_points.extend(&choice.low);
-        }
         // The GA goes on where at least half the pilot pixels predict a gain above the
         // winning margin: one pixel alone (an outlier, or a small region) does not pay for
         // evolving the whole image.
@@ -926,8 +996,41 @@ impl Plan {
             .flatten()
             .filter(|(p, _)| p.pays(target))
             .count();
-        let pilot_pays = 2 * paying >= pilot.len().max(1);
+        let pilot_pays = 2 * paying >= pilot.max(1);
+        let closed = config.gate && !pilot_pays && target == Target::Mixture;
         if !config.gate || pilot_pays {
+            // The baseline, then the other GA pixels (the pilot's stay, whatever their
+            // cells' variance).
+            let t2 = Instant::now();
+            let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
+            stats.rays.add(counts);
+            let keep: Vec<(u32, u32)> = chosen.iter().map(|&(x, y, _)| (x, y)).collect();
+            let choice = choose_pixels(&base, &cells, (width, height), config, &keep);
+            stats.low_variance_cells = choice.low.len();
+            let mut v = choice.cell_variance;
+            v.sort_by(f64::total_cmp);
+            if !v.is_empty() {
+                stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
+            }
+            if config.gate {
+                pt_points.extend(&choice.low);
+            }
+            chosen.extend((choice.pixels.iter()).filter(|&&(x, y, _)| !keep.contains(&(x, y))));
+            let n = chosen.len();
+            done.resize(n, None);
+            bar.inc_length((n - pilot) as u64);
+            let baseline_part = t2.elapsed().as_secs_f64();
+            baseline_seconds += baseline_part;
+
+            // With warm starts, the grid pixels of "white" cells (in a checkerboard of
+            // cells) first, then the rest, seeded from their evolved neighbours.
+            let g = config.grid;
+            let white = |i: usize| {
+                let (x, y, origin) = chosen[i];
+                origin == Origin::Grid && (x / g + y / g) % 2 == 0
+            };
+            let (first, second): (Vec<usize>, Vec<usize>) =
+                (pilot..n).partition(|&i| !config.warm_start || white(i));
             // With a time limit, the waves run in chunks, each only if time is left.
             let chunk = match config.time_limit {
                 Some(_) => 4 * rayon::current_num_threads(),
@@ -942,7 +1045,7 @@ impl Plan {
                     {
                         late.extend(c.iter().map(|j| j.0));
                     } else {
-                        evolve_wave(c, done);
+                        evolve_wave(c, &chosen, done);
                     }
                 }
             };
@@ -951,9 +1054,8 @@ impl Plan {
             // scouting still counts in the stats. A scout without a best individual (no
             // light-carrying test path) or without generations left stands as it is.
             let rest = ga.generations.saturating_sub(scout);
-            let go_on: Vec<Job> = pilot
-                .iter()
-                .filter_map(|&i| {
+            let go_on: Vec<Job> = (0..pilot)
+                .filter_map(|i| {
                     let (p, counts) = done[i].take()?;
                     match p.best.clone() {
                         Some(best) if rest > 0 => {
@@ -968,8 +1070,12 @@ impl Plan {
                 })
                 .collect();
             bar.inc_length(go_on.len() as u64);
-            evolve_wave(&go_on, &mut done);
-            run_chunks(&cold(&first), &mut done);
+            evolve_wave(&go_on, &chosen, &mut done);
+            let cold: Vec<Job> = first
+                .iter()
+                .map(|&i| (i, Vec::new(), ga.generations, 0, trials_everywhere))
+                .collect();
+            run_chunks(&cold, &mut done);
             // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
             // needs half the generations.
             let warm = ga.generations.div_ceil(2);
@@ -997,14 +1103,19 @@ impl Plan {
             if config.gate && target == Target::Mixture {
                 pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
             }
+            stats.ga_seconds -= baseline_part;
         } else {
-            stats.gated_pixels = first.len() + second.len();
-            let skipped = first.iter().chain(&second);
-            pt_points.extend(skipped.map(|&i| (chosen[i].0, chosen[i].1)));
+            // No baseline: every other cell renders with `pt`.
+            stats.gated_pixels = grid.len() - done.iter().flatten().count();
+            let pilot_at = &chosen;
+            pt_points.extend(
+                (grid.iter()).filter(|&&(x, y)| !pilot_at.iter().any(|p| (p.0, p.1) == (x, y))),
+            );
         }
+        stats.baseline_seconds = baseline_seconds;
         let results: Vec<(GaPixel, RayCounts)> = done.into_iter().flatten().collect();
         bar.finish_and_clear();
-        stats.ga_seconds = t1.elapsed().as_secs_f64();
+        stats.ga_seconds += t1.elapsed().as_secs_f64();
         let mut pixels = Vec::with_capacity(results.len());
         // The work of the pilot pixels' scouting runs, which the pixels that went on replaced.
         for (p, counts) in scouted
@@ -1030,6 +1141,7 @@ impl Plan {
             pixels,
             pt_points,
             gate: config.gate,
+            closed,
             target,
             srt,
             neighbours: config.neighbours,
@@ -1107,6 +1219,9 @@ impl Plan {
         parts: &mut Vec<(f64, &'a Mixture)>,
     ) -> bool {
         parts.clear();
+        if self.closed {
+            return false;
+        }
         self.interpolation(x, y, weights);
         if self.gate {
             let total: f64 = weights.iter().map(|w| w.0).sum();
@@ -1193,6 +1308,7 @@ mod tests {
             pixels: vec![pixel(0, Some(3.0)), pixel(10, Some(0.5)), pixel(20, None)],
             pt_points: if gate { vec![(30, 0)] } else { Vec::new() },
             gate,
+            closed: false,
             target: Target::Guide,
             srt: mixture(0.5),
             neighbours: 2,
