@@ -1001,6 +1001,13 @@ fn left_out(
         out.push("nothing else: pruning is off (--no-prune)".to_string());
         return out;
     }
+    if !s.baseline_ran {
+        out.push(format!(
+            "the baseline and the GA at {} grid pixels: the gate's pilot predicted no gain",
+            s.gated_pixels
+        ));
+        return out;
+    }
     out.push(format!(
         "GA in {} grid cells whose pooled baseline relative variance is below {} (cells: min {:.3}, median {:.3}, max {:.3})",
         s.low_variance_cells, config.prune_variance, s.cell_variance[0], s.cell_variance[1], s.cell_variance[2]

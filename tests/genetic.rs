@@ -952,7 +952,8 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
         stats.gated_pixels + mixture.pixels.len() + stats.empty_cells,
         36
     );
-    assert_eq!(mixture.stats.low_variance_cells, 0, "no baseline ran");
+    assert!(!stats.baseline_ran);
+    assert_eq!(stats.low_variance_cells, 0, "no baseline ran");
     for p in &mixture.pixels {
         assert!(
             mixture.local(p.x, p.y).is_none(),
@@ -977,5 +978,6 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
         Target::Mixture,
     );
     assert!(ungated.pixels.len() > PILOT_PIXELS);
+    assert!(ungated.stats.baseline_ran);
     assert!((0..48).all(|y| (0..48).all(|x| ungated.local(x, y).is_some())));
 }

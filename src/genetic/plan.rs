@@ -331,6 +331,8 @@ pub struct PlanStats {
     pub pt_pixels: usize,
     /// GA pixels not evolved because the plan reached `PlanConfig::time_limit`.
     pub time_limited_pixels: usize,
+    /// Whether the baseline ran: not where the gate's pilot closed the GA.
+    pub baseline_ran: bool,
     /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
     /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
     pub cell_variance: [f64; 3],
@@ -1004,6 +1006,7 @@ impl Plan {
             let t2 = Instant::now();
             let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
             stats.rays.add(counts);
+            stats.baseline_ran = true;
             let keep: Vec<(u32, u32)> = chosen.iter().map(|&(x, y, _)| (x, y)).collect();
             let choice = choose_pixels(&base, &cells, (width, height), config, &keep);
             stats.low_variance_cells = choice.low.len();
