@@ -930,24 +930,29 @@ impl Plan {
         // pixel does; for a guide only the pilot (see `trials_everywhere`).
         type Job = (usize, Vec<Individual>, usize, u64, bool);
         let trials_everywhere = target == Target::Mixture;
+        let run_job = |at: (u32, u32, Origin), seeds: &[Individual], generations, stream, trial| {
+            let r = run_pixel(
+                view,
+                &srt,
+                ga,
+                at,
+                max_bounces,
+                seed,
+                (config, target),
+                (seeds, generations, stream, trial),
+            );
+            bar.inc(1);
+            r
+        };
         let evolve_wave =
             |wave: &[Job], chosen: &[(u32, u32, Origin)], done: &mut Vec<Option<_>>| {
                 let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                     .par_iter()
                     .map(|(i, seeds, generations, stream, trial)| {
-                        let i = *i;
-                        let r = run_pixel(
-                            view,
-                            &srt,
-                            ga,
-                            chosen[i],
-                            max_bounces,
-                            seed,
-                            (config, target),
-                            (seeds, *generations, *stream, *trial),
-                        );
-                        bar.inc(1);
-                        (i, r)
+                        (
+                            *i,
+                            run_job(chosen[*i], seeds, *generations, *stream, *trial),
+                        )
                     })
                     .collect();
                 for (i, r) in results {
@@ -968,20 +973,10 @@ impl Plan {
                 if settled() {
                     return None;
                 }
-                let r = run_pixel(
-                    view,
-                    &srt,
-                    ga,
-                    chosen[i],
-                    max_bounces,
-                    seed,
-                    (config, target),
-                    (&[], scout, 0, true),
-                );
+                let r = run_job(chosen[i], &[], scout, 0, true);
                 if !r.0.pays(target) {
                     losing.fetch_add(1, Ordering::Relaxed);
                 }
-                bar.inc(1);
                 Some((i, r))
             })
             .collect();
