@@ -11,7 +11,8 @@
 //! Paths are traced in packets of 16 ([`TestPaths::sample`]): each path is a
 //! [`Walk`](crate::path::generator::Walk) with its own random stream, and the walks of a
 //! packet advance in lockstep, their pending rays traced together (Embree's `rtcIntersect16`
-//! and `rtcOccluded16`; a loop on obvhs). A path's result does not depend on how its rays
+//! and `rtcOccluded16`; a loop on obvhs) when there are at least [`MIN_INCOHERENT_PACKET`]
+//! of them, one by one otherwise. A path's result does not depend on how its rays
 //! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]),
 //! but for a camera ray through an edge two triangles share at the same `t`, which the
 //! coherent camera packets may answer with the other triangle (a set of measure zero).
@@ -100,6 +101,16 @@ impl Default for Lane {
     }
 }
 
+/// After the camera rays, a step's pending rays go as one packet only if there are at least
+/// this many; fewer go as single rays. The paths' rays are incoherent past the camera, where
+/// a packet query costs about as much as a full one however few lanes it holds (cbox, one
+/// thread: 16-ray packets 6.79 Mray/s, single rays 6.42), and absorption thins the packets
+/// step by step. `genpath bench`, test paths in packets against single rays, two runs each:
+/// with every step in packets 0.72–0.82× (cbox) and 0.74–0.90× (fig5); with this threshold
+/// 0.99–1.10× and 0.98–1.06×; with 4, 0.92–0.94× and 0.82–0.91×; with 16, 1.02–1.03× and
+/// 0.89–1.00×.
+pub const MIN_INCOHERENT_PACKET: usize = 12;
+
 /// Up to 16 paths traced together: their lanes and the buffers of their packet queries,
 /// reused from packet to packet.
 struct Packet {
@@ -182,7 +193,13 @@ impl Packet {
     fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
         let count = self.gather(false);
         let (rays, points) = (&self.rays[..count], &mut self.points[..count]);
-        view.trace_packet(rays, points, Coherence::Incoherent, counts);
+        if count >= MIN_INCOHERENT_PACKET {
+            view.trace_packet(rays, points, Coherence::Incoherent, counts);
+        } else {
+            for (ray, point) in rays.iter().zip(points.iter_mut()) {
+                *point = view.trace(ray, counts);
+            }
+        }
         for (&i, y) in self.owner[..count].iter().zip(&self.points) {
             let lane = &mut self.lanes[i];
             let g = &q.generators[lane.generator];
@@ -197,7 +214,13 @@ impl Packet {
     /// Traces the pending shadow rays as one packet and ends their walks; returns how many.
     fn trace_shadows(&mut self, view: &SceneView, counts: &mut RayCounts) -> usize {
         let count = self.gather(true);
-        view.unblocked_packet(&self.rays[..count], &mut self.free[..count], counts);
+        if count >= MIN_INCOHERENT_PACKET {
+            view.unblocked_packet(&self.rays[..count], &mut self.free[..count], counts);
+        } else {
+            for (ray, free) in self.rays[..count].iter().zip(&mut self.free) {
+                *free = view.unblocked(ray, counts);
+            }
+        }
         for (&i, &free) in self.owner[..count].iter().zip(&self.free) {
             let lane = &mut self.lanes[i];
             lane.walk.shadow(free, &mut lane.contributions);
