@@ -19,19 +19,20 @@
 //!
 //! 5. **Gate** (beyond the paper; off with `PlanConfig::gate = false`). The GA pays for
 //!    itself only where its estimator beats path tracing at equal time, so each GA pixel
-//!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of `pt` and of the evolved estimator (the mixture
-//!    for `ga`, the guided path tracer for `ga-pt`), and the predicted gain
+//!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of
+//!    `pt` and of the evolved estimator (the mixture for `ga`, the guided path tracer for
+//!    `ga-pt`), and the predicted gain
 //!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
 //!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
 //!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
 //!    grid pixels spread over the image, for `1 / PILOT_SHARE` of the generations, before the
 //!    baseline; unless at least half of them predict a gain, the other grid pixels are not
 //!    evolved and become `pt` points, and the baseline is not run: the image renders with
-//!    `pt` (for a guide, except near a pilot pixel that does not predict a loss; a mixture's
-//!    pilot stops starting pixels once it cannot pay, so there it is `pt` everywhere) (cbox, `ga`, 64 spp: the
-//!    plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA before, 0.01 s of grid rays
-//!    and 0.16 s of GA with the pilot first). Where they do, the pilot pixels go on from their best individuals (with a fresh
-//!    random stream). For a guide the other GA pixels then run no trial and keep their
+//!    `pt`, for a guide except near a pilot pixel that does not predict a loss. (A mixture's
+//!    pilot stops starting pixels once it cannot pay, so there it is `pt` everywhere. cbox,
+//!    `ga`, 64 spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the
+//!    baseline first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they
+//!    do, the pilot pixels go on from their best individuals (with a fresh random stream). For a guide the other GA pixels then run no trial and keep their
 //!    guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so it rarely
 //!    loses much, and on fig5 the trials cost 40 % of the GA phase while the pixels they
 //!    sent to `pt` made the image no better. A mixture's variance can exceed `pt`'s many
@@ -385,6 +386,16 @@ fn derived_seed(seed: u64, stream: u64) -> u64 {
     rand::Rng::random::<u64>(&mut rng)
 }
 
+/// The cells of a `grid`-pixel grid over a `width × height` image, row by row: `[x0, y0, x1,
+/// y1)` each, clipped to the image.
+fn grid_cells(width: u32, height: u32, grid: u32) -> impl Iterator<Item = [u32; 4]> {
+    (0..height).step_by(grid as usize).flat_map(move |y0| {
+        (0..width)
+            .step_by(grid as usize)
+            .map(move |x0| [x0, y0, (x0 + grid).min(width), (y0 + grid).min(height)])
+    })
+}
+
 /// Each grid cell's GA pixel: the pixel closest to the cell's centre whose centre ray sees a
 /// scattering surface (`None`: the cell has none), in row-major cell order; and the pixels
 /// whose centre ray sees none. One ray per pixel, no random numbers: the pilot can run
@@ -415,14 +426,12 @@ fn grid_pixels(
         scatters.extend(row);
         counts.add(c);
     }
-    let mut cells = Vec::new();
-    for cy in (0..height).step_by(grid as usize) {
-        for cx in (0..width).step_by(grid as usize) {
-            let (x1, y1) = ((cx + grid).min(width), (cy + grid).min(height));
-            let centre = ((cx + x1 - 1) as f64 / 2.0, (cy + y1 - 1) as f64 / 2.0);
+    let cells = grid_cells(width, height, grid)
+        .map(|[x0, y0, x1, y1]| {
+            let centre = ((x0 + x1 - 1) as f64 / 2.0, (y0 + y1 - 1) as f64 / 2.0);
             let mut best: Option<(f64, u32, u32)> = None;
-            for y in cy..y1 {
-                for x in cx..x1 {
+            for y in y0..y1 {
+                for x in x0..x1 {
                     if !scatters[(y * width + x) as usize] {
                         continue;
                     }
@@ -432,9 +441,9 @@ fn grid_pixels(
                     }
                 }
             }
-            cells.push(best.map(|(_, x, y)| (x, y)));
-        }
-    }
+            best.map(|(_, x, y)| (x, y))
+        })
+        .collect();
     (cells, scatters.iter().filter(|s| !**s).count())
 }
 
@@ -526,23 +535,18 @@ fn choose_pixels(
     config: &PlanConfig,
     keep: &[(u32, u32)],
 ) -> Choice {
-    let g = config.grid;
     let mut chosen = Vec::new();
     let mut low_cells = Vec::new();
     let mut noisy = Vec::new();
     let mut cell_variance = Vec::new();
-    let corners = (0..height)
-        .step_by(g as usize)
-        .flat_map(|cy| (0..width).step_by(g as usize).map(move |cx| (cx, cy)));
-    for ((cx, cy), cell) in corners.zip(cells) {
+    for ([x0, y0, x1, y1], cell) in grid_cells(width, height, config.grid).zip(cells) {
         let Some((x, y)) = *cell else {
             continue;
         };
-        let (x1, y1) = ((cx + g).min(width), (cy + g).min(height));
         let (mut sum, mut sum_sq, mut n) = (0.0, 0.0, 0usize);
         let mut noisiest = None::<(f64, u32, u32)>;
-        for py in cy..y1 {
-            for px in cx..x1 {
+        for py in y0..y1 {
+            for px in x0..x1 {
                 let b = base[(py * width + px) as usize];
                 if !b.scatters {
                     continue;
@@ -904,7 +908,9 @@ impl Plan {
         stats.skipped_pixels = skipped;
         stats.empty_cells = cells.iter().filter(|c| c.is_none()).count();
         let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
-        let mut baseline_seconds = t0.elapsed().as_secs_f64();
+        let grid_seconds = t0.elapsed().as_secs_f64();
+        // Seconds of the baseline, which runs between GA waves.
+        let mut baseline_part = 0.0;
 
         let t1 = Instant::now();
         // With the gate, a pilot of grid pixels spread evenly over the image runs first,
@@ -1017,8 +1023,7 @@ impl Plan {
             let n = chosen.len();
             done.resize(n, None);
             bar.inc_length((n - pilot) as u64);
-            let baseline_part = t2.elapsed().as_secs_f64();
-            baseline_seconds += baseline_part;
+            baseline_part = t2.elapsed().as_secs_f64();
 
             // With warm starts, the grid pixels of "white" cells (in a checkerboard of
             // cells) first, then the rest, seeded from their evolved neighbours.
@@ -1101,7 +1106,6 @@ impl Plan {
             if config.gate && target == Target::Mixture {
                 pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
             }
-            stats.ga_seconds -= baseline_part;
         } else {
             // No baseline: every other cell renders with `pt`.
             stats.gated_pixels = grid.len() - done.iter().flatten().count();
@@ -1110,10 +1114,10 @@ impl Plan {
                 (grid.iter()).filter(|&&(x, y)| !pilot_at.iter().any(|p| (p.0, p.1) == (x, y))),
             );
         }
-        stats.baseline_seconds = baseline_seconds;
         let results: Vec<(GaPixel, RayCounts)> = done.into_iter().flatten().collect();
         bar.finish_and_clear();
-        stats.ga_seconds += t1.elapsed().as_secs_f64();
+        stats.baseline_seconds = grid_seconds + baseline_part;
+        stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;
         let mut pixels = Vec::with_capacity(results.len());
         // The work of the pilot pixels' scouting runs, which the pixels that went on replaced.
         for (p, counts) in scouted

@@ -230,8 +230,6 @@ impl SphereBins {
         Self::new(axis, edges, n_phi)
     }
 
-    /// `n_in` bins of equal area in the cap `h ≤ h_split` and `n_out` over the rest, each
-    /// ring cut into `n_phi` sectors.
     /// These bins with the quadrature checking convergence only from `min_depth` splits on
     /// (`4^min_depth` cells per bin): densities whose discontinuities enclose small or thin
     /// regions (a patch's corner, a sliver seen edge-on) that could hide between the nodes of
@@ -241,6 +239,8 @@ impl SphereBins {
         self
     }
 
+    /// `n_in` bins of equal area in the cap `h ≤ h_split` and `n_out` over the rest, each
+    /// ring cut into `n_phi` sectors.
     pub fn split_at(axis: DVec3, h_split: f64, n_in: usize, n_out: usize, n_phi: usize) -> Self {
         assert!(h_split > 0.0 && h_split < 2.0);
         let mut edges: Vec<f64> = (0..n_in)
