@@ -766,7 +766,9 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
 fn run_bench(args: BenchArgs) -> Result<()> {
     use genpath::genetic::population::evolve;
     use genpath::genetic::test_paths::TestPaths;
-    use genpath::report::bench::{best, bounds, camera_rays, random_rays, ray_rates};
+    use genpath::report::bench::{
+        best, best_interleaved, bounds, camera_rays, random_rays, ray_rates,
+    };
     if let Some(json) = &args.json {
         check_dir(json)?;
     }
@@ -793,8 +795,8 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         n * n
     );
     println!(
-        "{:<8} {:<11} {:>15} {:>15} {:>16} {:>16} {:>6}",
-        "back-end",
+        "{:<11} {:<11} {:>15} {:>15} {:>16} {:>16} {:>6}",
+        "back/lanes",
         "rays",
         "closest Mray/s",
         "closest pkt16",
@@ -807,7 +809,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         let accel = match accel::build(kind, &scene.mesh) {
             Ok(accel) => accel,
             Err(accel::AccelError::NotBuilt(name, feature)) => {
-                println!("{name:<8} not built (feature `{feature}`)");
+                println!("{name:<11} not built (feature `{feature}`)");
                 continue;
             }
             Err(e) => return Err(e.into()),
@@ -815,8 +817,8 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         for (set, rays, coherence) in &sets {
             let r = ray_rates(accel.as_ref(), rays, *coherence, passes);
             println!(
-                "{:<8} {set:<11} {:>15.2} {:>15.2} {:>16.2} {:>16.2} {:>6.1}",
-                accel.name(),
+                "{:<11} {set:<11} {:>15.2} {:>15.2} {:>16.2} {:>16.2} {:>6.1}",
+                format!("{}/{}", accel.name(), accel.packet_lanes()),
                 r.closest_single,
                 r.closest_packet,
                 r.occluded_single,
@@ -824,7 +826,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
                 100.0 * r.hit_fraction
             );
             rays_json
-                .push(serde_json::json!({ "accel": accel.name(), "rays": set, "mrays_per_s": r }));
+                .push(serde_json::json!({ "accel": accel.name(), "packet_lanes": accel.packet_lanes(), "rays": set, "mrays_per_s": r }));
         }
     }
 
@@ -839,16 +841,21 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     let q = mixture_file::srt(&scene, max_bounces, ga.srt_absorption);
     let pixel = (scene.camera.width / 2, scene.camera.height / 2);
     let m = ga.test_paths;
-    let (packet_t, _) = best(passes, || {
-        TestPaths::sample(&view, &q, pixel, m, max_bounces, 1)
-            .0
-            .len()
-    });
-    let (single_t, _) = best(passes, || {
-        TestPaths::sample_single(&view, &q, pixel, m, max_bounces, 1)
-            .0
-            .len()
-    });
+    let [(packet_t, _), (single_t, _)] = best_interleaved(
+        passes,
+        [
+            &mut || {
+                TestPaths::sample(&view, &q, pixel, m, max_bounces, 1)
+                    .0
+                    .len()
+            },
+            &mut || {
+                TestPaths::sample_single(&view, &q, pixel, m, max_bounces, 1)
+                    .0
+                    .len()
+            },
+        ],
+    );
     let paths = TestPaths::sample(&view, &q, pixel, m, max_bounces, 1).0;
     let start = Instant::now();
     let mut rng = genpath::sampling::sample_rng(1, 0, 0);

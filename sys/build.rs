@@ -121,10 +121,10 @@ fn generate_bindings(embree: &Embree) {
         .derive_default(true)
         .parse_callbacks(Box::new(bindgen::CargoCallbacks::new()));
     if embree.major == 3 {
-        // lib.rs wraps rtcIntersect1/16 and rtcOccluded1/16 in Embree 4's signatures; the other
-        // query entry points keep Embree 3's argument order, so they are left out rather than
-        // exported under an Embree 4 name with an Embree 3 signature.
-        builder = builder.blocklist_function("rtc(Intersect|Occluded)(4|8|1M|1Mp|NM|Np)");
+        // lib.rs wraps rtcIntersect1/8/16 and rtcOccluded1/8/16 in Embree 4's signatures; the
+        // other query entry points keep Embree 3's argument order, so they are left out rather
+        // than exported under an Embree 4 name with an Embree 3 signature.
+        builder = builder.blocklist_function("rtc(Intersect|Occluded)(4|1M|1Mp|NM|Np)");
     }
     let bindings = builder.generate().unwrap_or_else(|err| {
         eprintln!("error: bindgen failed on {}: {err}", header.display());

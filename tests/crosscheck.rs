@@ -181,11 +181,18 @@ impl fmt::Display for Report {
     }
 }
 
-/// Cross-checks Embree against obvhs on `rays` over `mesh`.
-fn crosscheck(mesh: &TriangleMesh, rays: &[Ray]) -> Report {
-    let embree = EmbreeAccel::new(mesh).expect("Embree builds the scene");
+/// Embree's two packet paths: packets go to Embree 8 or 16 rays at a time (the CPU's native
+/// width decides which one renders), and both must answer like single rays on any CPU.
+const EMBREE_LANES: [usize; 2] = [8, 16];
+
+/// Cross-checks Embree, with each of [`EMBREE_LANES`], against obvhs on `rays` over `mesh`.
+fn crosscheck(mesh: &TriangleMesh, rays: &[Ray]) -> [Report; 2] {
     let bvh = BvhAccel::new(mesh);
-    crosscheck_accels(mesh, &embree, &bvh, rays)
+    EMBREE_LANES.map(|lanes| {
+        let embree = EmbreeAccel::with_lanes(mesh, lanes).expect("Embree builds the scene");
+        assert_eq!(embree.packet_lanes(), lanes);
+        crosscheck_accels(mesh, &embree, &bvh, rays)
+    })
 }
 
 fn crosscheck_accels(mesh: &TriangleMesh, a: &dyn Accel, b: &dyn Accel, rays: &[Ray]) -> Report {
@@ -343,11 +350,12 @@ fn incoherent_rays_agree() {
     let mesh = stress_scene();
     let (lo, hi) = bench::bounds(&mesh);
     let rays = bench::random_rays(lo, hi, 100_000, 11);
-    let report = crosscheck(&mesh, &rays);
-    println!("incoherent: {report}");
-    report.assert_clean();
-    // About half the rays escape upwards; the rest must hit, or the test tests little.
-    assert!(report.hits > rays.len() * 2 / 5, "{report}");
+    for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&mesh, &rays)) {
+        println!("incoherent, Embree {lanes} lanes: {report}");
+        report.assert_clean();
+        // About half the rays escape upwards; the rest must hit, or the test tests little.
+        assert!(report.hits > rays.len() * 2 / 5, "{report}");
+    }
 }
 
 /// The design's extreme scales (1e-4 and 1e5): only relative tolerances may matter.
@@ -358,10 +366,11 @@ fn tiny_and_huge_scenes_agree() {
         mesh.positions.iter_mut().for_each(|p| *p *= scale);
         let (lo, hi) = bench::bounds(&mesh);
         let rays = bench::random_rays(lo, hi, 20_000, 5);
-        let report = crosscheck(&mesh, &rays);
-        println!("scale {scale:e}: {report}");
-        report.assert_clean();
-        assert!(report.hits > rays.len() * 2 / 5, "{report}");
+        for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&mesh, &rays)) {
+            println!("scale {scale:e}, Embree {lanes} lanes: {report}");
+            report.assert_clean();
+            assert!(report.hits > rays.len() * 2 / 5, "{report}");
+        }
     }
 }
 
@@ -370,13 +379,14 @@ fn coherent_rays_agree() {
     let mesh = stress_scene();
     let rays = stress::camera_rays(Vec3::new(0.3, 0.8, 4.5), Vec3::ZERO, 50.0, 320, 320);
     assert!(rays.len() >= 100_000);
-    let report = crosscheck(&mesh, &rays);
-    println!("coherent: {report}");
-    report.assert_clean();
-    assert!(
-        report.hits > rays.len() / 2 && report.hits < rays.len(),
-        "{report}"
-    );
+    for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&mesh, &rays)) {
+        println!("coherent, Embree {lanes} lanes: {report}");
+        report.assert_clean();
+        assert!(
+            report.hits > rays.len() / 2 && report.hits < rays.len(),
+            "{report}"
+        );
+    }
 }
 
 /// A shipped scene: every pixel centre of its camera at 320 × 320, and as many random rays
@@ -393,10 +403,11 @@ fn shipped_scene_agrees(name: &str) {
         .collect();
     let (lo, hi) = bench::bounds(&scene.mesh);
     rays.extend(bench::random_rays(lo, hi, 100_000, 13));
-    let report = crosscheck(&scene.mesh, &rays);
-    println!("{name}: {report}");
-    report.assert_clean();
-    assert!(report.hits > rays.len() / 2, "{report}");
+    for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&scene.mesh, &rays)) {
+        println!("{name}, Embree {lanes} lanes: {report}");
+        report.assert_clean();
+        assert!(report.hits > rays.len() / 2, "{report}");
+    }
 }
 
 #[test]
@@ -534,6 +545,10 @@ impl Accel for Corrupted<'_> {
     fn name(&self) -> &'static str {
         "corrupted"
     }
+
+    fn packet_lanes(&self) -> usize {
+        self.0.packet_lanes()
+    }
 }
 
 #[test]
@@ -562,7 +577,8 @@ fn crosscheck_catches_a_corrupted_back_end() {
 #[test]
 fn invalid_rays_miss_and_are_blocked_on_both_back_ends() {
     let mesh = quad();
-    let embree = EmbreeAccel::new(&mesh).unwrap();
+    let [embree8, embree16] =
+        EMBREE_LANES.map(|lanes| EmbreeAccel::with_lanes(&mesh, lanes).unwrap());
     let bvh = BvhAccel::new(&mesh);
     // Off the shared diagonal: on it, either triangle is a right answer (see `Accel`).
     let good = down_at(0.3, 0.2);
@@ -578,7 +594,7 @@ fn invalid_rays_miss_and_are_blocked_on_both_back_ends() {
         Ray::new(good.origin, good.dir, -1.0, f32::INFINITY),
         Ray::new(good.origin, good.dir, f32::NAN, f32::INFINITY),
     ];
-    for accel in [&embree as &dyn Accel, &bvh] {
+    for accel in [&embree8 as &dyn Accel, &embree16, &bvh] {
         assert!(accel.intersect(&good).is_some() && !accel.occluded(&Ray { tmax: 0.5, ..good }));
         for ray in &bad {
             assert!(!ray.is_valid());

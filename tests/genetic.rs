@@ -411,6 +411,9 @@ impl Accel for NudgedLane<'_> {
     fn name(&self) -> &'static str {
         "nudged"
     }
+    fn packet_lanes(&self) -> usize {
+        self.0.packet_lanes()
+    }
 }
 
 #[test]

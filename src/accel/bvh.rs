@@ -115,6 +115,10 @@ impl Accel for BvhAccel {
     fn name(&self) -> &'static str {
         "bvh"
     }
+
+    fn packet_lanes(&self) -> usize {
+        1
+    }
 }
 
 #[cfg(test)]

@@ -125,6 +125,9 @@ pub trait Accel: Send + Sync {
     fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], coherence: Coherence);
     /// Back-end name for logs and stats.
     fn name(&self) -> &'static str;
+    /// Rays per traversal call inside a packet query: Embree's packet width, 1 for a back-end
+    /// that answers a packet ray by ray.
+    fn packet_lanes(&self) -> usize;
 }
 
 /// Which back-end to build, chosen by `--accel`.

@@ -66,14 +66,26 @@ pub fn camera_rays(camera: &Camera, width: u32, height: u32) -> Vec<Ray> {
 
 /// Shortest time of `passes` runs of `f`, and what `f` counted.
 pub fn best(passes: usize, mut f: impl FnMut() -> usize) -> (Duration, usize) {
-    let mut fastest = Duration::MAX;
-    let mut count = 0;
+    let [result] = best_interleaved(passes, [&mut f]);
+    result
+}
+
+/// [`best`] of several measurements that are to be compared: each pass runs every one of
+/// them once, in turn, so that a change in the machine's load between passes weighs on all
+/// of them alike instead of on whichever happened to run then.
+pub fn best_interleaved<const N: usize>(
+    passes: usize,
+    mut fs: [&mut dyn FnMut() -> usize; N],
+) -> [(Duration, usize); N] {
+    let mut results = [(Duration::MAX, 0); N];
     for _ in 0..passes.max(1) {
-        let start = Instant::now();
-        count = black_box(f());
-        fastest = fastest.min(start.elapsed());
+        for (f, (fastest, count)) in fs.iter_mut().zip(&mut results) {
+            let start = Instant::now();
+            *count = black_box(f());
+            *fastest = (*fastest).min(start.elapsed());
+        }
     }
-    (fastest, count)
+    results
 }
 
 fn intersect_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
@@ -119,15 +131,21 @@ pub struct RayRates {
     pub hit_fraction: f64,
 }
 
-/// Measures [`RayRates`], each query the best of `passes`; packets are traced with the
+/// Measures [`RayRates`], each query the best of `passes` (interleaved); packets are traced with the
 /// traversal `coherence` asks for.
 pub fn ray_rates(accel: &dyn Accel, rays: &[Ray], coherence: Coherence, passes: usize) -> RayRates {
     let n = rays.len() as f64;
     let mrays = |d: Duration| n / d.as_secs_f64().max(1e-12) / 1e6;
-    let (closest_single, hits) = best(passes, || intersect_single(accel, rays));
-    let (closest_packet, _) = best(passes, || intersect_packets(accel, rays, coherence));
-    let (occluded_single, _) = best(passes, || occluded_single(accel, rays));
-    let (occluded_packet, _) = best(passes, || occluded_packets(accel, rays, coherence));
+    let [(closest_single, hits), (closest_packet, _), (occluded_single, _), (occluded_packet, _)] =
+        best_interleaved(
+            passes,
+            [
+                &mut || intersect_single(accel, rays),
+                &mut || intersect_packets(accel, rays, coherence),
+                &mut || occluded_single(accel, rays),
+                &mut || occluded_packets(accel, rays, coherence),
+            ],
+        );
     RayRates {
         closest_single: mrays(closest_single),
         closest_packet: mrays(closest_packet),

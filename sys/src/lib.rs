@@ -4,7 +4,8 @@
 //! `build.rs` sets `cfg(embree3)` or `cfg(embree4)`. Everything the headers declare is
 //! re-exported as generated, except the ray queries, which always have Embree 4's shape:
 //!
-//! * [`rtcIntersect1`], [`rtcIntersect16`], [`rtcOccluded1`], [`rtcOccluded16`] take
+//! * [`rtcIntersect1`], [`rtcIntersect8`], [`rtcIntersect16`], [`rtcOccluded1`],
+//!   [`rtcOccluded8`], [`rtcOccluded16`] take
 //!   `(valid?, scene, ray, args)` where `args` is an optional [`RTCIntersectArguments`] /
 //!   [`RTCOccludedArguments`]. On Embree 3 they build the `RTCIntersectContext` that Embree 3
 //!   wants (`(valid?, scene, context, ray)`), and the arguments carry only the coherence flag
@@ -19,7 +20,7 @@
 //!
 //! Usage rules Embree does not check: `ray.mask` must be `u32::MAX` (`-1`) to hit geometry with
 //! the default mask, `hit.geomID` must start as [`RTC_INVALID_GEOMETRY_ID`], a packet's `valid`
-//! array must be aligned like the packet ([`RTCValid16`] is), and a *shared* vertex buffer
+//! array must be aligned like the packet ([`RTCValid8`] and [`RTCValid16`] are), and a *shared* vertex buffer
 //! needs 4 readable bytes after its last vertex (buffers made by `rtcSetNewGeometryBuffer` are
 //! padded by Embree).
 #![allow(non_camel_case_types, non_snake_case, non_upper_case_globals)]
@@ -44,6 +45,18 @@ pub const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
 pub struct RTCValid16(pub [c_int; 16]);
 
 impl RTCValid16 {
+    /// Lanes `0..n` active, the rest masked off.
+    pub fn first(n: usize) -> Self {
+        Self(std::array::from_fn(|i| if i < n { -1 } else { 0 }))
+    }
+}
+
+/// The `valid` mask of an 8-wide packet query, aligned for Embree's 256-bit loads.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RTCValid8(pub [c_int; 8]);
+
+impl RTCValid8 {
     /// Lanes `0..n` active, the rest masked off.
     pub fn first(n: usize) -> Self {
         Self(std::array::from_fn(|i| if i < n { -1 } else { 0 }))
@@ -87,6 +100,20 @@ mod queries {
         unsafe { raw::rtcIntersect1(scene, rayhit, opt_ptr(args)) }
     }
 
+    /// Closest hits of the active lanes of an 8-ray packet.
+    ///
+    /// # Safety
+    /// `scene` must be a live, committed scene.
+    pub unsafe fn rtcIntersect8(
+        valid: &RTCValid8,
+        scene: RTCScene,
+        rayhit: &mut RTCRayHit8,
+        args: Option<&mut RTCIntersectArguments>,
+    ) {
+        // SAFETY: as above; `valid` and `rayhit` are 32-byte aligned by their types.
+        unsafe { raw::rtcIntersect8(valid.0.as_ptr(), scene, rayhit, opt_ptr(args)) }
+    }
+
     /// Closest hits of the active lanes of a 16-ray packet.
     ///
     /// # Safety
@@ -112,6 +139,20 @@ mod queries {
     ) {
         // SAFETY: the caller guarantees `scene`; the other pointers come from references.
         unsafe { raw::rtcOccluded1(scene, ray, opt_ptr(args)) }
+    }
+
+    /// Any hits of the active lanes of an 8-ray packet (`tfar[i] = -inf` when blocked).
+    ///
+    /// # Safety
+    /// `scene` must be a live, committed scene.
+    pub unsafe fn rtcOccluded8(
+        valid: &RTCValid8,
+        scene: RTCScene,
+        ray: &mut RTCRay8,
+        args: Option<&mut RTCOccludedArguments>,
+    ) {
+        // SAFETY: as above; `valid` and `ray` are 32-byte aligned by their types.
+        unsafe { raw::rtcOccluded8(valid.0.as_ptr(), scene, ray, opt_ptr(args)) }
     }
 
     /// Any hits of the active lanes of a 16-ray packet (`tfar[i] = -inf` when blocked).
@@ -192,6 +233,21 @@ mod queries {
         unsafe { raw::rtcIntersect1(scene, &mut context, rayhit) }
     }
 
+    /// Closest hits of the active lanes of an 8-ray packet.
+    ///
+    /// # Safety
+    /// `scene` must be a live, committed scene.
+    pub unsafe fn rtcIntersect8(
+        valid: &RTCValid8,
+        scene: RTCScene,
+        rayhit: &mut RTCRayHit8,
+        args: Option<&mut RTCIntersectArguments>,
+    ) {
+        let mut context = context(args.map(|a| a.flags));
+        // SAFETY: as above; `valid` and `rayhit` are 32-byte aligned by their types.
+        unsafe { raw::rtcIntersect8(valid.0.as_ptr(), scene, &mut context, rayhit) }
+    }
+
     /// Closest hits of the active lanes of a 16-ray packet.
     ///
     /// # Safety
@@ -221,6 +277,21 @@ mod queries {
         unsafe { raw::rtcOccluded1(scene, &mut context, ray) }
     }
 
+    /// Any hits of the active lanes of an 8-ray packet (`tfar[i] = -inf` when blocked).
+    ///
+    /// # Safety
+    /// `scene` must be a live, committed scene.
+    pub unsafe fn rtcOccluded8(
+        valid: &RTCValid8,
+        scene: RTCScene,
+        ray: &mut RTCRay8,
+        args: Option<&mut RTCOccludedArguments>,
+    ) {
+        let mut context = context(args.map(|a| a.flags));
+        // SAFETY: as above; `valid` and `ray` are 32-byte aligned by their types.
+        unsafe { raw::rtcOccluded8(valid.0.as_ptr(), scene, &mut context, ray) }
+    }
+
     /// Any hits of the active lanes of a 16-ray packet (`tfar[i] = -inf` when blocked).
     ///
     /// # Safety
@@ -237,9 +308,11 @@ mod queries {
     }
 }
 
-// The named import shadows both globs: these four are always the Embree 4 shaped wrappers.
+// The named import shadows both globs: these six are always the Embree 4 shaped wrappers.
 pub use queries::*;
-pub use queries::{rtcIntersect1, rtcIntersect16, rtcOccluded1, rtcOccluded16};
+pub use queries::{
+    rtcIntersect1, rtcIntersect16, rtcIntersect8, rtcOccluded1, rtcOccluded16, rtcOccluded8,
+};
 
 #[cfg(test)]
 mod tests {
@@ -247,12 +320,17 @@ mod tests {
     use std::mem::{align_of, size_of};
 
     #[test]
-    fn packet_types_are_aligned_for_avx512_loads() {
+    fn packet_types_are_aligned_for_their_simd_loads() {
         assert_eq!(align_of::<RTCValid16>(), 64);
         assert_eq!(size_of::<RTCValid16>(), 64);
         assert_eq!(align_of::<RTCRayHit16>(), 64);
         assert_eq!(align_of::<RTCRay16>(), 64);
         assert_eq!(RTCValid16::first(3).0[..4], [-1, -1, -1, 0]);
+        assert_eq!(align_of::<RTCValid8>(), 32);
+        assert_eq!(size_of::<RTCValid8>(), 32);
+        assert_eq!(align_of::<RTCRayHit8>(), 32);
+        assert_eq!(align_of::<RTCRay8>(), 32);
+        assert_eq!(RTCValid8::first(7).0[6..], [-1, 0]);
     }
 
     #[test]
@@ -369,6 +447,33 @@ mod tests {
             rtcOccluded16(&valid, scene, &mut occlusion, None);
             assert_eq!(occlusion.tfar[0], f32::NEG_INFINITY);
             assert!(occlusion.tfar[1..].iter().all(|&t| t == f32::INFINITY));
+
+            // The same through the 8-wide wrappers, with lane 1 over the triangle this time.
+            let mut packet = RTCRayHit8::default();
+            for i in 0..8 {
+                packet.ray.org_x[i] = 0.25 + i as f32 - 1.0;
+                packet.ray.org_y[i] = 0.5;
+                packet.ray.org_z[i] = 2.0;
+                packet.ray.dir_z[i] = -1.0;
+                packet.ray.tfar[i] = f32::INFINITY;
+                packet.ray.mask[i] = u32::MAX;
+                packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            }
+            let valid = RTCValid8::first(3);
+            let mut occlusion = packet.ray;
+            rtcIntersect8(&valid, scene, &mut packet, None);
+            assert_eq!(
+                packet.hit.geomID[..3],
+                [RTC_INVALID_GEOMETRY_ID, geom_id, RTC_INVALID_GEOMETRY_ID]
+            );
+            assert!((packet.ray.tfar[1] - 2.0).abs() < 1e-6);
+            assert!(packet.ray.tfar[3..].iter().all(|&t| t == f32::INFINITY));
+            rtcOccluded8(&valid, scene, &mut occlusion, None);
+            assert_eq!(occlusion.tfar[1], f32::NEG_INFINITY);
+            assert!(occlusion.tfar[..1]
+                .iter()
+                .chain(&occlusion.tfar[2..])
+                .all(|&t| t == f32::INFINITY));
 
             assert_eq!(rtcGetDeviceError(device), RTC_ERROR_NONE);
             rtcReleaseScene(scene);
