@@ -9,13 +9,14 @@
 //! the same for every generator that uses a BRDF sampler there, so it is computed once here.
 //!
 //! Paths are traced in packets of 16 ([`TestPaths::sample`]): each path is a
-//! [`Walk`](crate::path::generator::Walk) with its own random stream, and the walks of a
-//! packet advance in lockstep, their pending rays traced together (Embree's `rtcIntersect16`
-//! and `rtcOccluded16`; a loop on obvhs) when there are at least [`MIN_INCOHERENT_PACKET`]
-//! of them, one by one otherwise. A path's result does not depend on how its rays
-//! are traced, so the store equals the one traced ray by ray ([`TestPaths::sample_single`]),
-//! but for a camera ray through an edge two triangles share at the same `t`, which the
-//! coherent camera packets may answer with the other triangle (a set of measure zero).
+//! [`crate::path::generator::Walk`] with its own random stream, and the walks of a packet
+//! advance in lockstep, their pending rays traced together (one packet query: Embree's
+//! `rtcIntersect16`/`rtcOccluded16`, or the `8` variants twice on a CPU without AVX-512; a
+//! loop on obvhs) when there are at least [`MIN_INCOHERENT_PACKET`] of them, one by one
+//! otherwise. A path's result does not depend on how its rays are traced, so the store
+//! equals the one traced ray by ray ([`TestPaths::sample_single`]), but for a camera ray
+//! through an edge two triangles share at the same `t`, which the coherent camera packets
+//! may answer with the other triangle (a set of measure zero).
 
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
@@ -105,10 +106,13 @@ impl Default for Lane {
 /// this many; fewer go as single rays. The paths' rays are incoherent past the camera, where
 /// a packet query costs about as much as a full one however few lanes it holds (cbox, one
 /// thread: 16-ray packets 6.79 Mray/s, single rays 6.42), and absorption thins the packets
-/// step by step. `genpath bench`, test paths in packets against single rays, two runs each:
-/// with every step in packets 0.72–0.82× (cbox) and 0.74–0.90× (fig5); with this threshold
-/// 0.99–1.10× and 0.98–1.06×; with 4, 0.92–0.94× and 0.82–0.91×; with 16, 1.02–1.03× and
-/// 0.89–1.00×.
+/// step by step. `genpath bench`, test paths in packets against single rays, two runs each,
+/// with Embree's 16-ray calls: with every step in packets 0.72–0.82× (cbox) and 0.74–0.90×
+/// (fig5); with this threshold 0.99–1.10× and 0.98–1.06×; with 4, 0.92–0.94× and
+/// 0.82–0.91×; with 16, 1.02–1.03× and 0.89–1.00×. With the 8-ray calls of an AVX2 CPU
+/// (three runs each, passes interleaved) no threshold stands out: every step in packets
+/// 0.92–0.99× and 0.93×, 4 0.94–1.02× and 0.98×, 8 0.90–0.94× and 0.92–0.96×, 12
+/// 0.94–1.02× and 0.93–0.98×.
 pub const MIN_INCOHERENT_PACKET: usize = 12;
 
 /// Up to 16 paths traced together: their lanes and the buffers of their packet queries,

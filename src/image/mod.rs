@@ -1,6 +1,6 @@
 //! Images in memory and on disk.
 //!
-//! [`write`] picks the format from the file extension and writes through OpenImageIO
+//! [`write()`] picks the format from the file extension and writes through OpenImageIO
 //! (feature `oiio`, `oiio.rs` + `shim/oiio_shim.cpp`) or through the pure-Rust `exr`/`png`
 //! crates (`rust_writers.rs`). Every file is written under a temporary name in the target
 //! directory and renamed into place, so a failed write never leaves a partial file.
@@ -64,7 +64,7 @@ pub fn write(path: &Path, img: &Image) -> Result<(), ImageError> {
     write_atomic(path, |tmp| writer(tmp, img))
 }
 
-/// Fails when `path` names a format that [`write`] cannot write, before any work is done.
+/// Fails when `path` names a format that [`write()`] cannot write, before any work is done.
 pub fn check_format(path: &Path) -> Result<(), ImageError> {
     writer_for(path).map(|_| ())
 }

@@ -10,7 +10,7 @@
 //!
 //! Every generator evaluates the density of a path that *any* generator produced from the
 //! stored vertices alone ([`PathGenerator::pdf_path`]), which is what the balance-heuristic
-//! estimator of a [`Mixture`] (paper eq. 7–8) and the fitness of the genetic algorithm need.
+//! estimator of a [`Mixture`](super::mixture::Mixture) (paper eq. 7–8) and the fitness of the genetic algorithm need.
 
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
