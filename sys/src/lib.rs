@@ -423,57 +423,59 @@ mod tests {
             rtcOccluded1(scene, &mut short, None);
             assert_eq!(short.tfar, 1.5);
 
-            // Lane i starts at x = 0.25 + i: only lane 0 is over the triangle; lanes 3.. are
-            // masked off and must come back untouched.
-            let mut packet = RTCRayHit16::default();
-            for i in 0..16 {
-                packet.ray.org_x[i] = 0.25 + i as f32;
-                packet.ray.org_y[i] = 0.5;
-                packet.ray.org_z[i] = 2.0;
-                packet.ray.dir_z[i] = -1.0;
-                packet.ray.tfar[i] = f32::INFINITY;
-                packet.ray.mask[i] = u32::MAX;
-                packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+            // Lane i starts at x = 0.25 + i − lit: only lane `lit` is over the triangle;
+            // lanes 3.. are masked off and must come back untouched.
+            macro_rules! check_packet {
+                ($RayHit:ident, $Valid:ident, $width:literal, $intersect:ident,
+                 $occluded:ident, $lit:literal) => {
+                    let mut packet = $RayHit::default();
+                    for i in 0..$width {
+                        packet.ray.org_x[i] = 0.25 + i as f32 - $lit as f32;
+                        packet.ray.org_y[i] = 0.5;
+                        packet.ray.org_z[i] = 2.0;
+                        packet.ray.dir_z[i] = -1.0;
+                        packet.ray.tfar[i] = f32::INFINITY;
+                        packet.ray.mask[i] = u32::MAX;
+                        packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+                    }
+                    let valid = $Valid::first(3);
+                    let mut occlusion = packet.ray;
+                    $intersect(&valid, scene, &mut packet, None);
+                    for i in 0..$width {
+                        let lit = i == $lit;
+                        let expected = if lit {
+                            geom_id
+                        } else {
+                            RTC_INVALID_GEOMETRY_ID
+                        };
+                        assert_eq!(packet.hit.geomID[i], expected, "{}: lane {i}", $width);
+                        let t = if lit { 2.0 } else { f32::INFINITY };
+                        assert!(
+                            packet.ray.tfar[i] == t || (packet.ray.tfar[i] - t).abs() < 1e-6,
+                            "{}: lane {i}",
+                            $width
+                        );
+                    }
+                    $occluded(&valid, scene, &mut occlusion, None);
+                    for i in 0..$width {
+                        let t = if i == $lit {
+                            f32::NEG_INFINITY
+                        } else {
+                            f32::INFINITY
+                        };
+                        assert_eq!(occlusion.tfar[i], t, "{}: lane {i}", $width);
+                    }
+                };
             }
-            let valid = RTCValid16::first(3);
-            let mut occlusion = packet.ray;
-            rtcIntersect16(&valid, scene, &mut packet, None);
-            assert_eq!(
-                packet.hit.geomID[..3],
-                [geom_id, RTC_INVALID_GEOMETRY_ID, u32::MAX]
+            check_packet!(
+                RTCRayHit16,
+                RTCValid16,
+                16,
+                rtcIntersect16,
+                rtcOccluded16,
+                0
             );
-            assert!((packet.ray.tfar[0] - 2.0).abs() < 1e-6);
-            assert!(packet.ray.tfar[3..].iter().all(|&t| t == f32::INFINITY));
-            rtcOccluded16(&valid, scene, &mut occlusion, None);
-            assert_eq!(occlusion.tfar[0], f32::NEG_INFINITY);
-            assert!(occlusion.tfar[1..].iter().all(|&t| t == f32::INFINITY));
-
-            // The same through the 8-wide wrappers, with lane 1 over the triangle this time.
-            let mut packet = RTCRayHit8::default();
-            for i in 0..8 {
-                packet.ray.org_x[i] = 0.25 + i as f32 - 1.0;
-                packet.ray.org_y[i] = 0.5;
-                packet.ray.org_z[i] = 2.0;
-                packet.ray.dir_z[i] = -1.0;
-                packet.ray.tfar[i] = f32::INFINITY;
-                packet.ray.mask[i] = u32::MAX;
-                packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-            }
-            let valid = RTCValid8::first(3);
-            let mut occlusion = packet.ray;
-            rtcIntersect8(&valid, scene, &mut packet, None);
-            assert_eq!(
-                packet.hit.geomID[..3],
-                [RTC_INVALID_GEOMETRY_ID, geom_id, RTC_INVALID_GEOMETRY_ID]
-            );
-            assert!((packet.ray.tfar[1] - 2.0).abs() < 1e-6);
-            assert!(packet.ray.tfar[3..].iter().all(|&t| t == f32::INFINITY));
-            rtcOccluded8(&valid, scene, &mut occlusion, None);
-            assert_eq!(occlusion.tfar[1], f32::NEG_INFINITY);
-            assert!(occlusion.tfar[..1]
-                .iter()
-                .chain(&occlusion.tfar[2..])
-                .all(|&t| t == f32::INFINITY));
+            check_packet!(RTCRayHit8, RTCValid8, 8, rtcIntersect8, rtcOccluded8, 1);
 
             assert_eq!(rtcGetDeviceError(device), RTC_ERROR_NONE);
             rtcReleaseScene(scene);
