@@ -243,21 +243,25 @@ impl Sweep<'_> {
         let total = self.methods.len() * self.reps as usize * self.budgets.len();
         let bar = progress_bar(total as u64, "sweep", self.progress);
         let mut rows = Vec::with_capacity(total);
-        for spec in &self.methods {
-            for rep in 0..self.reps {
-                let settings = RenderSettings {
-                    method: spec.config.method,
-                    seed: self.settings.seed.wrapping_add(rep as u64),
-                    progress: false,
-                    ..self.settings.clone()
-                };
-                // With budgets in seconds, a GA plan is built per budget with its time limit
-                // (`GA_BUDGET_SHARE` of it); with budgets in samples, once.
-                let plans: Vec<(Option<f64>, Vec<f64>)> = match &self.budgets {
-                    Budgets::Spp(b) => vec![(None, b.iter().map(|&s| f64::from(s)).collect())],
-                    Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), vec![t])).collect(),
-                };
-                for (seconds, budgets) in plans {
+        // With budgets in seconds, a GA plan is built per budget with its time limit
+        // (`GA_BUDGET_SHARE` of it); with budgets in samples, once.
+        let plans: Vec<(Option<f64>, Vec<f64>)> = match &self.budgets {
+            Budgets::Spp(b) => vec![(None, b.iter().map(|&s| f64::from(s)).collect())],
+            Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), vec![t])).collect(),
+        };
+        // The methods run one after the other at each budget, not each through all budgets
+        // in turn: renders to be compared at equal time then run minutes closer together,
+        // so that a shared machine's slow spells weigh on them more alike.
+        for rep in 0..self.reps {
+            for (seconds, budgets) in &plans {
+                let (seconds, budgets) = (*seconds, budgets.as_slice());
+                for spec in &self.methods {
+                    let settings = RenderSettings {
+                        method: spec.config.method,
+                        seed: self.settings.seed.wrapping_add(rep as u64),
+                        progress: false,
+                        ..self.settings.clone()
+                    };
                     let mut config = spec.config.clone();
                     config.plan.time_limit = seconds.map(|t| GA_BUDGET_SHARE * t);
                     let t0 = Instant::now();
