@@ -10,7 +10,7 @@
 mod stress;
 
 use genpath::accel::{self, AccelError, AccelKind, Coherence};
-use genpath::report::bench::{bounds, camera_rays, random_rays, ray_rates};
+use genpath::report::bench::{accel_label, bounds, camera_rays, random_rays, ray_rates};
 use genpath::scene::Scene;
 use glam::Vec3;
 use std::error::Error;
@@ -78,7 +78,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             ] {
                 println!(
                     "{:<11} {set:<11} {query:<10} {single:>13.2} {packet:>15.2} {:>7.1}",
-                    format!("{}/{}", accel.name(), accel.packet_lanes()),
+                    accel_label(&*accel),
                     100.0 * r.hit_fraction
                 );
             }

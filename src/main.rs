@@ -767,7 +767,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     use genpath::genetic::population::evolve;
     use genpath::genetic::test_paths::TestPaths;
     use genpath::report::bench::{
-        best, best_interleaved, bounds, camera_rays, random_rays, ray_rates,
+        accel_label, best, best_interleaved, bounds, camera_rays, random_rays, ray_rates,
     };
     if let Some(json) = &args.json {
         check_dir(json)?;
@@ -818,7 +818,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             let r = ray_rates(accel.as_ref(), rays, *coherence, passes);
             println!(
                 "{:<11} {set:<11} {:>15.2} {:>15.2} {:>16.2} {:>16.2} {:>6.1}",
-                format!("{}/{}", accel.name(), accel.packet_lanes()),
+                accel_label(accel.as_ref()),
                 r.closest_single,
                 r.closest_packet,
                 r.occluded_single,

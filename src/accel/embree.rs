@@ -58,13 +58,6 @@ impl EmbreeAccel {
                 error_name(code)
             )));
         }
-        // From here on `accel`'s Drop releases the device (and the scene once it exists).
-        let mut accel = Self {
-            device,
-            scene: std::ptr::null_mut(),
-            normals: mesh.normals.clone(),
-            lanes: PACKET_SIZE,
-        };
         // SAFETY: `device` is live; these properties are plain queries.
         let (native16, native8) = unsafe {
             (
@@ -72,11 +65,18 @@ impl EmbreeAccel {
                 sys::rtcGetDeviceProperty(device, sys::RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED),
             )
         };
-        accel.lanes = lanes.unwrap_or(if native16 == 0 && native8 != 0 {
+        let native = if native16 == 0 && native8 != 0 {
             8
         } else {
             PACKET_SIZE
-        });
+        };
+        // From here on `accel`'s Drop releases the device (and the scene once it exists).
+        let mut accel = Self {
+            device,
+            scene: std::ptr::null_mut(),
+            normals: mesh.normals.clone(),
+            lanes: lanes.unwrap_or(native),
+        };
         accel.build_scene(mesh)?;
         Ok(accel)
     }

@@ -21,23 +21,23 @@
 //!    itself only where its estimator beats path tracing at equal time, so each GA pixel
 //!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of
 //!    `pt` and of the evolved estimator (the mixture for `ga`, the guided path tracer for
-//!    `ga-pt`), and the predicted gain
-//!    `Var_pt · cost_pt / (Var · cost)` with costs counted in rays and densities
-//!    ([`RayCounts::cost`]), so that the plan stays deterministic. Pixels whose nearest GA
-//!    pixels mostly predict a loss render with `pt`. The GA runs first at `PILOT_PIXELS`
-//!    grid pixels spread over the image, for `1 / PILOT_SHARE` of the generations, before the
-//!    baseline; unless at least half of them predict a gain, the other grid pixels are not
-//!    evolved and become `pt` points, and the baseline is not run: the image renders with
-//!    `pt`, for a guide except near a pilot pixel that does not predict a loss. (A mixture's
-//!    pilot stops starting pixels once it cannot pay, so there it is `pt` everywhere. cbox,
-//!    `ga`, 64 spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the
-//!    baseline first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they
-//!    do, the pilot pixels go on from their best individuals (with a fresh random stream). For a guide the other GA pixels then run no trial and keep their
-//!    guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so it rarely
-//!    loses much, and on fig5 the trials cost 40 % of the GA phase while the pixels they
-//!    sent to `pt` made the image no better. A mixture's variance can exceed `pt`'s many
-//!    times, so there every GA pixel runs its trial. Low-variance cells (pruning) render
-//!    with `pt` too.
+//!    `ga-pt`), and the predicted gain `Var_pt · cost_pt / (Var · cost)` with costs counted
+//!    in rays and densities ([`RayCounts::cost`]), so that the plan stays deterministic.
+//!    Pixels whose nearest GA pixels mostly predict a loss render with `pt`. The GA runs
+//!    first at `PILOT_PIXELS` grid pixels spread over the image, for `1 / PILOT_SHARE` of
+//!    the generations, before the baseline; unless at least half of them predict a gain,
+//!    the other grid pixels are not evolved and become `pt` points, and the baseline is not
+//!    run: the image renders with `pt`, for a guide except near a pilot pixel that does not
+//!    predict a loss. (A mixture's pilot stops starting pixels once it cannot pay, so there
+//!    it is `pt` everywhere. cbox, `ga`, 64 spp: the plan took 0.09–0.16 s of baseline and
+//!    0.16–0.26 s of GA with the baseline first, 0.01 s of grid rays and 0.16 s of GA with
+//!    the pilot first.) Where they do, the pilot pixels go on from their best individuals
+//!    (with a fresh random stream). For a guide the other GA pixels then run no trial and
+//!    keep their guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so
+//!    it rarely loses much, and on fig5 the trials cost 40 % of the GA phase while the
+//!    pixels they sent to `pt` made the image no better. A mixture's variance can exceed
+//!    `pt`'s many times, so there every GA pixel runs its trial. Low-variance cells
+//!    (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.

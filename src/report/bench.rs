@@ -88,6 +88,11 @@ pub fn best_interleaved<const N: usize>(
     results
 }
 
+/// A back-end's name and packet width as the bench tables print it: `embree/8`, `bvh/1`.
+pub fn accel_label(accel: &dyn Accel) -> String {
+    format!("{}/{}", accel.name(), accel.packet_lanes())
+}
+
 fn intersect_single(accel: &dyn Accel, rays: &[Ray]) -> usize {
     rays.iter()
         .filter(|r| accel.intersect(black_box(r)).is_some())
@@ -131,8 +136,8 @@ pub struct RayRates {
     pub hit_fraction: f64,
 }
 
-/// Measures [`RayRates`], each query the best of `passes` (interleaved); packets are traced with the
-/// traversal `coherence` asks for.
+/// Measures [`RayRates`], each query the best of `passes` (interleaved); packets are traced
+/// with the traversal `coherence` asks for.
 pub fn ray_rates(accel: &dyn Accel, rays: &[Ray], coherence: Coherence, passes: usize) -> RayRates {
     let n = rays.len() as f64;
     let mrays = |d: Duration| n / d.as_secs_f64().max(1e-12) / 1e6;
