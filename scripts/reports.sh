@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates reports/: for each scene, relMSE against wall-clock time (every phase included)
-# for pt, srt and GA variants, at 256×256 and max bounces 5, against the committed references
-# in reports/refs/ (made with `genpath reference … --spp 16384/8192`, see reports/README.md).
+# for pt, srt, pg and GA variants, at 256×256 and max bounces 5, against the committed
+# references in reports/refs/ (made with `genpath reference … --spp 16384/8192`, see
+# reports/README.md).
 #
 #   bash scripts/reports.sh [BUDGETS]        # default BUDGETS: 2,8,30 (seconds)
 #
@@ -10,7 +11,7 @@
 # `genpath reference` derived its halves' seeds).
 # Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
 # and reports/bench*.json (`genpath bench`), reports/bench-stress.txt (`cargo bench --bench
-# rays`). Takes about 27 × (sum of budgets) seconds.
+# rays`). Takes about 38 × (sum of budgets) seconds.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
@@ -21,7 +22,9 @@ for scene in ${SCENES:-fig5 fig1 cbox glossy}; do
     # The GA methods with their defaults (gate on), and the paper's method without the gate
     # (every pixel renders with its evolved mixture). On fig5, where the GA has something to
     # learn, each addition beyond the paper is also turned off on its own.
-    methods="pt,srt,ga,ga-pt,ga:gate=0,ga-pt:gate=0"
+    # pg (spatial path guiding without the GA) shows what the GA adds; ga-pt:spatial=1
+    # guides the vertices past the GA's with pg's guide.
+    methods="pt,srt,ga,ga-pt,pg,ga-pt:spatial=1,ga:gate=0,ga-pt:gate=0"
     if [ "$scene" = fig5 ]; then
         methods="$methods,ga-pt:cw=0,ga-pt:warm=0,ga-pt:da=0,ga-pt:pa=0"
     fi

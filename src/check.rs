@@ -1,13 +1,13 @@
 //! `genpath check SCENE`: the numerical invariants of design §8 on any scene, at a small
 //! size.
 //!
-//! * Every method (`pt`, `srt`, `ga`, `ga-pt`) renders without a NaN, infinite or negative
-//!   pixel.
+//! * Every method (`pt`, `srt`, `ga`, `ga-pt`, `pg`) renders without a NaN, infinite or
+//!   negative pixel.
 //! * Every density a generator samples with — the `srt` generator and every generator the GA
 //!   evolved — is finite and positive, and so is the mixture density of every light-carrying
 //!   path (the estimator divides by it).
 //! * Every fitness value (eq. 10) the GA computed is finite.
-//! * The image means of `srt`, `ga` and `ga-pt` agree with `pt`'s per channel, inside a
+//! * The image means of `srt`, `ga`, `ga-pt` and `pg` agree with `pt`'s per channel, inside a
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
@@ -15,10 +15,12 @@ use crate::genetic::plan::{Plan, PlanConfig, Target};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
+use crate::path::spatial::Grid;
 use crate::path::{mixture_file, Method, RayCounts, SceneView};
-use crate::render::{render, Estimator, Film, RenderSettings};
+use crate::render::{render, train_spatial, Estimator, Film, RenderSettings};
 use crate::sampling::{sample_rng, uniform};
 use statrs::distribution::{ContinuousCDF, Normal};
+use std::sync::Arc;
 
 /// What `check` renders and samples.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -214,6 +216,12 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         config.seed,
         false,
     )?;
+    let spatial = Arc::new(train_spatial(
+        view,
+        &settings(Method::Pg),
+        Grid::around(&view.scene.mesh.positions),
+        config.plan.spatial_passes,
+    ));
     let films: Vec<(Method, Film)> = vec![
         (
             Method::Pt,
@@ -234,6 +242,14 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         (
             Method::GaPt,
             render(view, &settings(Method::GaPt), Estimator::GaPt(&plan)),
+        ),
+        (
+            Method::Pg,
+            render(
+                view,
+                &settings(Method::Pg),
+                Estimator::Spatial(None, &spatial),
+            ),
         ),
     ];
     let comparisons = 3 * (films.len() - 1);

@@ -144,9 +144,10 @@ struct SweepArgs {
     /// The reference (EXR), e.g. from `genpath reference`, of the size rendered.
     #[arg(long = "ref", value_name = "REF.exr")]
     reference: PathBuf,
-    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, or
-    /// ga:key=value:… (ga-pt:…) with keys m, l, pop, gen, s, e, grid, extra, neighbours, cw,
-    /// gate, warm, da, gs (e.g. ga:m=10000:grid=32, ga-pt:gate=0; an unknown key lists them).
+    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, pg, or
+    /// ga:key=value:… (ga-pt:…, pg:sp=N) with keys m, l, pop, gen, s, e, grid, extra,
+    /// neighbours, cw, gate, warm, da, pa, gs, spatial, sp (e.g. ga:m=10000:grid=32,
+    /// ga-pt:gate=0, ga-pt:spatial=1; an unknown key lists them).
     #[arg(long, value_delimiter = ',', default_value = "pt,srt,ga")]
     methods: Vec<String>,
     /// Budgets, comma-separated: samples per pixel, or seconds per image with --time.
@@ -293,6 +294,14 @@ struct GaArgs {
     /// at most as many as the test paths need); path tracing's own sampling beyond.
     #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     guide_steps: u32,
+    /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
+    /// short path-traced passes, as --method pg does everywhere (beyond the paper).
+    #[arg(long)]
+    spatial_guide: bool,
+    /// pg, and ga-pt with --spatial-guide: path-traced passes of one sample per pixel that
+    /// train the spatial guide (their time counts; their images are not kept).
+    #[arg(long, default_value_t = PlanConfig::default().spatial_passes, value_parser = clap::value_parser!(u32).range(1..=64))]
+    spatial_passes: u32,
 }
 
 impl GaArgs {
@@ -329,6 +338,8 @@ impl GaArgs {
             warm_start: self.warm_start,
             time_limit: self.ga_time_limit,
             guide_steps: self.guide_steps as usize,
+            spatial: self.spatial_guide,
+            spatial_passes: self.spatial_passes,
         };
         ga.validate()?;
         plan.validate()?;
@@ -544,6 +555,7 @@ fn run_render(args: RenderArgs) -> Result<()> {
         .install(|| render::render(&view, &settings, prepared.estimator()));
     let render_s = film.elapsed.as_secs_f64();
     let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
+    let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
 
     let t_write = Instant::now();
     for output in &args.outputs {
@@ -568,10 +580,15 @@ fn run_render(args: RenderArgs) -> Result<()> {
             "accel_build": session.accel_s,
             "baseline": plan.map(|p| p.stats.baseline_seconds),
             "ga": plan.map(|p| p.stats.ga_seconds),
+            "spatial": spatial_s,
             "render": render_s,
             "write": write_s,
-            "total_render": plan_s + render_s,
+            "total_render": plan_s + spatial_s + render_s,
         }),
+    );
+    stats.insert(
+        "spatial".into(),
+        serde_json::json!(prepared.spatial().map(|s| &s.stats)),
     );
     stats.insert("rays".into(), rays_json(film.rays));
     stats.insert(
@@ -585,6 +602,12 @@ fn run_render(args: RenderArgs) -> Result<()> {
             eprintln!(
                 "genpath: GA on {} pixels ({improved} improved on srt) in {plan_s:.2} s",
                 plan.pixels.len()
+            );
+        }
+        if let Some(s) = prepared.spatial() {
+            eprintln!(
+                "genpath: spatial guide: {} of {} cells trained on {} records from {} passes in {:.2} s",
+                s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.seconds
             );
         }
         eprintln!(

@@ -724,7 +724,7 @@ fn sweep_writes_csv_and_plot() {
         (vec!["--methods", "ga:q=3"], "unknown key `q`"),
         (
             vec!["--methods", "pt:m=3"],
-            "only ga and ga-pt take settings",
+            "only ga, ga-pt and pg take settings",
         ),
         (vec!["--methods", "ga:pop=0"], "population"),
         (vec!["--budgets", "0"], "--budgets"),
@@ -837,7 +837,8 @@ fn check_passes_on_fig5() {
     assert!(stdout.contains("check passed"), "{stdout}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
-    assert_eq!(report["methods"].as_array().unwrap().len(), 4);
+    // pt, srt, ga, ga-pt, pg.
+    assert_eq!(report["methods"].as_array().unwrap().len(), 5);
     assert_eq!(report["pdf_bad"], 0);
     let out = genpath(&["check", "/nonexistent/scene.toml"]);
     assert!(!out.status.success());

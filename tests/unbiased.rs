@@ -1,5 +1,5 @@
-//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga`, `ga-pt` and `pt` estimate the same
-//! image. Per
+//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga`, `ga-pt` (with and without the
+//! spatial guide), `pg` and `pt` estimate the same image. Per
 //! block of pixels, the difference of two methods' means must lie inside a 99.9 % interval
 //! (Šidák-corrected over all blocks and channels) computed from their sample variances; and
 //! the same comparison must reject a mixture whose one component's density is off by 10 %,
@@ -10,11 +10,13 @@ use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
+use genpath::path::spatial::Grid;
 use genpath::path::{mixture_file, Method, SceneView};
-use genpath::render::{render, Estimator, Film, RenderSettings};
+use genpath::render::{render, train_spatial, Estimator, Film, RenderSettings};
 use genpath::scene::Scene;
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 const SIZE: u32 = 64;
 const BLOCK: u32 = 32;
@@ -38,8 +40,13 @@ enum Which {
     Ga {
         unnormalised: bool,
     },
-    /// Path tracing guided by the same small GA's mixtures (`ga-pt`).
-    GaPt,
+    /// Path tracing guided by the same small GA's mixtures (`ga-pt`), optionally with the
+    /// spatial guide past the GA's vertices.
+    GaPt {
+        spatial: bool,
+    },
+    /// Path tracing guided by the spatial guide alone (`pg`).
+    Pg,
 }
 
 fn small_ga() -> (GaConfig, PlanConfig) {
@@ -66,13 +73,38 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     let view = SceneView::new(&scene, accel.as_ref());
     let mut plan = None;
     let mut guided = false;
+    let mut spatial = None;
+    let settings = RenderSettings {
+        method: Method::Pt,
+        spp,
+        max_bounces,
+        seed,
+        progress: false,
+    };
+    let train = || {
+        let grid = Grid::around(&scene.mesh.positions);
+        let passes = PlanConfig::default().spatial_passes;
+        let s = train_spatial(&view, &settings, grid, passes);
+        assert!(
+            s.stats.trained_cells > 0,
+            "{name}: no cell of the spatial guide trained"
+        );
+        Some(Arc::new(s))
+    };
     let mixture = match which {
         Which::Pt => None,
-        Which::GaPt => {
+        Which::Pg => {
+            spatial = train();
+            None
+        }
+        Which::GaPt { spatial: with } => {
             let (ga, config) = small_ga();
             let target = (max_bounces, Target::Guide);
             plan = Some(Plan::build(&view, &ga, &config, target, seed, false).unwrap());
             guided = true;
+            if with {
+                spatial = train();
+            }
             None
         }
         Which::Ga { unnormalised } => {
@@ -112,14 +144,8 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             })
         }
     };
-    let settings = RenderSettings {
-        method: Method::Pt,
-        spp,
-        max_bounces,
-        seed,
-        progress: false,
-    };
     let estimator = match (&plan, &mixture) {
+        _ if spatial.is_some() => Estimator::Spatial(plan.as_ref(), spatial.as_ref().unwrap()),
         (Some(plan), _) if guided => Estimator::GaPt(plan),
         (Some(plan), _) => Estimator::Ga(plan),
         (None, Some(mixture)) => Estimator::Mixture(mixture),
@@ -186,7 +212,9 @@ fn check_agree(name: &str, max_bounces: u32) {
             },
             SPP,
         ),
-        ("ga-pt", Which::GaPt, SPP / 2),
+        ("ga-pt", Which::GaPt { spatial: false }, SPP / 2),
+        ("ga-pt, spatial", Which::GaPt { spatial: true }, SPP / 2),
+        ("pg", Which::Pg, SPP / 2),
     ] {
         let film = render_with(name, which, max_bounces, spp, 23);
         let (z, rel, n) = compare(&film, &pt);

@@ -145,6 +145,12 @@ pub struct PlanConfig {
     /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
     /// every step the test paths need.
     pub guide_steps: usize,
+    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`path::spatial`), as
+    /// `pg` guides every vertex.
+    pub spatial: bool,
+    /// `pg`, and `ga-pt` with `spatial`: path-traced passes of one sample per pixel that
+    /// train the spatial guide.
+    pub spatial_passes: u32,
 }
 
 impl Default for PlanConfig {
@@ -160,6 +166,8 @@ impl Default for PlanConfig {
             warm_start: true,
             time_limit: None,
             guide_steps: 1,
+            spatial: false,
+            spatial_passes: 4,
         }
     }
 }
@@ -195,6 +203,12 @@ impl PlanConfig {
             return fail(format!(
                 "guide steps {} is not in [1, 64]",
                 self.guide_steps
+            ));
+        }
+        if !(1..=64).contains(&self.spatial_passes) {
+            return fail(format!(
+                "spatial guide passes {} is not in [1, 64]",
+                self.spatial_passes
             ));
         }
         if !(1..=64).contains(&self.neighbours) {

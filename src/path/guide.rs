@@ -21,11 +21,13 @@
 
 use super::generator::DirectionSampler;
 use super::mixture::Mixture;
+use super::spatial::{SpatialGuide, GUIDE_SHARE};
 use crate::sampling::anchor::{AnchorSampler, ConeTest};
 use crate::sampling::brdf;
 use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
+use std::sync::Arc;
 
 /// One weighted anchor cone of a level, with what its density and its sampling need
 /// precomputed: the guide evaluates every cone of a level twice per vertex (light sample and
@@ -127,6 +129,8 @@ pub struct Guide {
     /// Fault injection for statistical tests: scales the cones' and patches' densities when
     /// evaluated.
     pdf_error: Option<f64>,
+    /// Beyond the levels: the spatial guide, where it has learned something.
+    spatial: Option<Arc<SpatialGuide>>,
 }
 
 /// A direction drawn from a guide.
@@ -200,24 +204,44 @@ impl Guide {
         self
     }
 
-    /// Anchor cones and patches at vertex `k`: the densities one evaluation of `pdf` there
-    /// costs.
-    pub fn samplers(&self, k: usize) -> usize {
-        self.level(k)
-            .map_or(0, |l| l.anchors.len() + l.patches.len())
+    /// This guide with `spatial` guiding the vertices beyond its levels.
+    pub fn with_spatial(mut self, spatial: Option<Arc<SpatialGuide>>) -> Self {
+        self.spatial = spatial;
+        self
     }
 
-    /// Whether vertex `k` samples anything but the BRDF.
+    /// Anchor cones and patches at vertex `k` (or the spatial guide): the densities one
+    /// evaluation of `pdf` there costs.
+    pub fn samplers(&self, k: usize) -> usize {
+        match self.level(k) {
+            Some(l) => l.anchors.len() + l.patches.len(),
+            None => usize::from(self.spatial.is_some()),
+        }
+    }
+
+    /// Whether vertex `k` may sample anything but the BRDF.
     pub fn guides(&self, k: usize) -> bool {
-        k < self.depth
+        k < self.depth || self.spatial.is_some()
+    }
+
+    /// The spatial guide and its trained cell at `x`, for a vertex beyond the levels.
+    fn spatial_at(&self, x: Vec3) -> Option<(&SpatialGuide, usize)> {
+        let s = self.spatial.as_deref()?;
+        Some((s, s.cell(x)?))
     }
 
     /// `p_k(wi)` at `x` for the material's BRDF pdf `brdf_pdf` there.
     fn pdf_with(&self, k: usize, x: DVec3, wi: DVec3, brdf_pdf: f64) -> f64 {
-        let Some(level) = self.level(k) else {
-            return brdf_pdf;
-        };
         let scale = self.pdf_error.unwrap_or(1.0);
+        let Some(level) = self.level(k) else {
+            return match self.spatial_at(x.as_vec3()) {
+                Some((s, cell)) => {
+                    let p = s.pdf(cell, wi.as_vec3());
+                    GUIDE_SHARE * scale * p + (1.0 - GUIDE_SHARE) * brdf_pdf
+                }
+                None => brdf_pdf,
+            };
+        };
         let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
         let patches: f64 = level
             .patches
@@ -245,15 +269,23 @@ impl Guide {
         u: [f64; 4],
     ) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
-        let Some(level) = self.level(k) else {
-            let s = brdf::sample(material, n, wo, rest)?;
-            return Some(GuideSample {
-                wi: s.wi,
-                pdf: s.pdf,
-                weight: s.weight,
-            });
-        };
         let xd = x.as_dvec3();
+        let Some(level) = self.level(k) else {
+            let Some((s, cell)) = self.spatial_at(x) else {
+                let s = brdf::sample(material, n, wo, rest)?;
+                return Some(GuideSample {
+                    wi: s.wi,
+                    pdf: s.pdf,
+                    weight: s.weight,
+                });
+            };
+            let wi = if u[0] < GUIDE_SHARE {
+                s.sample(cell, rest)
+            } else {
+                brdf::sample_direction(material, n, wo, rest)?
+            };
+            return self.finish_sample(k, material, xd, n, wo, wi);
+        };
         let mut target = u[0] - level.brdf;
         let wi = if target < 0.0 {
             brdf::sample_direction(material, n, wo, rest)?
@@ -276,6 +308,19 @@ impl Guide {
             };
             dir.as_vec3().normalize()
         };
+        self.finish_sample(k, material, xd, n, wo, wi)
+    }
+
+    /// The guide sample of direction `wi`: its density and weight.
+    fn finish_sample(
+        &self,
+        k: usize,
+        material: &Material,
+        xd: DVec3,
+        n: Vec3,
+        wo: Vec3,
+        wi: Vec3,
+    ) -> Option<GuideSample> {
         let cos = n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);
         if cos <= 0.0 || f.max_element() <= 0.0 {
@@ -336,6 +381,11 @@ mod tests {
 
     /// Monte Carlo ∫ p_0(ω) dω over the sphere, uniform directions: 1 for a density.
     fn integral(guide: &Guide, material: &Material) -> f64 {
+        integral_at(guide, material, 0)
+    }
+
+    /// ∫ p_k(ω) dω at the origin.
+    fn integral_at(guide: &Guide, material: &Material, k: usize) -> f64 {
         let n = Vec3::Y;
         let wo = Vec3::new(0.3, 1.0, 0.1).normalize();
         let mut rng = sample_rng(5, 0, 0);
@@ -348,9 +398,66 @@ mod tests {
             let phi = std::f32::consts::TAU * uniform(&mut rng);
             let r = (1.0 - z * z).max(0.0).sqrt();
             let wi = Vec3::new(r * phi.cos(), z, r * phi.sin());
-            sum += guide.pdf(0, material, Vec3::ZERO, n, wo, wi);
+            sum += guide.pdf(k, material, Vec3::ZERO, n, wo, wi);
         }
         sum / count as f64 * 4.0 * std::f64::consts::PI
+    }
+
+    fn white() -> Material {
+        Material {
+            name: "white".into(),
+            kd: Vec3::splat(0.5),
+            ks: Vec3::ZERO,
+            ns: 0.0,
+            mirror: false,
+            ke: Vec3::ZERO,
+        }
+    }
+
+    /// Past the mixture's two levels, a spatial guide trained on records around one
+    /// direction: a density (and the check rejects its density off by 10 %), whose samples
+    /// carry the density `pdf` reports and go where the records did.
+    #[test]
+    fn spatial_guide_past_the_levels_is_a_density() {
+        use crate::path::spatial::{bin, Grid, Record};
+        let material = white();
+        let target = Vec3::new(0.6, 0.7, -0.3).normalize();
+        let grid = Grid::new(Vec3::splat(-1.0), Vec3::ONE);
+        let cell = grid.cell(Vec3::ZERO) as u32;
+        let records = (0..100).map(|i| Record {
+            cell,
+            bin: bin(target) as u16,
+            value: 1.0 + (i % 3) as f32,
+        });
+        let spatial = Arc::new(SpatialGuide::train(grid, records));
+        let guide = Guide::new(&mixture()).with_spatial(Some(spatial));
+        assert!(guide.guides(2) && guide.samplers(2) == 1);
+        let total = integral_at(&guide, &material, 2);
+        assert!((total - 1.0).abs() < 0.01, "∫ p = {total}");
+        // Half the density is the spatial guide's: ×1.1 there makes ∫ p ≈ 1.05.
+        let wrong = integral_at(&guide.clone().with_pdf_error(1.1), &material, 2);
+        assert!(
+            (wrong - 1.0).abs() > 0.03,
+            "∫ p = {wrong} with a wrong density"
+        );
+        let (n, wo) = (Vec3::Y, Vec3::new(0.3, 1.0, 0.1).normalize());
+        let mut rng = sample_rng(7, 0, 0);
+        let mut towards = 0;
+        for _ in 0..10_000 {
+            let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
+            if let Some(s) = guide.sample(2, &material, Vec3::ZERO, n, wo, u) {
+                let p = guide.pdf(2, &material, Vec3::ZERO, n, wo, s.wi);
+                assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
+                towards += usize::from(bin(s.wi) == bin(target));
+            }
+        }
+        // 0.5 · 0.9 of the samples in the trained bin (1/128 of the sphere).
+        assert!(towards > 4_000, "{towards} samples in the trained bin");
+        // Outside the trained cell: BRDF sampling alone.
+        let far = Vec3::new(0.9, 0.9, 0.9);
+        let wi = Vec3::new(0.0, 1.0, 0.0);
+        let brdf_pdf = brdf::pdf(&material, n, wo, wi);
+        assert_eq!(guide.pdf(2, &material, far, n, wo, wi), brdf_pdf);
     }
 
     #[test]

@@ -5,6 +5,7 @@ pub mod guide;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
+pub mod spatial;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::scene::{Material, Scene};
@@ -28,6 +29,10 @@ pub enum Method {
     /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
     /// evolved anchor samplers, with next-event estimation at every vertex.
     GaPt,
+    /// Beyond the paper: path tracing guided by a spatial guide learned from short
+    /// path-traced training passes (`path::spatial`), without the GA: the baseline that
+    /// shows what the GA adds.
+    Pg,
 }
 
 /// A surface point reached by a ray.

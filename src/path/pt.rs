@@ -7,6 +7,7 @@
 //! power heuristic weighs light sampling against that mixture's density.
 
 use super::guide::Guide;
+use super::spatial::PathRecorder;
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::{brdf, uniform, Rng};
@@ -51,6 +52,21 @@ pub fn radiance_guided(
     rng: &mut Rng,
     counts: &mut RayCounts,
     guide: Option<&Guide>,
+) -> Vec3 {
+    radiance_recorded(view, ray, max_bounces, rng, counts, guide, None)
+}
+
+/// [`radiance_guided`], recording at every non-delta vertex the incident light along the
+/// light sample's and the sampled direction for training a spatial guide.
+#[allow(clippy::too_many_arguments)]
+pub fn radiance_recorded(
+    view: &SceneView,
+    ray: &Ray,
+    max_bounces: u32,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+    guide: Option<&Guide>,
+    mut recorder: Option<&mut PathRecorder>,
 ) -> Vec3 {
     let scene = view.scene;
     let Some(mut x) = view.trace(ray, counts) else {
@@ -100,6 +116,9 @@ pub fn radiance_guided(
                     } as f32;
                     let weight = power_heuristic(pdf_light, pdf_brdf);
                     radiance += beta * f * le * (cos_x * weight / pdf_light);
+                    if let Some(r) = recorder.as_deref_mut() {
+                        r.light(x.p, wi, le * (cos_x * weight / pdf_light));
+                    }
                 }
             }
         }
@@ -133,6 +152,10 @@ pub fn radiance_guided(
         }
         beta *= bs.weight;
         let wi = bs.wi;
+        if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
+            let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;
+            r.sampled(x.p, wi, cos_over_pdf, beta, radiance);
+        }
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace(&next_ray, counts) else {
             break;
@@ -161,6 +184,9 @@ pub fn radiance_guided(
         }
         x = y;
         wo = -wi;
+    }
+    if let Some(r) = recorder {
+        r.finish(radiance);
     }
     radiance
 }

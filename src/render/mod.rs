@@ -8,11 +8,13 @@ use crate::image::Image;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
+use crate::path::spatial::{Grid, PathRecorder, SpatialGuide};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
-use crate::sampling::{sample_rng, uniform, Rng};
+use crate::sampling::{derive_seed, sample_rng, uniform, Rng};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Side of the square tiles the image is split into for parallel rendering.
@@ -41,6 +43,9 @@ pub enum Estimator<'a> {
     Ga(&'a Plan),
     /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt`).
     GaPt(&'a Plan),
+    /// Path tracing guided by a spatial guide beyond the GA plan's levels (`ga-pt` with
+    /// spatial passes), or everywhere without a plan (`pg`).
+    Spatial(Option<&'a Plan>, &'a Arc<SpatialGuide>),
 }
 
 /// Everything a method needs besides the render settings.
@@ -70,6 +75,7 @@ pub enum Prepared {
     Mixture(Mixture),
     Ga(Plan),
     GaPt(Plan),
+    Spatial(Option<Plan>, Arc<SpatialGuide>),
 }
 
 impl Prepared {
@@ -80,8 +86,14 @@ impl Prepared {
         config: &MethodConfig,
         settings: &RenderSettings,
     ) -> Result<Self, PrepareError> {
+        let spatial = || {
+            let grid = Grid::around(&view.scene.mesh.positions);
+            let passes = config.plan.spatial_passes;
+            Arc::new(train_spatial(view, settings, grid, passes))
+        };
         Ok(match config.method {
             Method::Pt => Prepared::Pt,
+            Method::Pg => Prepared::Spatial(None, spatial()),
             Method::Srt => Prepared::Mixture(mixture_file::srt(
                 view.scene,
                 settings.max_bounces,
@@ -111,6 +123,8 @@ impl Prepared {
                 )?;
                 if config.method == Method::Ga {
                     Prepared::Ga(plan)
+                } else if config.plan.spatial {
+                    Prepared::Spatial(Some(plan), spatial())
                 } else {
                     Prepared::GaPt(plan)
                 }
@@ -124,12 +138,23 @@ impl Prepared {
             Prepared::Mixture(m) => Estimator::Mixture(m),
             Prepared::Ga(plan) => Estimator::Ga(plan),
             Prepared::GaPt(plan) => Estimator::GaPt(plan),
+            Prepared::Spatial(plan, spatial) => Estimator::Spatial(plan.as_ref(), spatial),
         }
     }
 
     pub fn plan(&self) -> Option<&Plan> {
         match self {
-            Prepared::Ga(plan) | Prepared::GaPt(plan) => Some(plan),
+            Prepared::Ga(plan) | Prepared::GaPt(plan) | Prepared::Spatial(Some(plan), _) => {
+                Some(plan)
+            }
+            _ => None,
+        }
+    }
+
+    /// The spatial guide of `pg` (and of `ga-pt` with `PlanConfig::spatial`).
+    pub fn spatial(&self) -> Option<&SpatialGuide> {
+        match self {
+            Prepared::Spatial(_, s) => Some(s),
             _ => None,
         }
     }
@@ -274,7 +299,13 @@ fn render_tile(
     let mut rays = RayCounts::default();
     let mut scratch = MixtureScratch::default();
     // A guide per pixel, made in the same storage.
-    let (mut guide, mut weights, mut parts) = (Guide::default(), Vec::new(), Vec::new());
+    let spatial = match estimator {
+        Estimator::Spatial(_, s) => Some(Arc::clone(s)),
+        _ => None,
+    };
+    let spatial_guided = spatial.is_some();
+    let mut guide = Guide::default().with_spatial(spatial);
+    let (mut weights, mut parts) = (Vec::new(), Vec::new());
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
             let pixel = y as u64 * camera.width as u64 + x as u64;
@@ -283,17 +314,20 @@ fn render_tile(
                 _ => None,
             };
             let guided = match estimator {
-                Estimator::GaPt(plan) => {
+                Estimator::GaPt(plan) | Estimator::Spatial(Some(plan), _) => {
                     let guided = plan.local_parts(x, y, &mut weights, &mut parts);
                     if guided {
                         guide.rebuild(&parts);
+                    } else {
+                        guide.rebuild(&[]);
                     }
-                    guided
+                    guided || spatial_guided
                 }
+                Estimator::Spatial(None, _) => true,
                 _ => false,
             };
             let mixture = match estimator {
-                Estimator::Pt | Estimator::GaPt(_) => None,
+                Estimator::Pt | Estimator::GaPt(_) | Estimator::Spatial(..) => None,
                 Estimator::Mixture(m) => Some(m),
                 Estimator::Ga(_) => local.as_ref(),
             };
@@ -331,4 +365,71 @@ fn render_tile(
         variance,
         rays,
     }
+}
+
+/// Stream tag of the spatial guide's training passes: disjoint from the render's streams.
+const SPATIAL_STREAM: u64 = 0x7370_6174_6961_6c00;
+
+/// A spatial guide trained on `passes` passes of one path-traced sample per pixel: the first
+/// unguided, each later one guided by the guide learned from the passes before it (all
+/// passes' records train the last guide). The passes' images are not kept. Records are
+/// gathered per tile and merged in tile order, so the guide does not depend on the thread
+/// count.
+pub fn train_spatial(
+    view: &SceneView,
+    settings: &RenderSettings,
+    grid: Grid,
+    passes: u32,
+) -> SpatialGuide {
+    let start = Instant::now();
+    let camera = &view.scene.camera;
+    let tiles = tiles(camera.width, camera.height);
+    let mut records = Vec::new();
+    let mut spatial: Option<Arc<SpatialGuide>> = None;
+    let bar = progress_bar(u64::from(passes), "guide", settings.progress);
+    for pass in 0..passes {
+        let seed = derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass));
+        let guide = spatial
+            .clone()
+            .map(|s| Guide::default().with_spatial(Some(s)));
+        let per_tile: Vec<Vec<_>> = tiles
+            .par_iter()
+            .map(|tile| {
+                let mut recorder = PathRecorder::new(grid.clone());
+                let mut counts = RayCounts::default();
+                for y in tile.y0..tile.y1 {
+                    for x in tile.x0..tile.x1 {
+                        let pixel = y as u64 * camera.width as u64 + x as u64;
+                        let mut rng = sample_rng(seed, pixel, 0);
+                        let ray =
+                            camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+                        pt::radiance_recorded(
+                            view,
+                            &ray,
+                            settings.max_bounces,
+                            &mut rng,
+                            &mut counts,
+                            guide.as_ref(),
+                            Some(&mut recorder),
+                        );
+                    }
+                }
+                recorder.records
+            })
+            .collect();
+        records.extend(per_tile.into_iter().flatten());
+        spatial = Some(Arc::new(SpatialGuide::train(
+            grid.clone(),
+            records.iter().copied(),
+        )));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let mut spatial = match spatial {
+        Some(s) => Arc::try_unwrap(s).unwrap_or_else(|s| (*s).clone()),
+        None => SpatialGuide::train(grid, std::iter::empty()),
+    };
+    spatial.stats.passes = passes;
+    spatial.stats.seconds = start.elapsed().as_secs_f64();
+    spatial
 }

@@ -27,7 +27,7 @@ pub struct MethodSpec {
 pub const GA_KEYS: &str = "m (test paths), l (max light-carrying test paths), pop (population), \
     gen (generations), s (generators), grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
     gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1]), \
-    pa (patches, share in [0, 1]), gs (ga-pt: guide steps)";
+    pa (patches, share in [0, 1]), gs (ga-pt: guide steps), spatial (ga-pt: spatial guide past the GA's vertices: 0 or 1), sp (its training passes, and pg's)";
 
 impl MethodSpec {
     /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
@@ -42,6 +42,7 @@ impl MethodSpec {
             "mixture" => Method::Mixture,
             "ga" => Method::Ga,
             "ga-pt" => Method::GaPt,
+            "pg" => Method::Pg,
             _ => return Err(format!("unknown method `{name}` in `{text}`")),
         };
         let mut config = MethodConfig {
@@ -49,8 +50,8 @@ impl MethodSpec {
             ..base.clone()
         };
         for part in parts {
-            if !matches!(method, Method::Ga | Method::GaPt) {
-                return Err(format!("`{text}`: only ga and ga-pt take settings"));
+            if !matches!(method, Method::Ga | Method::GaPt | Method::Pg) {
+                return Err(format!("`{text}`: only ga, ga-pt and pg take settings"));
             }
             let Some((key, value)) = part.split_once('=') else {
                 return Err(format!("`{text}`: `{part}` is not key=value"));
@@ -74,6 +75,8 @@ impl MethodSpec {
                 "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
                 "neighbours" => plan.neighbours = int()?,
                 "gs" => plan.guide_steps = int()?,
+                "sp" => plan.spatial_passes = u32::try_from(int()?).map_err(|e| bad(&e))?,
+                "spatial" => plan.spatial = flag()?,
                 "cw" => ga.convex_weights = flag()?,
                 "gate" => plan.gate = flag()?,
                 "warm" => plan.warm_start = flag()?,
