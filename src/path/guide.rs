@@ -451,7 +451,7 @@ mod tests {
                 towards += usize::from(bin(s.wi) == bin(target));
             }
         }
-        // 0.5 · 0.9 of the samples in the trained bin (1/128 of the sphere).
+        // 0.5 · 0.9 of the samples in the trained bin (1/512 of the sphere).
         assert!(towards > 4_000, "{towards} samples in the trained bin");
         // Outside the trained cell: BRDF sampling alone.
         let far = Vec3::new(0.9, 0.9, 0.9);

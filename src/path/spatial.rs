@@ -13,9 +13,9 @@
 //!
 //! It is trained on records of path-traced samples: at every non-delta vertex, the
 //! cosine-weighted incident radiance along the sampled direction (and along the light sample's
-//! direction, with its multiple-importance weight) over that direction's density. Each bin's
-//! mean of these records estimates `∫_bin L_i |cos| dω`; the bin's probability is that,
-//! normalised, with [`UNIFORM_SHARE`] of the sphere's uniform density mixed in. Cells
+//! direction, with its multiple-importance weight) over that direction's density. The sum of
+//! a bin's records is proportional to an estimate of `∫_bin L_i |cos| dω`; the bin's
+//! probability is that, normalised over the cell, with [`UNIFORM_SHARE`] of the sphere's uniform density mixed in. Cells
 //! without a record carrying light are untrained: path tracing samples the BSDF there.
 //!
 //! A guided vertex draws its direction from `GUIDE_SHARE · p_guide + (1 − GUIDE_SHARE) ·
@@ -25,16 +25,24 @@
 use glam::Vec3;
 use std::f64::consts::PI;
 
-/// Bins of `cos θ` (about the world `y` axis) and of `φ`.
-pub const THETA_BINS: usize = 8;
-pub const PHI_BINS: usize = 16;
+/// Bins of `cos θ` (about the world `y` axis) and of `φ`: 512 bins of 0.025 sr, about 9°
+/// across. fig1, 64 spp, seed 7, `pg` relMSE (`pt`: 0.053): 0.036 with 8 × 16 bins and 16
+/// training passes, 0.032 with 16 × 16 and 8 passes, 0.031 with 16 × 32 and 8 passes.
+pub const THETA_BINS: usize = 16;
+pub const PHI_BINS: usize = 32;
 pub const BINS: usize = THETA_BINS * PHI_BINS;
-/// Cells along the longest side of the scene's bounding box.
+/// Cells along the longest side of the scene's bounding box. fig1, equal time, 2 / 8 s,
+/// `pg` with 4 passes over `pt`: 0.70 / 0.67 with 8 cells, 0.92 / 0.85 with 12 (too few
+/// records per cell), and with 4 cells and 32 passes the per-sample relMSE is 0.049
+/// against 0.036 with 8.
 pub const CELLS_LONGEST: usize = 8;
 /// Share of the uniform sphere density in a trained cell's density: directions the training
 /// records missed keep some probability.
 pub const UNIFORM_SHARE: f64 = 0.1;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF.
+/// (fig1, 64 spp, 8 × 16 bins: relMSE 0.038 / 0.039 / 0.050 / 0.128 at shares 0.3 / 0.5 /
+/// 0.7 / 0.9; with 32 training passes 0.5 still beats 0.7, 0.036 against 0.042: a regular
+/// grid's cells average incident light over too much space to be trusted further.)
 pub const GUIDE_SHARE: f64 = 0.5;
 
 /// The regular grid of cells over a bounding box.
@@ -84,13 +92,36 @@ impl Grid {
     }
 }
 
-/// The bin of unit direction `d`.
+/// The bin of unit direction `d`: `cos θ = d.y` in [`THETA_BINS`] equal steps, and `φ + π`
+/// (the angle of `(−d.x, −d.z)`) in [`PHI_BINS`] equal sectors, found by comparisons with
+/// the sector boundaries' tangents rather than by `atan2` (every guided vertex computes two
+/// or three bins).
 pub fn bin(d: Vec3) -> usize {
     let t = (((d.y + 1.0) * 0.5 * THETA_BINS as f32) as usize).min(THETA_BINS - 1);
-    let phi = (d.z as f64).atan2(d.x as f64);
-    let p = (((phi / (2.0 * PI) + 0.5) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
-    t * PHI_BINS + p
+    let (a, b) = (-d.x, -d.z);
+    // Quadrant of (a, b), and (a, b) rotated into the first one: (p > 0, r ≥ 0).
+    let (quadrant, p, r) = match (a >= 0.0, b >= 0.0) {
+        (true, true) => (0, a, b),
+        (false, true) => (1, b, -a),
+        (false, false) => (2, -a, -b),
+        (true, false) => (3, -b, a),
+    };
+    let sector = SECTOR_TANGENTS.iter().filter(|&&tan| r >= p * tan).count();
+    t * PHI_BINS + SECTORS * quadrant + sector
 }
+
+/// Sectors of `φ` per quadrant, and the tangents of their inner boundaries `k π / (2 ·
+/// SECTORS)`, `k = 1 … SECTORS − 1`.
+const SECTORS: usize = PHI_BINS / 4;
+const SECTOR_TANGENTS: [f32; SECTORS - 1] = [
+    0.198_912_37,
+    0.414_213_57,
+    0.668_178_6,
+    1.0,
+    1.496_605_8,
+    2.414_213_6,
+    5.027_339_5,
+];
 
 /// The direction at position `(r1, r2) ∈ [0, 1)²` inside `bin`, uniform in solid angle.
 fn direction(bin: usize, r1: f64, r2: f64) -> Vec3 {
@@ -283,6 +314,19 @@ impl SpatialGuide {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `bin` against the `atan2` it replaces, on random directions.
+    #[test]
+    fn bins_agree_with_atan2() {
+        let mut rng = crate::sampling::sample_rng(9, 0, 0);
+        for _ in 0..100_000 {
+            let u = [0; 3].map(|_| crate::sampling::uniform(&mut rng) as f64);
+            let d = direction((u[0] * BINS as f64) as usize, u[1], u[2]);
+            let phi = (d.z as f64).atan2(d.x as f64);
+            let p = (((phi / (2.0 * PI) + 0.5) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
+            assert_eq!(bin(d) % PHI_BINS, p, "{d}");
+        }
+    }
 
     #[test]
     fn bins_are_equal_area_and_round_trip() {
