@@ -462,14 +462,7 @@ mod tests {
 
     #[test]
     fn guide_is_a_density_and_sampling_agrees_with_pdf() {
-        let material = Material {
-            name: "white".into(),
-            kd: Vec3::splat(0.5),
-            ks: Vec3::ZERO,
-            ns: 0.0,
-            mirror: false,
-            ke: Vec3::ZERO,
-        };
+        let material = white();
         let guide = Guide::new(&mixture());
         assert!(guide.guides(0) && guide.guides(1) && !guide.guides(2));
         let total = integral(&guide, &material);

@@ -40,26 +40,15 @@ pub fn radiance(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
-    radiance_guided(view, ray, max_bounces, rng, counts, None)
+    radiance_guided(view, ray, max_bounces, rng, counts, None, None)
 }
 
 /// [`radiance`], with directions drawn from `guide` where it has samplers (see the module
-/// documentation); `None` is plain path tracing, with the same random numbers.
-pub fn radiance_guided(
-    view: &SceneView,
-    ray: &Ray,
-    max_bounces: u32,
-    rng: &mut Rng,
-    counts: &mut RayCounts,
-    guide: Option<&Guide>,
-) -> Vec3 {
-    radiance_recorded(view, ray, max_bounces, rng, counts, guide, None)
-}
-
-/// [`radiance_guided`], recording at every non-delta vertex the incident light along the
-/// light sample's and the sampled direction for training a spatial guide.
+/// documentation); `None` is plain path tracing, with the same random numbers. With a
+/// `recorder`, every non-delta vertex records the incident light along the light sample's
+/// and the sampled direction, for training a spatial guide.
 #[allow(clippy::too_many_arguments)]
-pub fn radiance_recorded(
+pub fn radiance_guided(
     view: &SceneView,
     ray: &Ray,
     max_bounces: u32,

@@ -275,7 +275,7 @@ pub fn sample(
     scratch: &mut MixtureScratch,
 ) -> DVec3 {
     let Some(mixture) = mixture else {
-        return pt::radiance_guided(view, ray, max_bounces, rng, counts, guide).as_dvec3();
+        return pt::radiance_guided(view, ray, max_bounces, rng, counts, guide, None).as_dvec3();
     };
     match view.trace(ray, counts) {
         None => DVec3::ZERO,
@@ -403,7 +403,7 @@ pub fn train_spatial(
                         let mut rng = sample_rng(seed, pixel, 0);
                         let ray =
                             camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                        pt::radiance_recorded(
+                        pt::radiance_guided(
                             view,
                             &ray,
                             settings.max_bounces,
