@@ -444,6 +444,65 @@ fn bad_generator_files() {
     );
 }
 
+/// `--method pg` (and `ga-pt --spatial-guide`): bit-identical for 1 and 2 threads (the
+/// training records merge in tile order), with the training in the JSON.
+#[test]
+fn spatial_guide_renders_deterministically_with_its_training_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    for method in [
+        &["--method", "pg"][..],
+        &["--method", "ga-pt", "--spatial-guide"],
+    ] {
+        let render = |threads: &str| {
+            let out = dir.path().join(format!("pg{threads}.exr"));
+            let output = genpath(
+                &[
+                    &[
+                        "render",
+                        fig5().to_str().unwrap(),
+                        "-o",
+                        out.to_str().unwrap(),
+                        "--spp",
+                        "4",
+                        "--width",
+                        "48",
+                        "--height",
+                        "40",
+                        "--threads",
+                        threads,
+                        "--quiet",
+                    ][..],
+                    method,
+                ]
+                .concat(),
+            );
+            assert!(
+                output.status.success(),
+                "{}",
+                String::from_utf8_lossy(&output.stderr)
+            );
+            out
+        };
+        let one = render("1");
+        let json: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join("pg1.exr.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(pixel_bits(&one), pixel_bits(&render("2")), "{method:?}");
+        let spatial = &json["spatial"];
+        assert_eq!(spatial["passes"], 4, "{method:?}: {spatial}");
+        assert!(spatial["trained_cells"].as_u64().unwrap() > 0, "{spatial}");
+        assert!(json["times_s"]["spatial"].as_f64().unwrap() > 0.0);
+    }
+    let out = dir.path().join("o.exr");
+    assert_fails(
+        &fig5(),
+        &["--method", "pg", "--spatial-passes", "0"],
+        &out,
+        &["--spatial-passes"],
+    );
+}
+
 #[test]
 fn impossible_ga_flags() {
     let dir = tempfile::tempdir().unwrap();
@@ -727,6 +786,8 @@ fn sweep_writes_csv_and_plot() {
             "only ga, ga-pt and pg take settings",
         ),
         (vec!["--methods", "ga:pop=0"], "population"),
+        (vec!["--methods", "pg:m=3"], "pg takes only sp"),
+        (vec!["--methods", "pg:sp=0"], "spatial guide passes"),
         (vec!["--budgets", "0"], "--budgets"),
         (vec!["--budgets", "1.5"], "--budgets"),
         (vec!["--budgets=-1", "--time"], "--budgets"),

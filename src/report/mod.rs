@@ -56,6 +56,9 @@ impl MethodSpec {
             let Some((key, value)) = part.split_once('=') else {
                 return Err(format!("`{text}`: `{part}` is not key=value"));
             };
+            if method == Method::Pg && key != "sp" {
+                return Err(format!("`{text}`: pg takes only sp (its training passes)"));
+            }
             let bad = |e: &dyn std::fmt::Display| format!("`{text}`: {key}={value}: {e}");
             let int = || value.parse::<usize>().map_err(|e| bad(&e));
             let flag = || match value {
