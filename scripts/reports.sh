@@ -7,8 +7,9 @@
 #   bash scripts/reports.sh [BUDGETS]        # default BUDGETS: 2,8,30 (seconds)
 #
 # SCENES="fig1 cbox" limits the scenes.
-# Seeds 101, 102, …: disjoint from the references' streams (their seed 1 was used before
-# `genpath reference` derived its halves' seeds).
+# Seeds 101, 102, …: disjoint from the references' streams (fig1's, cbox's and glossy's
+# halves used seed 1 before `genpath reference` derived its halves' seeds; fig5's derive
+# from seed 2).
 # Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
 # and reports/bench*.json (`genpath bench`), reports/bench-stress.txt (`cargo bench --bench
 # rays`), and reports/fig5-60s.* (fig5 at 60 s). Takes about 38 × (sum of budgets) seconds
