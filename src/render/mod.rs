@@ -43,8 +43,8 @@ pub enum Estimator<'a> {
     Ga(&'a Plan),
     /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt`).
     GaPt(&'a Plan),
-    /// Path tracing guided by a spatial guide beyond the GA plan's levels (`ga-pt` with
-    /// spatial passes), or everywhere without a plan (`pg`).
+    /// Path tracing guided by a spatial guide beyond the GA plan's levels (`ga-pt
+    /// --spatial-guide`), or at every vertex without a plan (`pg`).
     Spatial(Option<&'a Plan>, &'a Arc<SpatialGuide>),
 }
 
@@ -318,7 +318,8 @@ fn render_tile(
                     let guided = plan.local_parts(x, y, &mut weights, &mut parts);
                     if guided {
                         guide.rebuild(&parts);
-                    } else {
+                    } else if spatial_guided {
+                        // No levels: the spatial guide alone.
                         guide.rebuild(&[]);
                     }
                     guided || spatial_guided
