@@ -10,7 +10,7 @@
 mod stress;
 
 use genpath::accel::{self, AccelError, AccelKind, Coherence};
-use genpath::report::bench::{accel_label, bounds, camera_rays, random_rays, ray_rates};
+use genpath::report::bench::{accel_label, camera_rays, random_rays, ray_rates};
 use genpath::scene::Scene;
 use glam::Vec3;
 use std::error::Error;
@@ -33,14 +33,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         }
         None => {
             let mesh = stress::stress_mesh(7);
-            let (lo, hi) = bounds(&mesh);
+            let (lo, hi) = mesh.bounds();
             let center = (lo + hi) / 2.0;
             let eye = center + Vec3::new(0.07, 0.18, 1.0).normalize() * 0.65 * (hi - lo).length();
             let rays = stress::camera_rays(eye, center, 50.0, RAYS, RAYS);
             (mesh, rays, "generated stress mesh".to_string())
         }
     };
-    let (lo, hi) = bounds(&mesh);
+    let (lo, hi) = mesh.bounds();
     let sets = [
         ("coherent", coherent, Coherence::Coherent),
         (

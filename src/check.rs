@@ -219,7 +219,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
     let spatial = Arc::new(train_spatial(
         view,
         &settings(Method::Pg),
-        Grid::around(&view.scene.mesh.positions),
+        Grid::around(&view.scene.mesh),
         config.plan.spatial_passes,
     ));
     let films: Vec<(Method, Film)> = vec![

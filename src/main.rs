@@ -790,7 +790,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     use genpath::genetic::population::evolve;
     use genpath::genetic::test_paths::TestPaths;
     use genpath::report::bench::{
-        accel_label, best, best_interleaved, bounds, camera_rays, random_rays, ray_rates,
+        accel_label, best, best_interleaved, camera_rays, random_rays, ray_rates,
     };
     if let Some(json) = &args.json {
         check_dir(json)?;
@@ -798,7 +798,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let passes = args.passes as usize;
     let n = args.rays;
-    let (lo, hi) = bounds(&scene.mesh);
+    let (lo, hi) = scene.mesh.bounds();
     let sets = [
         (
             "coherent",

@@ -265,53 +265,44 @@ fn pixel_bits(path: &Path) -> Vec<u32> {
     image.pixels.iter().flatten().map(|c| c.to_bits()).collect()
 }
 
-#[test]
-fn one_and_two_threads_give_bit_identical_images() {
-    let dir = tempfile::tempdir().unwrap();
-    let render = |threads: &str| {
-        let out = dir.path().join(format!("t{threads}.exr"));
-        let output = genpath(&[
-            "render",
-            fig5().to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-            "--spp",
-            "4",
-            "--width",
-            "48",
-            "--height",
-            "40",
-            "--threads",
-            threads,
-            "--quiet",
-        ]);
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        pixel_bits(&out)
-    };
-    let one = render("1");
-    assert_eq!(one, render("2"));
-    // And the seed matters: a different seed must change the image.
-    let other = dir.path().join("seed.exr");
-    let output = genpath(&[
+/// `genpath render` of fig5 at 48×40 and 4 spp into `out`, quietly, with `extra` flags;
+/// the render must succeed.
+fn render_small_fig5(out: &Path, extra: &[&str]) {
+    let scene = fig5();
+    let base = [
         "render",
-        fig5().to_str().unwrap(),
+        scene.to_str().unwrap(),
         "-o",
-        other.to_str().unwrap(),
+        out.to_str().unwrap(),
         "--spp",
         "4",
         "--width",
         "48",
         "--height",
         "40",
-        "--seed",
-        "2",
         "--quiet",
-    ]);
-    assert!(output.status.success());
+    ];
+    let output = genpath(&[&base[..], extra].concat());
+    assert!(
+        output.status.success(),
+        "{extra:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+#[test]
+fn one_and_two_threads_give_bit_identical_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |threads: &str| {
+        let out = dir.path().join(format!("t{threads}.exr"));
+        render_small_fig5(&out, &["--threads", threads]);
+        pixel_bits(&out)
+    };
+    let one = render("1");
+    assert_eq!(one, render("2"));
+    // And the seed matters: a different seed must change the image.
+    let other = dir.path().join("seed.exr");
+    render_small_fig5(&other, &["--seed", "2"]);
     assert_ne!(one, pixel_bits(&other));
 }
 
@@ -455,32 +446,7 @@ fn spatial_guide_renders_deterministically_with_its_training_stats() {
     ] {
         let render = |threads: &str| {
             let out = dir.path().join(format!("pg{threads}.exr"));
-            let output = genpath(
-                &[
-                    &[
-                        "render",
-                        fig5().to_str().unwrap(),
-                        "-o",
-                        out.to_str().unwrap(),
-                        "--spp",
-                        "4",
-                        "--width",
-                        "48",
-                        "--height",
-                        "40",
-                        "--threads",
-                        threads,
-                        "--quiet",
-                    ][..],
-                    method,
-                ]
-                .concat(),
-            );
-            assert!(
-                output.status.success(),
-                "{}",
-                String::from_utf8_lossy(&output.stderr)
-            );
+            render_small_fig5(&out, &[&["--threads", threads][..], method].concat());
             out
         };
         let one = render("1");
@@ -553,22 +519,11 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
     let render = |threads: &str, seed: &str, gate: bool| {
         let out = dir.path().join(format!("ga{threads}-{seed}-{gate}.exr"));
         let explain = dir.path().join(format!("ga{threads}-{seed}-{gate}.png"));
-        let scene = fig5();
         let mut args = vec![
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
             "--explain",
             explain.to_str().unwrap(),
             "--method",
             "ga",
-            "--spp",
-            "4",
-            "--width",
-            "48",
-            "--height",
-            "40",
             "--ga-grid",
             "16",
             "--test-paths",
@@ -581,17 +536,11 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
             threads,
             "--seed",
             seed,
-            "--quiet",
         ];
         if !gate {
             args.push("--no-gate");
         }
-        let output = genpath(&args);
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        render_small_fig5(&out, &args);
         assert!(explain.exists(), "no explanation image");
         let mut json = out.clone().into_os_string();
         json.push(".json");

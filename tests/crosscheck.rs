@@ -348,7 +348,7 @@ fn stress_scene() -> TriangleMesh {
 #[test]
 fn incoherent_rays_agree() {
     let mesh = stress_scene();
-    let (lo, hi) = bench::bounds(&mesh);
+    let (lo, hi) = mesh.bounds();
     let rays = bench::random_rays(lo, hi, 100_000, 11);
     for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&mesh, &rays)) {
         println!("incoherent, Embree {lanes} lanes: {report}");
@@ -364,7 +364,7 @@ fn tiny_and_huge_scenes_agree() {
     for scale in [1e-4f32, 1e5] {
         let mut mesh = stress_scene();
         mesh.positions.iter_mut().for_each(|p| *p *= scale);
-        let (lo, hi) = bench::bounds(&mesh);
+        let (lo, hi) = mesh.bounds();
         let rays = bench::random_rays(lo, hi, 20_000, 5);
         for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&mesh, &rays)) {
             println!("scale {scale:e}, Embree {lanes} lanes: {report}");
@@ -401,7 +401,7 @@ fn shipped_scene_agrees(name: &str) {
     let mut rays: Vec<Ray> = (0..320 * 320)
         .map(|i| camera.ray((i % 320) as f32 + 0.5, (i / 320) as f32 + 0.5))
         .collect();
-    let (lo, hi) = bench::bounds(&scene.mesh);
+    let (lo, hi) = scene.mesh.bounds();
     rays.extend(bench::random_rays(lo, hi, 100_000, 13));
     for (lanes, report) in EMBREE_LANES.iter().zip(crosscheck(&scene.mesh, &rays)) {
         println!("{name}, Embree {lanes} lanes: {report}");
@@ -554,7 +554,7 @@ impl Accel for Corrupted<'_> {
 #[test]
 fn crosscheck_catches_a_corrupted_back_end() {
     let mesh = stress_scene();
-    let (lo, hi) = bench::bounds(&mesh);
+    let (lo, hi) = mesh.bounds();
     let rays = bench::random_rays(lo, hi, 5_000, 3);
     let embree = EmbreeAccel::new(&mesh).expect("Embree builds the scene");
     let bvh = BvhAccel::new(&mesh);

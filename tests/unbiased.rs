@@ -82,7 +82,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         progress: false,
     };
     let train = || {
-        let grid = Grid::around(&scene.mesh.positions);
+        let grid = Grid::around(&scene.mesh);
         let passes = PlanConfig::default().spatial_passes;
         let s = train_spatial(&view, &settings, grid, passes);
         assert!(

@@ -111,6 +111,15 @@ impl TriangleMesh {
     pub fn vertices(&self, prim: u32) -> [Vec3; 3] {
         self.triangles[prim as usize].map(|i| self.positions[i as usize])
     }
+
+    /// Axis-aligned bounds of the vertices (`lo > hi` for a mesh without any).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            })
+    }
 }
 
 /// What every back-end answers.

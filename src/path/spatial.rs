@@ -22,6 +22,7 @@
 //! p_bsdf` and multiple importance sampling weighs next-event estimation against that
 //! density, so the estimator stays unbiased whatever was learned.
 
+use crate::accel::TriangleMesh;
 use glam::Vec3;
 use std::f64::consts::PI;
 
@@ -66,12 +67,9 @@ impl Grid {
         Self { lo, scale, res }
     }
 
-    /// The grid over the bounding box of `positions`.
-    pub fn around(positions: &[Vec3]) -> Self {
-        let (lo, hi) = positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
+    /// The grid over the bounding box of `mesh`.
+    pub fn around(mesh: &TriangleMesh) -> Self {
+        let (lo, hi) = mesh.bounds();
         if lo.cmple(hi).all() {
             Self::new(lo, hi)
         } else {
@@ -218,6 +216,74 @@ impl PathRecorder {
     }
 }
 
+/// Per cell and bin, the summed values of the training records so far: each training pass
+/// adds its records, and the guide of all of them is rebuilt from the sums.
+#[derive(Clone, Debug)]
+pub struct RecordSums {
+    grid: Grid,
+    sums: Vec<f64>,
+    records: usize,
+}
+
+impl RecordSums {
+    pub fn new(grid: Grid) -> Self {
+        let sums = vec![0.0; grid.cells() * BINS];
+        Self {
+            grid,
+            sums,
+            records: 0,
+        }
+    }
+
+    pub fn add(&mut self, records: impl IntoIterator<Item = Record>) {
+        for r in records {
+            self.records += 1;
+            let i = r.cell as usize * BINS + r.bin as usize;
+            if let Some(s) = self.sums.get_mut(i) {
+                *s += f64::from(r.value);
+            }
+        }
+    }
+
+    /// The guide of the records added so far (see the module documentation).
+    pub fn guide(&self) -> SpatialGuide {
+        let cells = self.grid.cells();
+        let mut trained = vec![false; cells];
+        let mut density = vec![0.0f32; cells * BINS];
+        let mut cdf = vec![0.0f32; cells * BINS];
+        let bin_solid_angle = 4.0 * PI / BINS as f64;
+        for c in 0..cells {
+            let s = &self.sums[c * BINS..(c + 1) * BINS];
+            let total: f64 = s.iter().sum();
+            if !(total > 0.0 && total.is_finite()) {
+                continue;
+            }
+            trained[c] = true;
+            let mut acc = 0.0;
+            for b in 0..BINS {
+                let p = (1.0 - UNIFORM_SHARE) * s[b] / total + UNIFORM_SHARE / BINS as f64;
+                density[c * BINS + b] = (p / bin_solid_angle) as f32;
+                acc += p;
+                cdf[c * BINS + b] = acc as f32;
+            }
+            cdf[c * BINS + BINS - 1] = 1.0;
+        }
+        let stats = SpatialStats {
+            records: self.records,
+            cells,
+            trained_cells: trained.iter().filter(|&&t| t).count(),
+            ..SpatialStats::default()
+        };
+        SpatialGuide {
+            grid: self.grid.clone(),
+            stats,
+            trained,
+            density,
+            cdf,
+        }
+    }
+}
+
 /// What training a spatial guide did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SpatialStats {
@@ -247,49 +313,9 @@ impl SpatialGuide {
     /// The guide trained on `records` (per cell and bin, their mean value: cells with no
     /// light stay untrained).
     pub fn train(grid: Grid, records: impl IntoIterator<Item = Record>) -> Self {
-        let cells = grid.cells();
-        let mut sums = vec![0.0f64; cells * BINS];
-        let mut count = 0;
-        for r in records {
-            count += 1;
-            let i = r.cell as usize * BINS + r.bin as usize;
-            if let Some(s) = sums.get_mut(i) {
-                *s += f64::from(r.value);
-            }
-        }
-        let mut trained = vec![false; cells];
-        let mut density = vec![0.0f32; cells * BINS];
-        let mut cdf = vec![0.0f32; cells * BINS];
-        let bin_solid_angle = 4.0 * PI / BINS as f64;
-        for c in 0..cells {
-            let s = &sums[c * BINS..(c + 1) * BINS];
-            let total: f64 = s.iter().sum();
-            if !(total > 0.0 && total.is_finite()) {
-                continue;
-            }
-            trained[c] = true;
-            let mut acc = 0.0;
-            for b in 0..BINS {
-                let p = (1.0 - UNIFORM_SHARE) * s[b] / total + UNIFORM_SHARE / BINS as f64;
-                density[c * BINS + b] = (p / bin_solid_angle) as f32;
-                acc += p;
-                cdf[c * BINS + b] = acc as f32;
-            }
-            cdf[c * BINS + BINS - 1] = 1.0;
-        }
-        let stats = SpatialStats {
-            records: count,
-            cells,
-            trained_cells: trained.iter().filter(|&&t| t).count(),
-            ..SpatialStats::default()
-        };
-        Self {
-            grid,
-            stats,
-            trained,
-            density,
-            cdf,
-        }
+        let mut sums = RecordSums::new(grid);
+        sums.add(records);
+        sums.guide()
     }
 
     /// The trained cell at `p`, if any.

@@ -8,7 +8,7 @@ use crate::image::Image;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
-use crate::path::spatial::{Grid, PathRecorder, SpatialGuide};
+use crate::path::spatial::{Grid, PathRecorder, RecordSums, SpatialGuide};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{derive_seed, sample_rng, uniform, Rng};
 use glam::DVec3;
@@ -87,7 +87,7 @@ impl Prepared {
         settings: &RenderSettings,
     ) -> Result<Self, PrepareError> {
         let spatial = || {
-            let grid = Grid::around(&view.scene.mesh.positions);
+            let grid = Grid::around(&view.scene.mesh);
             let passes = config.plan.spatial_passes;
             Arc::new(train_spatial(view, settings, grid, passes))
         };
@@ -385,14 +385,12 @@ pub fn train_spatial(
     let start = Instant::now();
     let camera = &view.scene.camera;
     let tiles = tiles(camera.width, camera.height);
-    let mut records = Vec::new();
-    let mut spatial: Option<Arc<SpatialGuide>> = None;
+    let mut sums = RecordSums::new(grid.clone());
+    // The guide of the passes so far, which the next pass samples with.
+    let mut guide: Option<Guide> = None;
     let bar = progress_bar(u64::from(passes), "guide", settings.progress);
     for pass in 0..passes {
         let seed = derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass));
-        let guide = spatial
-            .clone()
-            .map(|s| Guide::default().with_spatial(Some(s)));
         let per_tile: Vec<Vec<_>> = tiles
             .par_iter()
             .map(|tile| {
@@ -418,18 +416,14 @@ pub fn train_spatial(
                 recorder.records
             })
             .collect();
-        records.extend(per_tile.into_iter().flatten());
-        spatial = Some(Arc::new(SpatialGuide::train(
-            grid.clone(),
-            records.iter().copied(),
-        )));
+        sums.add(per_tile.into_iter().flatten());
+        if pass + 1 < passes {
+            guide = Some(Guide::default().with_spatial(Some(Arc::new(sums.guide()))));
+        }
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let mut spatial = match spatial {
-        Some(s) => Arc::try_unwrap(s).unwrap_or_else(|s| (*s).clone()),
-        None => SpatialGuide::train(grid, std::iter::empty()),
-    };
+    let mut spatial = sums.guide();
     spatial.stats.passes = passes;
     spatial.stats.seconds = start.elapsed().as_secs_f64();
     spatial

@@ -6,22 +6,13 @@
 //! Every figure is the best of a few passes: the machines are shared, and the best pass is
 //! the one least disturbed.
 
-use crate::accel::{Accel, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::scene::Camera;
 use glam::Vec3;
 use rand::{Rng as _, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-
-/// Axis-aligned bounds of the mesh's vertices.
-pub fn bounds(mesh: &TriangleMesh) -> (Vec3, Vec3) {
-    mesh.positions
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        })
-}
 
 /// Incoherent rays: origins uniform in `(lo, hi)`, unit directions uniform on the sphere.
 pub fn random_rays(lo: Vec3, hi: Vec3, count: usize, seed: u64) -> Vec<Ray> {
