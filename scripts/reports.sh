@@ -12,8 +12,8 @@
 # from seed 2).
 # Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
 # and reports/bench*.json (`genpath bench`), reports/bench-stress.txt (`cargo bench --bench
-# rays`), and reports/fig5-60s.* (fig5 at 60 s). Takes about 38 × (sum of budgets) seconds
-# and 5 minutes more.
+# rays`), and reports/fig5-60s.* and reports/fig1-60s.* (at 60 s). Takes about 38 × (sum of
+# budgets) seconds and 10 minutes more.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
@@ -35,13 +35,16 @@ for scene in ${SCENES:-fig5 fig1 cbox glossy}; do
         -o "reports/$scene" > "reports/$scene.md"
     echo "reports/$scene: done"
 done
-# fig5 at 60 s, where the budgets' range of the issue ends: pt, the GA methods and pg.
-if [[ " ${SCENES:-fig5} " == *" fig5 "* ]]; then
-    "$bin" sweep scenes/fig5/scene.toml --ref reports/refs/fig5_ref.exr --time --budgets 60 \
-        --methods pt,ga,ga-pt,pg --max-bounces 5 --quiet --seed 101 \
-        -o reports/fig5-60s > reports/fig5-60s.md
-    echo "reports/fig5-60s: done"
-fi
+# fig5 and fig1 at 60 s, where the budgets' range of the issue ends: pt, the GA methods
+# and pg.
+for scene in fig5 fig1; do
+    if [[ " ${SCENES:-fig5 fig1} " == *" $scene "* ]]; then
+        "$bin" sweep "scenes/$scene/scene.toml" --ref "reports/refs/${scene}_ref.exr" \
+            --time --budgets 60 --methods pt,ga,ga-pt,pg,ga-pt:spatial=1 --max-bounces 5 \
+            --quiet --seed 101 -o "reports/$scene-60s" > "reports/$scene-60s.md"
+        echo "reports/$scene-60s: done"
+    fi
+done
 # Best of 10 passes: on the shared machine the packet rates swing by a third from one
 # half-minute to the next (reports/README.md), single rays much less.
 "$bin" bench scenes/cbox/scene.toml --passes 10 --json reports/bench.json > reports/bench.txt

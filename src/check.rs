@@ -15,12 +15,10 @@ use crate::genetic::plan::{Plan, PlanConfig, Target};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
-use crate::path::spatial::Grid;
 use crate::path::{mixture_file, Method, RayCounts, SceneView};
-use crate::render::{render, train_spatial, Estimator, Film, RenderSettings};
+use crate::render::{render, train_spatial, Estimator, Film, RenderSettings, TrainingSchedule};
 use crate::sampling::{sample_rng, uniform};
 use statrs::distribution::{ContinuousCDF, Normal};
-use std::sync::Arc;
 
 /// What `check` renders and samples.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -216,12 +214,16 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         config.seed,
         false,
     )?;
-    let spatial = Arc::new(train_spatial(
+    let training = train_spatial(
         view,
         &settings(Method::Pg),
-        Grid::around(&view.scene.mesh),
-        config.plan.spatial_passes,
-    ));
+        TrainingSchedule::new(&config.plan, config.spp),
+    );
+    // pg's image holds its training samples: the render adds the rest of `spp`.
+    let pg_settings = RenderSettings {
+        spp: config.spp.saturating_sub(training.samples.spp),
+        ..settings(Method::Pg)
+    };
     let films: Vec<(Method, Film)> = vec![
         (
             Method::Pt,
@@ -245,11 +247,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         ),
         (
             Method::Pg,
-            render(
-                view,
-                &settings(Method::Pg),
-                Estimator::Spatial(None, &spatial),
-            ),
+            render(view, &pg_settings, Estimator::Spatial(None, &training)),
         ),
     ];
     let comparisons = 3 * (films.len() - 1);

@@ -298,10 +298,11 @@ struct GaArgs {
     /// short path-traced passes, as --method pg does everywhere (beyond the paper).
     #[arg(long)]
     spatial_guide: bool,
-    /// pg, and ga-pt with --spatial-guide: path-traced passes of one sample per pixel that
-    /// train the spatial guide (their time counts; their images are not kept).
-    #[arg(long, default_value_t = PlanConfig::default().spatial_passes, value_parser = clap::value_parser!(u32).range(1..=64))]
-    spatial_passes: u32,
+    /// pg, and ga-pt with --spatial-guide: passes of path tracing that train the spatial
+    /// guide, pass i with 2^i samples per pixel; their samples count in --spp and stay in
+    /// the image. Default: as many as fit in half of --spp.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=12))]
+    spatial_passes: Option<u32>,
 }
 
 impl GaArgs {
@@ -340,6 +341,7 @@ impl GaArgs {
             guide_steps: self.guide_steps as usize,
             spatial: self.spatial_guide,
             spatial_passes: self.spatial_passes,
+            spatial_time_limit: None,
         };
         ga.validate()?;
         plan.validate()?;
@@ -550,9 +552,14 @@ fn run_render(args: RenderArgs) -> Result<()> {
         .pool
         .install(|| Prepared::new(&view, &config, &settings))?;
     let plan = prepared.plan();
+    // The spatial guide's training samples are already in the image.
+    let rest = RenderSettings {
+        spp: settings.spp.saturating_sub(prepared.samples_taken()),
+        ..settings.clone()
+    };
     let film = session
         .pool
-        .install(|| render::render(&view, &settings, prepared.estimator()));
+        .install(|| render::render(&view, &rest, prepared.estimator()));
     let render_s = film.elapsed.as_secs_f64();
     let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
     let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
@@ -606,8 +613,8 @@ fn run_render(args: RenderArgs) -> Result<()> {
         }
         if let Some(s) = prepared.spatial() {
             eprintln!(
-                "genpath: spatial guide: {} of {} cells trained on {} records from {} passes in {:.2} s",
-                s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.seconds
+                "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
+                s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.spp, s.stats.seconds
             );
         }
         eprintln!(

@@ -436,13 +436,20 @@ fn bad_generator_files() {
 }
 
 /// `--method pg` (and `ga-pt --spatial-guide`): bit-identical for 1 and 2 threads (the
-/// training records merge in tile order), with the training in the JSON.
+/// training records merge in tile order), with the training in the JSON: 2 passes of 1
+/// and 2 samples per pixel, of the image's 4.
 #[test]
 fn spatial_guide_renders_deterministically_with_its_training_stats() {
     let dir = tempfile::tempdir().unwrap();
     for method in [
-        &["--method", "pg"][..],
-        &["--method", "ga-pt", "--spatial-guide"],
+        &["--method", "pg", "--spatial-passes", "2"][..],
+        &[
+            "--method",
+            "ga-pt",
+            "--spatial-guide",
+            "--spatial-passes",
+            "2",
+        ],
     ] {
         let render = |threads: &str| {
             let out = dir.path().join(format!("pg{threads}.exr"));
@@ -456,17 +463,21 @@ fn spatial_guide_renders_deterministically_with_its_training_stats() {
         .unwrap();
         assert_eq!(pixel_bits(&one), pixel_bits(&render("2")), "{method:?}");
         let spatial = &json["spatial"];
-        assert_eq!(spatial["passes"], 4, "{method:?}: {spatial}");
+        assert_eq!(spatial["passes"], 2, "{method:?}: {spatial}");
+        assert_eq!(spatial["spp"], 3, "{method:?}: {spatial}");
+        assert_eq!(json["settings"]["spp"], 4, "{method:?}: {json}");
         assert!(spatial["trained_cells"].as_u64().unwrap() > 0, "{spatial}");
         assert!(json["times_s"]["spatial"].as_f64().unwrap() > 0.0);
     }
     let out = dir.path().join("o.exr");
-    assert_fails(
-        &fig5(),
-        &["--method", "pg", "--spatial-passes", "0"],
-        &out,
-        &["--spatial-passes"],
-    );
+    for passes in ["0", "13"] {
+        assert_fails(
+            &fig5(),
+            &["--method", "pg", "--spatial-passes", passes],
+            &out,
+            &["--spatial-passes"],
+        );
+    }
 }
 
 #[test]

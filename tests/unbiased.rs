@@ -10,13 +10,11 @@ use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
-use genpath::path::spatial::Grid;
 use genpath::path::{mixture_file, Method, SceneView};
-use genpath::render::{render, train_spatial, Estimator, Film, RenderSettings};
+use genpath::render::{render, train_spatial, Estimator, Film, RenderSettings, TrainingSchedule};
 use genpath::scene::Scene;
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 const SIZE: u32 = 64;
 const BLOCK: u32 = 32;
@@ -81,15 +79,15 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         seed,
         progress: false,
     };
+    // The guide trains on half the samples (the default), which stay in the image.
     let train = || {
-        let grid = Grid::around(&scene.mesh);
-        let passes = PlanConfig::default().spatial_passes;
-        let s = train_spatial(&view, &settings, grid, passes);
+        let schedule = TrainingSchedule::new(&PlanConfig::default(), spp);
+        let t = train_spatial(&view, &settings, schedule);
         assert!(
-            s.stats.trained_cells > 0,
-            "{name}: no cell of the spatial guide trained"
+            t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
+            "{name}: the spatial guide did not train"
         );
-        Some(Arc::new(s))
+        Some(t)
     };
     let mixture = match which {
         Which::Pt => None,
@@ -151,7 +149,12 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         (None, Some(mixture)) => Estimator::Mixture(mixture),
         (None, None) => Estimator::Pt,
     };
-    render(&view, &settings, estimator)
+    let taken = spatial.as_ref().map_or(0, |t| t.samples.spp);
+    let rest = RenderSettings {
+        spp: spp - taken,
+        ..settings.clone()
+    };
+    render(&view, &rest, estimator)
 }
 
 /// Per block and channel: (mean, variance of that mean).

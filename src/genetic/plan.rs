@@ -148,9 +148,13 @@ pub struct PlanConfig {
     /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`path::spatial`), as
     /// `pg` guides every vertex.
     pub spatial: bool,
-    /// `pg`, and `ga-pt` with `spatial`: path-traced passes of one sample per pixel that
-    /// train the spatial guide.
-    pub spatial_passes: u32,
+    /// `pg`, and `ga-pt` with `spatial`: passes of path tracing that train the spatial
+    /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
+    /// many as `spatial_time_limit` allows if set, else as many as fit in half the samples
+    /// per pixel.
+    pub spatial_passes: Option<u32>,
+    /// Seconds the spatial guide's training may take (see `spatial_passes`).
+    pub spatial_time_limit: Option<f64>,
 }
 
 impl Default for PlanConfig {
@@ -167,7 +171,8 @@ impl Default for PlanConfig {
             time_limit: None,
             guide_steps: 1,
             spatial: false,
-            spatial_passes: 4,
+            spatial_passes: None,
+            spatial_time_limit: None,
         }
     }
 }
@@ -205,10 +210,16 @@ impl PlanConfig {
                 self.guide_steps
             ));
         }
-        if !(1..=64).contains(&self.spatial_passes) {
+        if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
+            return fail(format!("spatial guide passes {p} is not in [1, 12]"));
+        }
+        if self
+            .spatial_time_limit
+            .is_some_and(|t| !(t.is_finite() && t >= 0.0))
+        {
             return fail(format!(
-                "spatial guide passes {} is not in [1, 64]",
-                self.spatial_passes
+                "spatial guide time limit {:?} must be finite and ≥ 0 seconds",
+                self.spatial_time_limit
             ));
         }
         if !(1..=64).contains(&self.neighbours) {

@@ -106,6 +106,28 @@ impl Level {
     fn guides(&self) -> bool {
         !(self.anchors.is_empty() && self.patches.is_empty())
     }
+
+    /// A direction out of `x` from the cone or patch that `target` (a uniform number less
+    /// the BRDF's weight) picks, driven by `rest`.
+    fn sample(&self, x: DVec3, mut target: f64, rest: [f64; 3]) -> Vec3 {
+        // Sampler `i`: the cones, then the patches; rounding past the end takes the last
+        // one.
+        let cones = self.anchors.len();
+        let weight = |i: usize| match i < cones {
+            true => self.anchors[i].weight,
+            false => self.patches[i - cones].weight,
+        };
+        let mut i = 0;
+        while i + 1 < cones + self.patches.len() && target >= weight(i) {
+            target -= weight(i);
+            i += 1;
+        }
+        let dir = match self.anchors.get(i) {
+            Some(a) => a.sampler.sample_with_extents(x, rest, a.extents),
+            None => self.patches[i - cones].shape.sampler.sample(x, rest),
+        };
+        dir.as_vec3().normalize()
+    }
 }
 
 /// Adds `weight` to `sampler`'s entry of `list`, or appends it: a sampler that several
@@ -224,41 +246,34 @@ impl Guide {
         k < self.depth || self.spatial.is_some()
     }
 
-    /// The spatial guide and its trained cell at `x`, for a vertex beyond the levels.
-    fn spatial_at(&self, x: Vec3) -> Option<(&SpatialGuide, usize)> {
-        let s = self.spatial.as_deref()?;
-        Some((s, s.cell(x)?))
-    }
-
-    /// `p_k(wi)` at `x` for the material's BRDF pdf `brdf_pdf` there.
-    fn pdf_with(&self, k: usize, x: DVec3, wi: DVec3, brdf_pdf: f64) -> f64 {
-        let scale = self.pdf_error.unwrap_or(1.0);
-        let Some(level) = self.level(k) else {
-            return match self.spatial_at(x.as_vec3()) {
-                Some((s, cell)) => {
-                    let p = s.pdf(cell, wi.as_vec3());
-                    GUIDE_SHARE * scale * p + (1.0 - GUIDE_SHARE) * brdf_pdf
-                }
-                None => brdf_pdf,
-            };
+    /// What guides the `k`-th non-delta vertex at `x` (normal `n`): its level, the spatial
+    /// guide's region there, or the BRDF alone. Looked up once per vertex, used for every
+    /// density and sample there. At the path's `last` vertex the spatial guide stays out:
+    /// the direction sampled there can only find emission, which next-event estimation
+    /// finds better, and the guide would cost its lookups for nothing.
+    pub fn at(&self, k: usize, x: Vec3, n: Vec3, last: bool) -> Vertex<'_> {
+        let by = match self.level(k) {
+            Some(level) => By::Level(level),
+            None => match self.spatial.as_deref().filter(|_| !last) {
+                Some(s) => s.cell(x, n).map_or(By::Brdf, |cell| By::Spatial(s, cell)),
+                None => By::Brdf,
+            },
         };
-        let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
-        let patches: f64 = level
-            .patches
-            .iter()
-            .map(|p| p.weight * p.shape.pdf(x, wi))
-            .sum();
-        level.brdf * brdf_pdf + scale * (anchors + patches)
+        Vertex {
+            by,
+            scale: self.pdf_error.unwrap_or(1.0),
+            x: x.as_dvec3(),
+            n,
+        }
     }
 
     /// `p_k(wi)` at the surface point `x` of `material` (normal `n` facing `wo`).
     pub fn pdf(&self, k: usize, material: &Material, x: Vec3, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
-        let brdf_pdf = brdf::pdf(material, n, wo, wi);
-        self.pdf_with(k, x.as_dvec3(), wi.as_dvec3(), brdf_pdf)
+        self.at(k, x, n, false).pdf(material, wo, wi)
     }
 
-    /// A direction out of the `k`-th non-delta vertex `x`, from four uniform numbers: `u[0]`
-    /// picks the sampler, the rest drive it. `None` where the direction carries nothing.
+    /// A direction out of the `k`-th non-delta vertex `x`, from four uniform numbers (see
+    /// [`Vertex::sample`]).
     pub fn sample(
         &self,
         k: usize,
@@ -268,65 +283,114 @@ impl Guide {
         wo: Vec3,
         u: [f64; 4],
     ) -> Option<GuideSample> {
+        self.at(k, x, n, false).sample(material, wo, u)
+    }
+}
+
+/// What guides one vertex (see [`Guide::at`]).
+#[derive(Clone, Copy)]
+enum By<'a> {
+    Level(&'a Level),
+    Spatial(&'a SpatialGuide, usize),
+    Brdf,
+}
+
+/// The guide of one vertex: the point `x`, its normal `n` (facing the path's `wo`) and
+/// what samples directions there.
+#[derive(Clone, Copy)]
+pub struct Vertex<'a> {
+    by: By<'a>,
+    /// The guide's fault injection (1 without).
+    scale: f64,
+    x: DVec3,
+    n: Vec3,
+}
+
+impl Vertex<'_> {
+    /// Whether this vertex samples anything but the BRDF.
+    pub fn guides(&self) -> bool {
+        !matches!(self.by, By::Brdf)
+    }
+
+    /// Cones, patches or spatial regions: the densities one evaluation of `pdf` costs.
+    pub fn samplers(&self) -> usize {
+        match self.by {
+            By::Level(l) => l.anchors.len() + l.patches.len(),
+            By::Spatial(..) => 1,
+            By::Brdf => 0,
+        }
+    }
+
+    /// `p(wi)` for the material's BRDF pdf `brdf_pdf` here.
+    fn pdf_with(&self, wi: DVec3, brdf_pdf: f64) -> f64 {
+        match self.by {
+            By::Brdf => brdf_pdf,
+            By::Spatial(s, cell) => {
+                let p = s.pdf(cell, wi.as_vec3());
+                GUIDE_SHARE * self.scale * p + (1.0 - GUIDE_SHARE) * brdf_pdf
+            }
+            By::Level(level) => {
+                let x = self.x;
+                let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
+                let patches: f64 = level
+                    .patches
+                    .iter()
+                    .map(|p| p.weight * p.shape.pdf(x, wi))
+                    .sum();
+                level.brdf * brdf_pdf + self.scale * (anchors + patches)
+            }
+        }
+    }
+
+    /// `p(wi)` for `material` seen from `wo`.
+    pub fn pdf(&self, material: &Material, wo: Vec3, wi: Vec3) -> f64 {
+        let brdf_pdf = brdf::pdf(material, self.n, wo, wi);
+        self.pdf_with(wi.as_dvec3(), brdf_pdf)
+    }
+
+    /// A direction out of this vertex of `material` seen from `wo`, from four uniform
+    /// numbers: `u[0]` picks the sampler, the rest drive it. `None` where the direction
+    /// carries nothing.
+    pub fn sample(&self, material: &Material, wo: Vec3, u: [f64; 4]) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
-        let xd = x.as_dvec3();
-        let Some(level) = self.level(k) else {
-            let Some((s, cell)) = self.spatial_at(x) else {
+        let n = self.n;
+        let wi = match self.by {
+            By::Brdf => {
                 let s = brdf::sample(material, n, wo, rest)?;
                 return Some(GuideSample {
                     wi: s.wi,
                     pdf: s.pdf,
                     weight: s.weight,
                 });
-            };
-            let wi = if u[0] < GUIDE_SHARE {
-                s.sample(cell, rest)
-            } else {
-                brdf::sample_direction(material, n, wo, rest)?
-            };
-            return self.finish_sample(k, material, xd, n, wo, wi);
-        };
-        let mut target = u[0] - level.brdf;
-        let wi = if target < 0.0 {
-            brdf::sample_direction(material, n, wo, rest)?
-        } else {
-            // Sampler `i`: the cones, then the patches; rounding past the end takes the
-            // last one.
-            let cones = level.anchors.len();
-            let weight = |i: usize| match i < cones {
-                true => level.anchors[i].weight,
-                false => level.patches[i - cones].weight,
-            };
-            let mut i = 0;
-            while i + 1 < cones + level.patches.len() && target >= weight(i) {
-                target -= weight(i);
-                i += 1;
             }
-            let dir = match level.anchors.get(i) {
-                Some(a) => a.sampler.sample_with_extents(xd, rest, a.extents),
-                None => level.patches[i - cones].shape.sampler.sample(xd, rest),
-            };
-            dir.as_vec3().normalize()
+            By::Spatial(s, cell) => {
+                if u[0] < GUIDE_SHARE {
+                    s.sample(cell, rest)
+                } else {
+                    brdf::sample_direction(material, n, wo, rest)?
+                }
+            }
+            By::Level(level) => {
+                let target = u[0] - level.brdf;
+                if target < 0.0 {
+                    brdf::sample_direction(material, n, wo, rest)?
+                } else {
+                    level.sample(self.x, target, rest)
+                }
+            }
         };
-        self.finish_sample(k, material, xd, n, wo, wi)
+        self.finish_sample(material, wo, wi)
     }
 
     /// The guide sample of direction `wi`: its density and weight.
-    fn finish_sample(
-        &self,
-        k: usize,
-        material: &Material,
-        xd: DVec3,
-        n: Vec3,
-        wo: Vec3,
-        wi: Vec3,
-    ) -> Option<GuideSample> {
+    fn finish_sample(&self, material: &Material, wo: Vec3, wi: Vec3) -> Option<GuideSample> {
+        let n = self.n;
         let cos = n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);
         if cos <= 0.0 || f.max_element() <= 0.0 {
             return None;
         }
-        let pdf = self.pdf_with(k, xd, wi.as_dvec3(), brdf::pdf(material, n, wo, wi));
+        let pdf = self.pdf_with(wi.as_dvec3(), brdf::pdf(material, n, wo, wi));
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -419,17 +483,26 @@ mod tests {
     /// carry the density `pdf` reports and go where the records did.
     #[test]
     fn spatial_guide_past_the_levels_is_a_density() {
-        use crate::path::spatial::{bin, Grid, Record};
+        use crate::path::spatial::{to_square, Record};
         let material = white();
         let target = Vec3::new(0.6, 0.7, -0.3).normalize();
-        let grid = Grid::new(Vec3::splat(-1.0), Vec3::ONE);
-        let cell = grid.cell(Vec3::ZERO) as u32;
-        let records = (0..100).map(|i| Record {
-            cell,
-            bin: bin(target) as u16,
-            value: 1.0 + (i % 3) as f32,
-        });
-        let spatial = Arc::new(SpatialGuide::train(grid, records));
+        let [tu, tv] = to_square(target);
+        // Records spread over a square of side 1/16 of the equal-area map at `target`, all
+        // at the origin, on a floor (facing +y).
+        let mut rng = sample_rng(8, 0, 0);
+        let records: Vec<Record> = (0..4100)
+            .map(|i| Record {
+                p: Vec3::ZERO,
+                facing: 2,
+                dir: [tu + uniform(&mut rng) / 16.0, tv + uniform(&mut rng) / 16.0],
+                value: 1.0 + (i % 3) as f32,
+            })
+            .collect();
+        let spatial = Arc::new(SpatialGuide::train(Vec3::splat(-1.0), Vec3::ONE, records));
+        let near = |d: Vec3| {
+            let [u, v] = to_square(d);
+            (0.0..1.0 / 16.0).contains(&(u - tu)) && (0.0..1.0 / 16.0).contains(&(v - tv))
+        };
         let guide = Guide::new(&mixture()).with_spatial(Some(spatial));
         assert!(guide.guides(2) && guide.samplers(2) == 1);
         let total = integral_at(&guide, &material, 2);
@@ -448,16 +521,16 @@ mod tests {
             if let Some(s) = guide.sample(2, &material, Vec3::ZERO, n, wo, u) {
                 let p = guide.pdf(2, &material, Vec3::ZERO, n, wo, s.wi);
                 assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
-                towards += usize::from(bin(s.wi) == bin(target));
+                towards += usize::from(near(s.wi));
             }
         }
-        // 0.5 · 0.9 of the samples in the trained bin (1/512 of the sphere).
-        assert!(towards > 4_000, "{towards} samples in the trained bin");
-        // Outside the trained cell: BRDF sampling alone.
-        let far = Vec3::new(0.9, 0.9, 0.9);
-        let wi = Vec3::new(0.0, 1.0, 0.0);
+        // 0.5 · 0.9 of the samples near the records (1/256 of the sphere).
+        assert!(towards > 4_000, "{towards} samples near the records");
+        // On a surface facing another way, where nothing was recorded: BRDF sampling alone.
+        let (n, wo) = (Vec3::X, Vec3::new(1.0, 0.3, 0.1).normalize());
+        let wi = Vec3::new(0.5, 0.5, 0.0).normalize();
         let brdf_pdf = brdf::pdf(&material, n, wo, wi);
-        assert_eq!(guide.pdf(2, &material, far, n, wo, wi), brdf_pdf);
+        assert_eq!(guide.pdf(2, &material, Vec3::ZERO, n, wo, wi), brdf_pdf);
     }
 
     #[test]
@@ -536,7 +609,10 @@ mod tests {
             let phi = std::f64::consts::TAU * uniform(&mut rng) as f64;
             let r = (1.0 - z * z).max(0.0).sqrt();
             let wi = DVec3::new(r * phi.cos(), z, r * phi.sin());
-            let (pa, pb) = (a.pdf_with(0, x, wi, 0.3), b.pdf_with(0, x, wi, 0.3));
+            let (pa, pb) = (
+                a.at(0, x.as_vec3(), Vec3::Y, false).pdf_with(wi, 0.3),
+                b.at(0, x.as_vec3(), Vec3::Y, false).pdf_with(wi, 0.3),
+            );
             worst = worst.max((pa - pb).abs() / pa.max(pb));
         }
         worst

@@ -72,10 +72,17 @@ pub fn radiance_guided(
             break;
         }
         let n = brdf::facing_normal(x.ng, wo);
-        let guide = guide.filter(|g| !material.mirror && g.guides(k));
-        if let Some(g) = guide {
+        let last = bounce == max_bounces;
+        // At a diffuse vertex the spatial guide's records leave out the direct light, which
+        // next-event estimation samples well there (see `path::spatial`).
+        let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
+        let guide = guide
+            .filter(|g| !material.mirror && g.guides(k))
+            .map(|g| g.at(k, x.p, n, last))
+            .filter(|v| v.guides());
+        if let Some(v) = guide {
             // The light sample's and the guided sample's densities.
-            counts.densities += 2 * g.samplers(k) as u64;
+            counts.densities += 2 * v.samplers() as u64;
         }
 
         // Next-event estimation (impossible through a mirror's delta).
@@ -100,13 +107,13 @@ pub fn radiance_guided(
                 {
                     let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
                     let pdf_brdf = match guide {
-                        Some(g) => g.pdf(k, material, x.p, n, wo, wi),
+                        Some(g) => g.pdf(material, wo, wi),
                         None => brdf::pdf(material, n, wo, wi),
                     } as f32;
                     let weight = power_heuristic(pdf_light, pdf_brdf);
                     radiance += beta * f * le * (cos_x * weight / pdf_light);
-                    if let Some(r) = recorder.as_deref_mut() {
-                        r.light(x.p, wi, le * (cos_x * weight / pdf_light));
+                    if let Some(r) = recorder.as_deref_mut().filter(|_| !diffuse) {
+                        r.light(x.p, n, wi, le * (cos_x * weight / pdf_light));
                     }
                 }
             }
@@ -116,13 +123,12 @@ pub fn radiance_guided(
         let bs = match guide {
             Some(g) => {
                 let u = std::array::from_fn(|_| uniform(rng) as f64);
-                g.sample(k, material, x.p, n, wo, u)
-                    .map(|s| brdf::BrdfSample {
-                        wi: s.wi,
-                        pdf: s.pdf,
-                        weight: s.weight,
-                        delta: false,
-                    })
+                g.sample(material, wo, u).map(|s| brdf::BrdfSample {
+                    wi: s.wi,
+                    pdf: s.pdf,
+                    weight: s.weight,
+                    delta: false,
+                })
             }
             None => {
                 let u = [
@@ -143,7 +149,7 @@ pub fn radiance_guided(
         let wi = bs.wi;
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
             let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;
-            r.sampled(x.p, wi, cos_over_pdf, beta, radiance);
+            r.sampled(x.p, n, wi, cos_over_pdf, beta, radiance);
         }
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace(&next_ray, counts) else {
@@ -162,6 +168,9 @@ pub fn radiance_guided(
                     power_heuristic(bs.pdf as f32, pdf_light)
                 };
                 radiance += beta * emitted(y_material, &y, -wi) * weight;
+                if let Some(r) = recorder.as_deref_mut().filter(|_| diffuse && !bs.delta) {
+                    r.emission_seen(radiance);
+                }
             }
         }
         if bounce >= RR_START {

@@ -3,20 +3,33 @@
 //! The genetic algorithm learns, per pixel, where light arrives from at the first vertices of
 //! that pixel's paths. Deeper vertices lie anywhere in the scene, and a per-pixel mixture
 //! says little about them. This guide learns incident light per region of space instead,
-//! in the manner of "practical path guiding" (Müller et al. 2017) with a fixed structure:
+//! after "practical path guiding" (Müller, Gross and Novák 2017): a spatial-directional tree.
 //!
-//! * space: the scene's bounding box cut into a regular grid of cells
-//!   ([`CELLS_LONGEST`] along its longest side);
-//! * directions: per cell, a piecewise-constant density over the sphere on an equal-area map
-//!   (`cos θ` about the world `y` axis and `φ`, [`THETA_BINS`] × [`PHI_BINS`] bins of equal
-//!   solid angle).
+//! * space: per way a surface can face ([`facing`]: the two sides of a thin wall learn
+//!   apart), a kd-tree over the scene's bounding box, a node cut in two at the middle of its
+//!   longest side while it holds more than [`SPLIT_RECORDS`] training records, down to a
+//!   lattice cell ([`LATTICE_LONGEST`] along the longest side): regions are small where
+//!   light was recorded often (near what the camera sees) and large elsewhere, and a lookup
+//!   is one read of a per-cell table;
+//! * directions: per spatial leaf, a quadtree over the equal-area square of the sphere
+//!   (`u = (cos θ + 1) / 2` about the world `y` axis, `v = (φ + π) / 2π`), a quadrant
+//!   subdivided while it carries more than [`SPLIT_ENERGY`] of the leaf's recorded light and
+//!   holds at least [`MIN_NODE_RECORDS`] records: fine where light comes from a small
+//!   solid angle (a slit, a lit band), coarse elsewhere.
 //!
 //! It is trained on records of path-traced samples: at every non-delta vertex, the
 //! cosine-weighted incident radiance along the sampled direction (and along the light sample's
-//! direction, with its multiple-importance weight) over that direction's density. The sum of
-//! a bin's records is proportional to an estimate of `∫_bin L_i |cos| dω`; the bin's
-//! probability is that, normalised over the cell, with [`UNIFORM_SHARE`] of the sphere's uniform density mixed in. Cells
-//! without a record carrying light are untrained: path tracing samples the BSDF there.
+//! direction, with its multiple-importance weight) over that direction's density. At a
+//! diffuse vertex, light arriving straight from an emitter is left out of the records (the
+//! light sample's record, and the emission the sampled direction finds at once): next-event
+//! estimation samples it well there, and a guide that learned it would spend its samples on
+//! the light instead of on the indirect light only it can find. fig1, 64 spp, seed 7: `pg`
+//! relMSE 0.0187 without direct light in the records, 0.0237 with; glossy 0.0055 against
+//! 0.0106; fig5 0.299 / 0.292 / 0.285 against 0.272 / 0.286 / 0.280 (seeds 7 / 11 / 13). The sum of
+//! a quadrant's records is proportional to an estimate of `∫ L_i |cos| dω` over its solid
+//! angle; a quadrant's probability given its parent is its share of the parent's sum, and
+//! [`UNIFORM_SHARE`] of the sphere's uniform density is mixed in. Leaves without a record
+//! carrying light are untrained: path tracing samples the BSDF there.
 //!
 //! A guided vertex draws its direction from `GUIDE_SHARE · p_guide + (1 − GUIDE_SHARE) ·
 //! p_bsdf` and multiple importance sampling weighs next-event estimation against that
@@ -26,132 +39,98 @@ use crate::accel::TriangleMesh;
 use glam::Vec3;
 use std::f64::consts::PI;
 
-/// Bins of `cos θ` (about the world `y` axis) and of `φ`: 512 bins of 0.025 sr, about 9°
-/// across. fig1, 64 spp, seed 7, `pg` relMSE (`pt`: 0.053): 0.036 with 8 × 16 bins and 16
-/// training passes, 0.032 with 16 × 16 and 8 passes, 0.031 with 16 × 32 and 8 passes.
-pub const THETA_BINS: usize = 16;
-pub const PHI_BINS: usize = 32;
-pub const BINS: usize = THETA_BINS * PHI_BINS;
-/// Cells along the longest side of the scene's bounding box. fig1, equal time, 2 / 8 s,
-/// `pg` with 4 passes over `pt`: 0.70 / 0.67 with 8 cells, 0.92 / 0.85 with 12 (too few
-/// records per cell), and with 4 cells and 32 passes the per-sample relMSE is 0.049
-/// against 0.036 with 8.
-pub const CELLS_LONGEST: usize = 8;
-/// Share of the uniform sphere density in a trained cell's density: directions the training
+/// A spatial node is cut in two while it holds more than this many training records.
+pub const SPLIT_RECORDS: usize = 4000;
+/// Depth limit of the spatial tree.
+const MAX_SPATIAL_DEPTH: u32 = 32;
+/// A directional quadrant is subdivided while it carries more than this share of its leaf's
+/// recorded light ...
+pub const SPLIT_ENERGY: f64 = 0.01;
+/// ... and holds at least this many records (fewer say too little about where inside it the
+/// light comes from).
+pub const MIN_NODE_RECORDS: usize = 16;
+/// Depth limit of a directional quadtree: leaves of `4π / 4^12` sr at the finest, about
+/// 0.05° across.
+const MAX_DIRECTIONAL_DEPTH: u32 = 12;
+/// Share of the sphere's uniform density in a trained leaf's density: directions the training
 /// records missed keep some probability.
 pub const UNIFORM_SHARE: f64 = 0.1;
+/// Lattice cells along the scene box's longest side: the finest spatial regions (see
+/// `Lattice`).
+pub const LATTICE_LONGEST: u32 = 16;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF.
-/// (fig1, 64 spp, 8 × 16 bins: relMSE 0.038 / 0.039 / 0.050 / 0.128 at shares 0.3 / 0.5 /
-/// 0.7 / 0.9; with 32 training passes 0.5 still beats 0.7, 0.036 against 0.042: a regular
-/// grid's cells average incident light over too much space to be trusted further.)
 pub const GUIDE_SHARE: f64 = 0.5;
 
-/// The regular grid of cells over a bounding box.
-#[derive(Clone, Debug)]
-pub struct Grid {
-    lo: Vec3,
-    /// Cells per unit length (the same along every axis).
-    scale: f32,
-    res: [usize; 3],
+/// The position of unit direction `d` on the equal-area square: `((cos θ + 1) / 2, (φ + π) /
+/// 2π)` with `cos θ = d.y` and `φ` the angle of `(d.x, d.z)`.
+pub fn to_square(d: Vec3) -> [f32; 2] {
+    let u = ((d.y + 1.0) * 0.5).clamp(0.0, 1.0);
+    let v = (d.z.atan2(d.x) * (0.5 * std::f32::consts::FRAC_1_PI) + 0.5).clamp(0.0, 1.0);
+    [u, v]
 }
 
-impl Grid {
-    /// A grid over the box `[lo, hi]` with [`CELLS_LONGEST`] cells along its longest side
-    /// (at least one along every side).
-    pub fn new(lo: Vec3, hi: Vec3) -> Self {
-        let size = (hi - lo).max(Vec3::splat(1e-6));
-        let scale = CELLS_LONGEST as f32 / size.max_element();
-        let res = size
-            .to_array()
-            .map(|s| ((s * scale).ceil() as usize).clamp(1, CELLS_LONGEST));
-        Self { lo, scale, res }
-    }
-
-    /// The grid over the bounding box of `mesh`.
-    pub fn around(mesh: &TriangleMesh) -> Self {
-        let (lo, hi) = mesh.bounds();
-        if lo.cmple(hi).all() {
-            Self::new(lo, hi)
-        } else {
-            Self::new(Vec3::ZERO, Vec3::ONE)
-        }
-    }
-
-    pub fn cells(&self) -> usize {
-        self.res.iter().product()
-    }
-
-    /// The cell containing `p` (points outside the box go to the nearest cell).
-    pub fn cell(&self, p: Vec3) -> usize {
-        let t = ((p - self.lo) * self.scale).to_array();
-        // `as usize` maps NaN and negatives to 0.
-        let i: [usize; 3] = std::array::from_fn(|a| (t[a] as usize).min(self.res[a] - 1));
-        (i[2] * self.res[1] + i[1]) * self.res[0] + i[0]
-    }
+/// The unit direction at `(u, v)` of the equal-area square (inverse of [`to_square`]).
+pub fn from_square(u: f64, v: f64) -> Vec3 {
+    let y = (2.0 * u - 1.0).clamp(-1.0, 1.0);
+    let (sin, cos) = ((2.0 * PI * (v - 0.5)) as f32).sin_cos();
+    let s = (1.0 - y * y).max(0.0).sqrt() as f32;
+    Vec3::new(s * cos, y as f32, s * sin).normalize()
 }
 
-/// The bin of unit direction `d`: `cos θ = d.y` in [`THETA_BINS`] equal steps, and `φ + π`
-/// (the angle of `(−d.x, −d.z)`) in [`PHI_BINS`] equal sectors, found by comparisons with
-/// the sector boundaries' tangents rather than by `atan2` (every guided vertex computes two
-/// or three bins).
-pub fn bin(d: Vec3) -> usize {
-    let t = (((d.y + 1.0) * 0.5 * THETA_BINS as f32) as usize).min(THETA_BINS - 1);
-    let (a, b) = (-d.x, -d.z);
-    // Quadrant of (a, b), and (a, b) rotated into the first one: (p > 0, r ≥ 0).
-    let (quadrant, p, r) = match (a >= 0.0, b >= 0.0) {
-        (true, true) => (0, a, b),
-        (false, true) => (1, b, -a),
-        (false, false) => (2, -a, -b),
-        (true, false) => (3, -b, a),
+/// The quadrant of `(u, v)` in the unit square, `(u ≥ ½) + 2 (v ≥ ½)`, and `(u, v)` in that
+/// quadrant's own unit square (exact in binary floating point).
+fn quadrant(u: f32, v: f32) -> (usize, f32, f32) {
+    let (hu, hv) = (u >= 0.5, v >= 0.5);
+    let q = usize::from(hu) + 2 * usize::from(hv);
+    (
+        q,
+        2.0 * u - f32::from(u8::from(hu)),
+        2.0 * v - f32::from(u8::from(hv)),
+    )
+}
+
+/// Which way a surface normal `n` faces: its largest component's axis and sign, `0 … 5`.
+/// Each facing has its own spatial tree, so that the two sides of a thin wall (the divider
+/// of fig1: lit from above, dark below, a millimetre apart) learn apart.
+pub fn facing(n: Vec3) -> usize {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
     };
-    let sector = SECTOR_TANGENTS.iter().filter(|&&tan| r >= p * tan).count();
-    t * PHI_BINS + SECTORS * quadrant + sector
+    2 * axis + usize::from(n[axis] < 0.0)
 }
 
-/// Sectors of `φ` per quadrant, and the tangents of their inner boundaries `k π / (2 ·
-/// SECTORS)`, `k = 1 … SECTORS − 1`.
-const SECTORS: usize = PHI_BINS / 4;
-const SECTOR_TANGENTS: [f32; SECTORS - 1] = [
-    0.198_912_37,
-    0.414_213_57,
-    0.668_178_6,
-    1.0,
-    1.496_605_8,
-    2.414_213_6,
-    5.027_339_5,
-];
+/// Ways a normal can face (see [`facing`]).
+pub const FACINGS: usize = 6;
 
-/// The direction at position `(r1, r2) ∈ [0, 1)²` inside `bin`, uniform in solid angle.
-fn direction(bin: usize, r1: f64, r2: f64) -> Vec3 {
-    let (t, p) = (bin / PHI_BINS, bin % PHI_BINS);
-    let y = (-1.0 + 2.0 * (t as f64 + r1) / THETA_BINS as f64).clamp(-1.0, 1.0);
-    let phi = 2.0 * PI * ((p as f64 + r2) / PHI_BINS as f64 - 0.5);
-    let s = (1.0 - y * y).max(0.0).sqrt();
-    Vec3::new((s * phi.cos()) as f32, y as f32, (s * phi.sin()) as f32).normalize()
-}
-
-/// One training record: a cell, a direction bin and the cosine-weighted radiance over the
-/// direction's density (luminance).
+/// One training record: where, which way the surface there faces (see [`facing`]), the
+/// direction on the equal-area square, and the cosine-weighted radiance over the direction's
+/// density (luminance).
 #[derive(Clone, Copy, Debug)]
 pub struct Record {
-    pub cell: u32,
-    pub bin: u16,
+    pub p: Vec3,
+    pub facing: u8,
+    pub dir: [f32; 2],
     pub value: f32,
 }
 
 /// Records collected along one path: the sampled directions' records wait for the radiance
 /// the rest of the path brings back.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct PathRecorder {
-    pub grid: Grid,
     pending: Vec<Pending>,
     pub records: Vec<Record>,
 }
 
 #[derive(Debug)]
 struct Pending {
-    cell: u32,
-    bin: u16,
+    p: Vec3,
+    facing: u8,
+    dir: [f32; 2],
     /// `|cos| / pdf` of the sampled direction.
     cos_over_pdf: f32,
     /// The path throughput right after this vertex's sample, and the radiance collected
@@ -165,37 +144,49 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 impl PathRecorder {
-    pub fn new(grid: Grid) -> Self {
-        Self {
-            grid,
-            pending: Vec::new(),
-            records: Vec::new(),
-        }
-    }
-
-    /// A light sample's record at `x`: `value` is its MIS-weighted `L_e |cos| / pdf`
-    /// (throughput excluded).
-    pub fn light(&mut self, x: Vec3, wi: Vec3, value: Vec3) {
+    /// A light sample's record at `x` (normal `n`): `value` is its MIS-weighted `L_e |cos| /
+    /// pdf` (throughput excluded).
+    pub fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3) {
         let value = luminance(value);
         if value > 0.0 && value.is_finite() {
             self.records.push(Record {
-                cell: self.grid.cell(x) as u32,
-                bin: bin(wi) as u16,
+                p: x,
+                facing: facing(n) as u8,
+                dir: to_square(wi),
                 value,
             });
         }
     }
 
-    /// The direction sampled at vertex `x`, with `|cos| / pdf`, the throughput after the
-    /// sample and the radiance collected so far.
-    pub fn sampled(&mut self, x: Vec3, wi: Vec3, cos_over_pdf: f32, beta: Vec3, before: Vec3) {
+    /// The direction sampled at vertex `x` (normal `n`), with `|cos| / pdf`, the throughput
+    /// after the sample and the radiance collected so far.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sampled(
+        &mut self,
+        x: Vec3,
+        n: Vec3,
+        wi: Vec3,
+        cos_over_pdf: f32,
+        beta: Vec3,
+        before: Vec3,
+    ) {
         self.pending.push(Pending {
-            cell: self.grid.cell(x) as u32,
-            bin: bin(wi) as u16,
+            p: x,
+            facing: facing(n) as u8,
+            dir: to_square(wi),
             cos_over_pdf,
             beta,
             before,
         });
+    }
+
+    /// Leaves the emission that the last sampled direction found at once (now added, the
+    /// estimate being `radiance`) out of that direction's record: see the module
+    /// documentation on direct light.
+    pub fn emission_seen(&mut self, radiance: Vec3) {
+        if let Some(p) = self.pending.last_mut() {
+            p.before = radiance;
+        }
     }
 
     /// Ends the path whose estimate is `radiance`: each sampled direction's record gets the
@@ -207,8 +198,9 @@ impl PathRecorder {
             let value = luminance(li) * p.cos_over_pdf;
             if value > 0.0 && value.is_finite() {
                 self.records.push(Record {
-                    cell: p.cell,
-                    bin: p.bin,
+                    p: p.p,
+                    facing: p.facing,
+                    dir: p.dir,
                     value,
                 });
             }
@@ -216,188 +208,586 @@ impl PathRecorder {
     }
 }
 
-/// Per cell and bin, the summed values of the training records so far: each training pass
-/// adds its records, and the guide of all of them is rebuilt from the sums.
-#[derive(Clone, Debug)]
-pub struct RecordSums {
-    grid: Grid,
-    sums: Vec<f64>,
-    records: usize,
+/// Moves the items of `items` for which `left` holds to the front; returns how many they are.
+fn partition<T>(items: &mut [T], left: impl Fn(&T) -> bool) -> usize {
+    let mut n = 0;
+    for i in 0..items.len() {
+        if left(&items[i]) {
+            items.swap(n, i);
+            n += 1;
+        }
+    }
+    n
 }
 
-impl RecordSums {
-    pub fn new(grid: Grid) -> Self {
-        let sums = vec![0.0; grid.cells() * BINS];
+/// Cuts the box `[lo, hi]` holding `records` in two at the middle of its longest side,
+/// where that leaves records on both sides: halves without a record are dropped (the box
+/// shrinks to the other half), so that a lookup does not descend through cuts that
+/// separate nothing (a floor's records, say, cut along its normal). The axis, the cut's
+/// position and how many records lie below it; `None` where no cut separates them.
+fn cut(
+    records: &mut [Record],
+    lo: &mut Vec3,
+    hi: &mut Vec3,
+    finest: Vec3,
+) -> Option<(usize, f32, usize)> {
+    loop {
+        // The longest side that is still more than a lattice cell long.
+        let size = (*hi - *lo).to_array();
+        let axis = (0..3)
+            .filter(|&a| size[a] > 1.5 * finest[a])
+            .max_by(|&a, &b| size[a].total_cmp(&size[b]).then(b.cmp(&a)))?;
+        let split = 0.5 * (lo[axis] + hi[axis]);
+        let below = partition(records, |r| r.p[axis] < split);
+        if below == 0 {
+            lo[axis] = split;
+        } else if below == records.len() {
+            hi[axis] = split;
+        } else {
+            return Some((axis, split, below));
+        }
+    }
+}
+
+/// The regular lattice over the scene's box that spatial lookups go through: the kd-tree's
+/// cuts halve boxes down to a lattice cell at the finest, so that every lattice cell lies in
+/// one leaf, and a lookup is one table read instead of a descent.
+#[derive(Clone, Debug)]
+struct Lattice {
+    lo: Vec3,
+    /// A cell's size along each axis, and its inverse.
+    cell: Vec3,
+    inv: Vec3,
+    res: [u32; 3],
+}
+
+impl Lattice {
+    /// [`LATTICE_LONGEST`] cells along the box's longest side, and along each other side the
+    /// power of two that keeps the cells closest to cubes (the kd-tree halves sides).
+    fn new(lo: Vec3, hi: Vec3) -> Self {
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let longest = size.max_element();
+        let res = size.to_array().map(|s| {
+            let n = (LATTICE_LONGEST as f32 * s / longest).max(1.0);
+            let p = n.log2().round().clamp(0.0, 10.0) as u32;
+            1u32 << p
+        });
+        let cell = size / Vec3::from_array(res.map(|r| r as f32));
         Self {
-            grid,
-            sums,
-            records: 0,
+            lo,
+            cell,
+            inv: cell.recip(),
+            res,
+        }
+    }
+
+    fn cells(&self) -> usize {
+        self.res.iter().map(|&r| r as usize).product()
+    }
+
+    /// The cell of `p` (points outside the box go to the nearest cell).
+    fn index(&self, p: Vec3) -> usize {
+        let t = ((p - self.lo) * self.inv).to_array();
+        // `as u32` maps NaN and negatives to 0.
+        let i: [usize; 3] = std::array::from_fn(|a| (t[a] as u32).min(self.res[a] - 1) as usize);
+        (i[2] * self.res[1] as usize + i[1]) * self.res[0] as usize + i[0]
+    }
+
+    /// The centre of cell `index`.
+    fn centre(&self, index: usize) -> Vec3 {
+        let (r0, r1) = (self.res[0] as usize, self.res[1] as usize);
+        let i = [index % r0, index / r0 % r1, index / (r0 * r1)];
+        self.lo + self.cell * (Vec3::from_array(i.map(|c| c as f32)) + 0.5)
+    }
+}
+
+/// A node of the spatial kd-tree: cut at `split` along `axis` (0, 1, 2) into the children
+/// below and above it, or a leaf (`axis` [`LEAF`]) whose `children[0]` is its directional
+/// quadtree's root (0: no record there carried light). Plain fields rather than an enum, so
+/// that a lookup descends without branching on the side.
+#[derive(Clone, Copy, Debug)]
+struct SpaceNode {
+    axis: u32,
+    split: f32,
+    children: [u32; 2],
+}
+
+const LEAF: u32 = 3;
+
+/// A node of a directional quadtree: per quadrant of its square (see [`quadrant`]), the
+/// quadrant's probability given the node, and its child node (0: the quadrant is a leaf,
+/// uniform inside); and for sampling, the cumulative probabilities through quadrants 0, 1
+/// and 2, infinite from the last quadrant with any probability on, so that no rounding
+/// picks a quadrant without probability.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuadNode {
+    prob: [f32; 4],
+    child: [u32; 4],
+    cdf: [f64; 3],
+}
+
+impl QuadNode {
+    /// Sets the cumulative probabilities from `prob`.
+    fn finish(&mut self) {
+        let last = (0..4).rev().find(|&q| self.prob[q] > 0.0).unwrap_or(0);
+        let mut acc = 0.0;
+        for q in 0..3 {
+            acc += f64::from(self.prob[q]);
+            self.cdf[q] = if q < last { acc } else { f64::INFINITY };
+        }
+    }
+}
+
+/// A directional record: position on the node's square and value.
+#[derive(Clone, Copy, Debug)]
+struct DirRecord {
+    u: f32,
+    v: f32,
+    value: f32,
+}
+
+/// The training records of every pass so far; the guide is rebuilt from all of them after
+/// each pass.
+#[derive(Clone, Debug)]
+pub struct Records {
+    lo: Vec3,
+    hi: Vec3,
+    records: Vec<Record>,
+}
+
+impl Records {
+    /// No records yet, for a guide over the box `[lo, hi]`.
+    pub fn new(lo: Vec3, hi: Vec3) -> Self {
+        Self {
+            lo,
+            hi,
+            records: Vec::new(),
+        }
+    }
+
+    /// No records yet, for a guide over the bounding box of `mesh`.
+    pub fn around(mesh: &TriangleMesh) -> Self {
+        let (lo, hi) = mesh.bounds();
+        if lo.cmple(hi).all() {
+            Self::new(lo, hi)
+        } else {
+            Self::new(Vec3::ZERO, Vec3::ONE)
         }
     }
 
     pub fn add(&mut self, records: impl IntoIterator<Item = Record>) {
-        for r in records {
-            self.records += 1;
-            let i = r.cell as usize * BINS + r.bin as usize;
-            if let Some(s) = self.sums.get_mut(i) {
-                *s += f64::from(r.value);
-            }
-        }
+        self.records.extend(records);
     }
 
-    /// The guide of the records added so far (see the module documentation).
-    pub fn guide(&self) -> SpatialGuide {
-        let cells = self.grid.cells();
-        let mut trained = vec![false; cells];
-        let mut density = vec![0.0f32; cells * BINS];
-        let mut cdf = vec![0.0f32; cells * BINS];
-        let bin_solid_angle = 4.0 * PI / BINS as f64;
-        for c in 0..cells {
-            let s = &self.sums[c * BINS..(c + 1) * BINS];
-            let total: f64 = s.iter().sum();
-            if !(total > 0.0 && total.is_finite()) {
-                continue;
-            }
-            trained[c] = true;
-            let mut acc = 0.0;
-            for b in 0..BINS {
-                let p = (1.0 - UNIFORM_SHARE) * s[b] / total + UNIFORM_SHARE / BINS as f64;
-                density[c * BINS + b] = (p / bin_solid_angle) as f32;
-                acc += p;
-                cdf[c * BINS + b] = acc as f32;
-            }
-            cdf[c * BINS + BINS - 1] = 1.0;
-        }
-        let stats = SpatialStats {
-            records: self.records,
-            cells,
-            trained_cells: trained.iter().filter(|&&t| t).count(),
-            ..SpatialStats::default()
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+
+    /// Forgets the records, keeping the storage.
+    pub fn clear(&mut self) {
+        self.records.clear();
+    }
+
+    /// The guide of the records added so far (see the module documentation). Builds reorder
+    /// the records, deterministically.
+    pub fn guide(&mut self) -> SpatialGuide {
+        let mut guide = SpatialGuide {
+            stats: SpatialStats {
+                records: self.records.len(),
+                ..SpatialStats::default()
+            },
+            lattice: Lattice::new(self.lo, self.hi),
+            regions: Vec::new(),
+            space: Vec::new(),
+            quads: vec![QuadNode::default()],
         };
-        SpatialGuide {
-            grid: self.grid.clone(),
-            stats,
-            trained,
-            density,
-            cdf,
+        let (lo, hi) = (self.lo, self.hi);
+        let mut rest = &mut self.records[..];
+        let cells = guide.lattice.cells();
+        guide.regions = vec![0; FACINGS * cells];
+        for f in 0..FACINGS {
+            let n = partition(rest, |r| usize::from(r.facing) == f);
+            let (these, others) = rest.split_at_mut(n);
+            guide.space.clear();
+            guide.build_space(these, lo, hi, 0);
+            for c in 0..cells {
+                guide.regions[f * cells + c] = guide.leaf(guide.lattice.centre(c));
+            }
+            rest = others;
         }
+        guide.space = Vec::new();
+        guide.stats.directional_nodes = guide.quads.len() - 1;
+        guide
     }
 }
 
 /// What training a spatial guide did.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct SpatialStats {
-    /// Training passes (one path-traced sample per pixel each).
+    /// Training passes (pass `i`: `2^i` path-traced samples per pixel), and their samples
+    /// per pixel in all (part of the image).
     pub passes: u32,
-    /// Records carrying light, over all passes.
+    pub spp: u32,
+    /// Records carrying light, over all passes (each guide learns from its pass's alone).
     pub records: usize,
+    /// Leaves of the spatial trees (one tree per facing), and those with a directional
+    /// quadtree.
     pub cells: usize,
     pub trained_cells: usize,
+    /// Nodes of all directional quadtrees.
+    pub directional_nodes: usize,
     /// Wall-clock seconds of the training passes.
     pub seconds: f64,
 }
 
-/// The trained guide: per cell, bin probabilities and their cumulative sums.
+/// The trained guide: a spatial kd-tree whose leaves hold directional quadtrees.
 #[derive(Clone, Debug)]
 pub struct SpatialGuide {
-    pub grid: Grid,
     pub stats: SpatialStats,
-    /// Per cell: whether any record carried light.
-    trained: Vec<bool>,
-    /// Per cell and bin: solid-angle density, and cumulative probability up to the bin's end.
-    density: Vec<f32>,
-    cdf: Vec<f32>,
+    lattice: Lattice,
+    /// Per facing and lattice cell, the root of the directional quadtree of the kd-tree leaf
+    /// holding the cell (0: none).
+    regions: Vec<u32>,
+    /// The kd-tree of the facing being built (not kept).
+    space: Vec<SpaceNode>,
+    /// Every leaf's quadtree nodes; node 0 is unused, so that child 0 can mean "none".
+    quads: Vec<QuadNode>,
 }
 
 impl SpatialGuide {
-    /// The guide trained on `records` (per cell and bin, their mean value: cells with no
-    /// light stay untrained).
-    pub fn train(grid: Grid, records: impl IntoIterator<Item = Record>) -> Self {
-        let mut sums = RecordSums::new(grid);
-        sums.add(records);
-        sums.guide()
+    /// The guide trained on `records` alone, over the box `[lo, hi]`.
+    pub fn train(lo: Vec3, hi: Vec3, records: impl IntoIterator<Item = Record>) -> Self {
+        let mut all = Records::new(lo, hi);
+        all.add(records);
+        all.guide()
     }
 
-    /// The trained cell at `p`, if any.
-    pub fn cell(&self, p: Vec3) -> Option<usize> {
-        let c = self.grid.cell(p);
-        self.trained[c].then_some(c)
+    /// Builds the spatial node of `records` in the box `[lo, hi]`; returns its index.
+    fn build_space(
+        &mut self,
+        records: &mut [Record],
+        mut lo: Vec3,
+        mut hi: Vec3,
+        depth: u32,
+    ) -> u32 {
+        let index = self.space.len();
+        self.space.push(SpaceNode {
+            axis: LEAF,
+            split: 0.0,
+            children: [0; 2],
+        });
+        let cut = (records.len() > SPLIT_RECORDS && depth < MAX_SPATIAL_DEPTH)
+            .then(|| cut(records, &mut lo, &mut hi, self.lattice.cell))
+            .flatten();
+        if let Some((axis, split, below)) = cut {
+            let (a, b) = records.split_at_mut(below);
+            let (mut hi_a, mut lo_b) = (hi, lo);
+            hi_a[axis] = split;
+            lo_b[axis] = split;
+            let children = [
+                self.build_space(a, lo, hi_a, depth + 1),
+                self.build_space(b, lo_b, hi, depth + 1),
+            ];
+            self.space[index] = SpaceNode {
+                axis: axis as u32,
+                split,
+                children,
+            };
+        } else {
+            self.stats.cells += 1;
+            let total: f64 = records.iter().map(|r| f64::from(r.value)).sum();
+            if total > 0.0 && total.is_finite() {
+                self.stats.trained_cells += 1;
+                let mut dirs: Vec<DirRecord> = records
+                    .iter()
+                    .map(|r| DirRecord {
+                        u: r.dir[0],
+                        v: r.dir[1],
+                        value: r.value,
+                    })
+                    .collect();
+                let root = self.build_quad(&mut dirs, total, total, 0);
+                self.space[index].children[0] = root;
+            }
+        }
+        index as u32
     }
 
-    /// The solid-angle density of `cell`'s guide for unit `wi`.
+    /// Builds the quadtree node of `records` (on the node's own square), whose values sum to
+    /// `energy`, in a leaf whose values sum to `total`; returns its index.
+    fn build_quad(
+        &mut self,
+        records: &mut [DirRecord],
+        energy: f64,
+        total: f64,
+        depth: u32,
+    ) -> u32 {
+        let index = self.quads.len();
+        self.quads.push(QuadNode::default());
+        // Quadrants 0, 1 (v < ½), then 2, 3, each with `u < ½` first.
+        let low_v = partition(records, |r| r.v < 0.5);
+        let (bottom, top) = records.split_at_mut(low_v);
+        let low_u = [
+            partition(bottom, |r| r.u < 0.5),
+            partition(top, |r| r.u < 0.5),
+        ];
+        let (b0, b1) = bottom.split_at_mut(low_u[0]);
+        let (t0, t1) = top.split_at_mut(low_u[1]);
+        let mut node = QuadNode::default();
+        for (q, part) in [b0, b1, t0, t1].into_iter().enumerate() {
+            let e: f64 = part.iter().map(|r| f64::from(r.value)).sum();
+            node.prob[q] = (e / energy) as f32;
+            if e > SPLIT_ENERGY * total
+                && part.len() >= MIN_NODE_RECORDS
+                && depth + 1 < MAX_DIRECTIONAL_DEPTH
+            {
+                for r in part.iter_mut() {
+                    (_, r.u, r.v) = quadrant(r.u, r.v);
+                }
+                node.child[q] = self.build_quad(part, e, total, depth + 1);
+            }
+        }
+        node.finish();
+        self.quads[index] = node;
+        index as u32
+    }
+
+    /// The trained region at `p` on a surface of normal `n`, if any: its directional
+    /// quadtree's root.
+    pub fn cell(&self, p: Vec3, n: Vec3) -> Option<usize> {
+        let i = facing(n) * self.lattice.cells() + self.lattice.index(p);
+        match self.regions[i] {
+            0 => None,
+            root => Some(root as usize),
+        }
+    }
+
+    /// The root of the directional quadtree of the kd-tree leaf at `p` (0: none).
+    fn leaf(&self, p: Vec3) -> u32 {
+        let p = p.to_array();
+        let mut node = self.space[0];
+        while node.axis != LEAF {
+            let above = p[node.axis as usize] >= node.split;
+            node = self.space[node.children[usize::from(above)] as usize];
+        }
+        node.children[0]
+    }
+
+    /// The solid-angle density of region `cell`'s guide for unit `wi`.
     pub fn pdf(&self, cell: usize, wi: Vec3) -> f64 {
-        f64::from(self.density[cell * BINS + bin(wi)])
+        let [mut u, mut v] = to_square(wi);
+        let mut node = cell;
+        let mut p = 1.0f64;
+        loop {
+            let n = &self.quads[node];
+            let q;
+            (q, u, v) = quadrant(u, v);
+            p *= 4.0 * f64::from(n.prob[q]);
+            match n.child[q] {
+                0 => break,
+                c => node = c as usize,
+            }
+        }
+        ((1.0 - UNIFORM_SHARE) * p + UNIFORM_SHARE) / (4.0 * PI)
     }
 
-    /// A direction from `cell`'s density, from three uniform numbers.
+    /// A direction from region `cell`'s density, from three uniform numbers.
     pub fn sample(&self, cell: usize, u: [f64; 3]) -> Vec3 {
-        let cdf = &self.cdf[cell * BINS..(cell + 1) * BINS];
-        let b = cdf.partition_point(|&c| f64::from(c) <= u[0]).min(BINS - 1);
-        direction(b, u[1], u[2])
+        if u[0] < UNIFORM_SHARE {
+            return from_square(u[1], u[2]);
+        }
+        let mut r = ((u[0] - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE)).clamp(0.0, 1.0);
+        let (mut x, mut y, mut size) = (0.0f64, 0.0f64, 1.0f64);
+        let mut node = cell;
+        loop {
+            let n = &self.quads[node];
+            // The quadrant whose cumulative probability passes `r`, without branches.
+            let q = n.cdf.iter().map(|&c| usize::from(r >= c)).sum::<usize>();
+            let before = if q == 0 { 0.0 } else { n.cdf[q - 1] };
+            r = ((r - before) / f64::from(n.prob[q])).clamp(0.0, 1.0);
+            size *= 0.5;
+            x += size * (q & 1) as f64;
+            y += size * (q >> 1) as f64;
+            match n.child[q] {
+                0 => break,
+                c => node = c as usize,
+            }
+        }
+        from_square(x + size * u[1], y + size * u[2])
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::{sample_rng, uniform};
 
-    /// `bin` against the `atan2` it replaces, on random directions.
+    fn uniforms(rng: &mut crate::sampling::Rng) -> [f64; 3] {
+        [0; 3].map(|_| f64::from(uniform(rng)))
+    }
+
     #[test]
-    fn bins_agree_with_atan2() {
-        let mut rng = crate::sampling::sample_rng(9, 0, 0);
-        for _ in 0..100_000 {
-            let u = [0; 3].map(|_| crate::sampling::uniform(&mut rng) as f64);
-            let d = direction((u[0] * BINS as f64) as usize, u[1], u[2]);
-            let phi = (d.z as f64).atan2(d.x as f64);
-            let p = (((phi / (2.0 * PI) + 0.5) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
-            assert_eq!(bin(d) % PHI_BINS, p, "{d}");
+    fn facings() {
+        let normals = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        for (i, n) in normals.into_iter().enumerate() {
+            assert_eq!(facing(n), i);
+            assert_eq!(facing((n + Vec3::splat(0.3)).normalize()), i);
         }
     }
 
     #[test]
-    fn bins_are_equal_area_and_round_trip() {
-        for b in 0..BINS {
-            for (r1, r2) in [(0.1, 0.2), (0.5, 0.5), (0.9, 0.95)] {
-                assert_eq!(bin(direction(b, r1, r2)), b, "bin {b} at ({r1}, {r2})");
-            }
+    fn square_round_trips() {
+        let mut rng = sample_rng(9, 0, 0);
+        for _ in 0..100_000 {
+            let [u, v] = uniforms(&mut rng)[..2].try_into().unwrap();
+            let [a, b] = to_square(from_square(u, v));
+            assert!((f64::from(a) - u).abs() < 1e-5, "u {u} → {a}");
+            // φ wraps at ±π; elsewhere v comes back.
+            let dv = (f64::from(b) - v).abs();
+            assert!(!(1e-5..=1.0 - 1e-5).contains(&dv), "v {v} → {b}");
         }
+    }
+
+    /// A guide trained on records bunched around two directions and spread over the rest,
+    /// in one region of the box `[0, 1]³`.
+    fn trained() -> SpatialGuide {
+        let mut rng = sample_rng(4, 0, 0);
+        let records = (0..SPLIT_RECORDS).map(|i| {
+            let [a, b, c] = uniforms(&mut rng);
+            let dir = match i % 4 {
+                0 => [0.3 + 0.01 * a as f32, 0.7 + 0.003 * b as f32],
+                1 => [0.8 + 0.05 * a as f32, 0.1 + 0.05 * b as f32],
+                _ => [a as f32, b as f32],
+            };
+            Record {
+                p: Vec3::splat(0.5),
+                facing: 2,
+                dir,
+                value: 0.5 + c as f32,
+            }
+        });
+        SpatialGuide::train(Vec3::ZERO, Vec3::ONE, records)
+    }
+
+    #[test]
+    fn quadtree_refines_where_the_light_is() {
+        let guide = trained();
+        assert_eq!(guide.stats.trained_cells, 1);
+        assert!(guide.cell(Vec3::splat(0.5), -Vec3::Y).is_none());
+        let cell = guide.cell(Vec3::splat(0.5), Vec3::Y).unwrap();
+        // A quarter of the light in 3e-5 of the square: the density there is thousands of
+        // times the mean, and the spread records' quadrants stay coarse.
+        let bright = guide.pdf(cell, from_square(0.305, 0.7015)) * 4.0 * PI;
+        let dim = guide.pdf(cell, from_square(0.5, 0.3)) * 4.0 * PI;
+        assert!(bright > 1000.0, "density {bright} at the narrow bunch");
+        assert!(
+            (0.3..1.0).contains(&dim),
+            "density {dim} among the spread records"
+        );
+        assert!(guide.stats.directional_nodes < 400, "{:?}", guide.stats);
     }
 
     #[test]
     fn density_integrates_to_one_and_matches_samples() {
-        let grid = Grid::new(Vec3::ZERO, Vec3::ONE);
-        let records = (0..200).map(|i| Record {
-            cell: 0,
-            bin: (i % 7) as u16,
-            value: 1.0 + i as f32,
-        });
-        let guide = SpatialGuide::train(grid, records);
-        assert!(guide.cell(Vec3::splat(0.01)).is_some());
-        // ∫ p dω over the sphere by the bins' equal solid angles.
-        let total: f64 = (0..BINS)
-            .map(|b| guide.pdf(0, direction(b, 0.5, 0.5)) * 4.0 * PI / BINS as f64)
-            .sum();
-        assert!((total - 1.0).abs() < 1e-5, "{total}");
-        // Sampled bin frequencies against the densities.
+        let guide = trained();
+        let cell = guide.cell(Vec3::splat(0.5), Vec3::Y).unwrap();
+        // ∫ p dω by sampling directions from the guide itself: E[1 / p] over its samples is
+        // the solid angle where p > 0, the whole sphere.
+        let mut rng = sample_rng(3, 0, 0);
         let n = 200_000;
-        let mut hits = vec![0u32; BINS];
-        let mut rng = crate::sampling::sample_rng(3, 0, 0);
+        let mut inverse = 0.0;
+        // Frequencies of a coarse 16 × 16 histogram of the square against each of its cells'
+        // probability, from the quadtree's leaves (and the uniform share).
+        let mut hits = vec![0u32; 256];
         for _ in 0..n {
-            let u = [0; 3].map(|_| f64::from(crate::sampling::uniform(&mut rng)));
-            hits[bin(guide.sample(0, u))] += 1;
+            let d = guide.sample(cell, uniforms(&mut rng));
+            inverse += 1.0 / guide.pdf(cell, d);
+            let [u, v] = to_square(d);
+            hits[((u * 16.0) as usize).min(15) * 16 + ((v * 16.0) as usize).min(15)] += 1;
         }
-        // Largest |z| of the bins' counts against `scale` × their probabilities.
+        let sphere = inverse / n as f64;
+        assert!(
+            (sphere / (4.0 * PI) - 1.0).abs() < 0.01,
+            "∫ 1 dω = {sphere}"
+        );
+        let mut expected = vec![UNIFORM_SHARE / 256.0; 256];
+        for (x, y, size, p) in leaves(&guide, cell) {
+            for (c, e) in expected.iter_mut().enumerate() {
+                let (cu, cv) = ((c / 16) as f64 / 16.0, (c % 16) as f64 / 16.0);
+                let overlap = |a: f64, b: f64| (a + size).min(b + 1.0 / 16.0) - a.max(b);
+                let area = overlap(x, cu).max(0.0) * overlap(y, cv).max(0.0);
+                *e += (1.0 - UNIFORM_SHARE) * p * area / (size * size);
+            }
+        }
+        let total: f64 = expected.iter().sum();
+        assert!((total - 1.0).abs() < 1e-3, "∫ p = {total}");
         let worst = |scale: f64| {
-            (0..BINS)
-                .map(|b| {
-                    let p = scale * guide.pdf(0, direction(b, 0.5, 0.5)) * 4.0 * PI / BINS as f64;
-                    let expected = p * n as f64;
-                    (hits[b] as f64 - expected).abs() / expected.sqrt().max(1.0)
+            (0..256)
+                .map(|c| {
+                    let e = scale * expected[c] * n as f64;
+                    (hits[c] as f64 - e).abs() / e.sqrt().max(1.0)
                 })
                 .fold(0.0, f64::max)
         };
         assert!(worst(1.0) < 5.0, "max |z| {}", worst(1.0));
         // The same check rejects probabilities off by 5 %.
         assert!(worst(1.05) > 5.0, "max |z| {} off by 5 %", worst(1.05));
+    }
+
+    /// The leaves of region `cell`'s quadtree: their squares `(u, v, side)` and probabilities.
+    fn leaves(guide: &SpatialGuide, cell: usize) -> Vec<(f64, f64, f64, f64)> {
+        let mut out = Vec::new();
+        let mut stack = vec![(cell, 0.0, 0.0, 1.0, 1.0)];
+        while let Some((node, x, y, size, p)) = stack.pop() {
+            let n = &guide.quads[node];
+            for q in 0..4 {
+                let h = size / 2.0;
+                let (qx, qy) = (x + h * (q & 1) as f64, y + h * (q >> 1) as f64);
+                let pq = p * f64::from(n.prob[q]);
+                match n.child[q] {
+                    0 => out.push((qx, qy, h, pq)),
+                    c => stack.push((c as usize, qx, qy, h, pq)),
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn space_splits_where_records_are() {
+        // Records at two points far apart, more than one leaf can hold: the regions split
+        // and each learns its own direction.
+        let records = (0..2 * SPLIT_RECORDS + 2).map(|i| {
+            let left = i % 2 == 0;
+            Record {
+                p: if left {
+                    Vec3::splat(0.1)
+                } else {
+                    Vec3::splat(0.9)
+                },
+                facing: 0,
+                dir: if left { [0.2, 0.2] } else { [0.8, 0.8] },
+                value: 1.0,
+            }
+        });
+        let guide = SpatialGuide::train(Vec3::ZERO, Vec3::ONE, records);
+        assert!(guide.stats.cells > 1, "{:?}", guide.stats);
+        let (a, b) = (
+            guide.cell(Vec3::splat(0.1), Vec3::X).unwrap(),
+            guide.cell(Vec3::splat(0.9), Vec3::X).unwrap(),
+        );
+        // The same place facing another way has no records.
+        assert!(guide.cell(Vec3::splat(0.9), -Vec3::X).is_none());
+        assert_ne!(a, b);
+        let (da, db) = (from_square(0.2, 0.2), from_square(0.8, 0.8));
+        assert!(guide.pdf(a, da) > 100.0 * guide.pdf(a, db));
+        assert!(guide.pdf(b, db) > 100.0 * guide.pdf(b, da));
+        // Nothing recorded: untrained.
+        let empty = SpatialGuide::train(Vec3::ZERO, Vec3::ONE, []);
+        assert!(empty.cell(Vec3::splat(0.5), Vec3::Y).is_none());
     }
 }

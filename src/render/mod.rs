@@ -8,7 +8,7 @@ use crate::image::Image;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
-use crate::path::spatial::{Grid, PathRecorder, RecordSums, SpatialGuide};
+use crate::path::spatial::{PathRecorder, Records, SpatialGuide, SpatialStats};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{derive_seed, sample_rng, uniform, Rng};
 use glam::DVec3;
@@ -44,8 +44,9 @@ pub enum Estimator<'a> {
     /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt`).
     GaPt(&'a Plan),
     /// Path tracing guided by a spatial guide beyond the GA plan's levels (`ga-pt
-    /// --spatial-guide`), or at every vertex without a plan (`pg`).
-    Spatial(Option<&'a Plan>, &'a Arc<SpatialGuide>),
+    /// --spatial-guide`), or at every vertex without a plan (`pg`); the samples its training
+    /// took are part of the image.
+    Spatial(Option<&'a Plan>, &'a SpatialTraining),
 }
 
 /// Everything a method needs besides the render settings.
@@ -75,7 +76,7 @@ pub enum Prepared {
     Mixture(Mixture),
     Ga(Plan),
     GaPt(Plan),
-    Spatial(Option<Plan>, Arc<SpatialGuide>),
+    Spatial(Option<Plan>, SpatialTraining),
 }
 
 impl Prepared {
@@ -87,9 +88,8 @@ impl Prepared {
         settings: &RenderSettings,
     ) -> Result<Self, PrepareError> {
         let spatial = || {
-            let grid = Grid::around(&view.scene.mesh);
-            let passes = config.plan.spatial_passes;
-            Arc::new(train_spatial(view, settings, grid, passes))
+            let schedule = TrainingSchedule::new(&config.plan, settings.spp);
+            train_spatial(view, settings, schedule)
         };
         Ok(match config.method {
             Method::Pt => Prepared::Pt,
@@ -154,8 +154,17 @@ impl Prepared {
     /// The spatial guide of `pg` (and of `ga-pt` with `PlanConfig::spatial`).
     pub fn spatial(&self) -> Option<&SpatialGuide> {
         match self {
-            Prepared::Spatial(_, s) => Some(s),
+            Prepared::Spatial(_, t) => Some(&t.guide),
             _ => None,
+        }
+    }
+
+    /// Samples per pixel already in the image before rendering: the spatial guide's
+    /// training samples.
+    pub fn samples_taken(&self) -> u32 {
+        match self {
+            Prepared::Spatial(_, t) => t.samples.spp,
+            _ => 0,
         }
     }
 
@@ -300,7 +309,11 @@ fn render_tile(
     let mut scratch = MixtureScratch::default();
     // A guide per pixel, made in the same storage.
     let spatial = match estimator {
-        Estimator::Spatial(_, s) => Some(Arc::clone(s)),
+        Estimator::Spatial(_, t) => Some(Arc::clone(&t.guide)),
+        _ => None,
+    };
+    let taken = match estimator {
+        Estimator::Spatial(_, t) => Some(&t.samples),
         _ => None,
     };
     let spatial_guided = spatial.is_some();
@@ -332,7 +345,10 @@ fn render_tile(
                 Estimator::Mixture(m) => Some(m),
                 Estimator::Ga(_) => local.as_ref(),
             };
-            let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+            let (mut sum, mut sum_sq, mut n) = match taken {
+                Some(t) => t.at(pixel as usize),
+                None => (DVec3::ZERO, DVec3::ZERO, 0),
+            };
             for s in 0..settings.spp {
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 // Box filter: a uniformly jittered position inside the pixel.
@@ -348,11 +364,12 @@ fn render_tile(
                 );
                 sum += value;
                 sum_sq += value * value;
+                n += 1;
             }
-            let spp = settings.spp.max(1) as f64;
+            let spp = n.max(1) as f64;
             let m = sum / spp;
             // Unbiased sample variance, divided by spp for the variance of the mean.
-            let var = if settings.spp > 1 {
+            let var = if n > 1 {
                 (sum_sq - sum * m) / (spp - 1.0) / spp
             } else {
                 DVec3::ZERO
@@ -371,60 +388,172 @@ fn render_tile(
 /// Stream tag of the spatial guide's training passes: disjoint from the render's streams.
 const SPATIAL_STREAM: u64 = 0x7370_6174_6961_6c00;
 
-/// A spatial guide trained on `passes` passes of one path-traced sample per pixel: the first
-/// unguided, each later one guided by the guide learned from the passes before it (all
-/// passes' records train the last guide). The passes' images are not kept. Records are
+/// Most training passes (the last one of 2048 samples per pixel).
+pub const MAX_SPATIAL_PASSES: u32 = 12;
+
+/// Per pixel, the sums of the samples taken so far, which a render adds its own to.
+#[derive(Clone, Debug, Default)]
+pub struct PixelSums {
+    /// Samples per pixel so far.
+    pub spp: u32,
+    sum: Vec<DVec3>,
+    sum_sq: Vec<DVec3>,
+}
+
+impl PixelSums {
+    /// Pixel `i`'s sum, sum of squares and sample count.
+    fn at(&self, i: usize) -> (DVec3, DVec3, u32) {
+        match (self.sum.get(i), self.sum_sq.get(i)) {
+            (Some(&s), Some(&q)) => (s, q, self.spp),
+            _ => (DVec3::ZERO, DVec3::ZERO, 0),
+        }
+    }
+}
+
+/// A spatial guide and the path-traced samples its training took: they are samples of the
+/// image like any other (each unbiased given the guide it was drawn with), and renders
+/// keep them.
+pub struct SpatialTraining {
+    pub guide: Arc<SpatialGuide>,
+    pub samples: PixelSums,
+}
+
+/// How long the spatial guide trains: pass `i` takes `2^i` samples per pixel, and the guide
+/// the next pass samples with is learned from that pass's records alone (as in "practical
+/// path guiding": each pass has as many samples as all the passes before it, and better
+/// ones).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrainingSchedule {
+    /// This many passes.
+    Passes(u32),
+    /// Passes while their samples stay within half of `spp`.
+    Samples(u32),
+    /// Passes while the next one (twice the last one's time) fits in `seconds` in all.
+    Seconds(f64),
+}
+
+impl TrainingSchedule {
+    /// `plan.spatial_passes` if set, else a share of `plan.spatial_time_limit` if set, else
+    /// half of `spp`.
+    pub fn new(plan: &PlanConfig, spp: u32) -> Self {
+        match (plan.spatial_passes, plan.spatial_time_limit) {
+            (Some(p), _) => Self::Passes(p),
+            (None, Some(t)) => Self::Seconds(t),
+            (None, None) => Self::Samples(spp),
+        }
+    }
+
+    /// Whether pass `pass` (`2^pass` samples per pixel) runs, after `elapsed` seconds of
+    /// passes of which the last took `last` seconds.
+    fn runs(&self, pass: u32, elapsed: f64, last: f64) -> bool {
+        if pass == 0 {
+            return true;
+        }
+        pass < MAX_SPATIAL_PASSES
+            && match *self {
+                Self::Passes(p) => pass < p,
+                Self::Samples(spp) => (2u64 << pass) - 1 <= u64::from(spp / 2),
+                Self::Seconds(t) => elapsed + 2.0 * last <= t,
+            }
+    }
+}
+
+/// A spatial guide trained by passes of path tracing (`schedule`): the first unguided, each
+/// later one guided by the guide learned from the pass before it. Records and samples are
 /// gathered per tile and merged in tile order, so the guide does not depend on the thread
 /// count.
 pub fn train_spatial(
     view: &SceneView,
     settings: &RenderSettings,
-    grid: Grid,
-    passes: u32,
-) -> SpatialGuide {
+    schedule: TrainingSchedule,
+) -> SpatialTraining {
     let start = Instant::now();
     let camera = &view.scene.camera;
-    let tiles = tiles(camera.width, camera.height);
-    let mut sums = RecordSums::new(grid.clone());
-    // The guide of the passes so far, which the next pass samples with.
-    let mut guide: Option<Guide> = None;
-    let bar = progress_bar(u64::from(passes), "guide", settings.progress);
-    for pass in 0..passes {
+    let (width, height) = (camera.width, camera.height);
+    let tiles = tiles(width, height);
+    let pixels = (width * height) as usize;
+    let mut samples = PixelSums {
+        spp: 0,
+        sum: vec![DVec3::ZERO; pixels],
+        sum_sq: vec![DVec3::ZERO; pixels],
+    };
+    let mut records = Records::around(&view.scene.mesh);
+    let mut stats = SpatialStats::default();
+    // The guide learned from the last pass, which the next pass samples with.
+    let mut spatial: Option<Arc<SpatialGuide>> = None;
+    let bar = progress_bar(0, "guide", settings.progress);
+    let (mut pass, mut last) = (0, 0.0);
+    while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
+        let t0 = Instant::now();
+        let spp = 1u32 << pass;
+        bar.set_length(u64::from(samples.spp + spp));
         let seed = derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass));
-        let per_tile: Vec<Vec<_>> = tiles
+        let guide = spatial
+            .take()
+            .map(|s| Guide::default().with_spatial(Some(s)));
+        let per_tile: Vec<_> = tiles
             .par_iter()
             .map(|tile| {
-                let mut recorder = PathRecorder::new(grid.clone());
+                let mut recorder = PathRecorder::default();
                 let mut counts = RayCounts::default();
+                let mut sums = Vec::new();
                 for y in tile.y0..tile.y1 {
                     for x in tile.x0..tile.x1 {
-                        let pixel = y as u64 * camera.width as u64 + x as u64;
-                        let mut rng = sample_rng(seed, pixel, 0);
-                        let ray =
-                            camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                        pt::radiance_guided(
-                            view,
-                            &ray,
-                            settings.max_bounces,
-                            &mut rng,
-                            &mut counts,
-                            guide.as_ref(),
-                            Some(&mut recorder),
-                        );
+                        let pixel = y as u64 * width as u64 + x as u64;
+                        let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+                        for s in 0..spp {
+                            let mut rng = sample_rng(seed, pixel, u64::from(s));
+                            let (px, py) = (uniform(&mut rng), uniform(&mut rng));
+                            let ray = camera.ray(x as f32 + px, y as f32 + py);
+                            let value = pt::radiance_guided(
+                                view,
+                                &ray,
+                                settings.max_bounces,
+                                &mut rng,
+                                &mut counts,
+                                guide.as_ref(),
+                                Some(&mut recorder),
+                            )
+                            .as_dvec3();
+                            sum += value;
+                            sum_sq += value * value;
+                        }
+                        sums.push((pixel as usize, sum, sum_sq));
                     }
                 }
-                recorder.records
+                (recorder.records, sums)
             })
             .collect();
-        sums.add(per_tile.into_iter().flatten());
-        if pass + 1 < passes {
-            guide = Some(Guide::default().with_spatial(Some(Arc::new(sums.guide()))));
+        records.clear();
+        for (tile_records, sums) in per_tile {
+            records.add(tile_records);
+            for (i, sum, sum_sq) in sums {
+                samples.sum[i] += sum;
+                samples.sum_sq[i] += sum_sq;
+            }
         }
-        bar.inc(1);
+        samples.spp += spp;
+        stats.records += records.len();
+        drop(guide);
+        spatial = Some(Arc::new(records.guide()));
+        bar.set_position(u64::from(samples.spp));
+        last = t0.elapsed().as_secs_f64();
+        pass += 1;
     }
     bar.finish_and_clear();
-    let mut spatial = sums.guide();
-    spatial.stats.passes = passes;
-    spatial.stats.seconds = start.elapsed().as_secs_f64();
-    spatial
+    // The first pass always runs; the passes' guides are dropped, so this is no copy.
+    let mut guide = spatial
+        .map(Arc::unwrap_or_clone)
+        .unwrap_or_else(|| records.guide());
+    stats.passes = pass;
+    stats.spp = samples.spp;
+    stats.seconds = start.elapsed().as_secs_f64();
+    stats.cells = guide.stats.cells;
+    stats.trained_cells = guide.stats.trained_cells;
+    stats.directional_nodes = guide.stats.directional_nodes;
+    guide.stats = stats;
+    SpatialTraining {
+        guide: Arc::new(guide),
+        samples,
+    }
 }

@@ -78,7 +78,7 @@ impl MethodSpec {
                 "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
                 "neighbours" => plan.neighbours = int()?,
                 "gs" => plan.guide_steps = int()?,
-                "sp" => plan.spatial_passes = u32::try_from(int()?).map_err(|e| bad(&e))?,
+                "sp" => plan.spatial_passes = Some(u32::try_from(int()?).map_err(|e| bad(&e))?),
                 "spatial" => plan.spatial = flag()?,
                 "cw" => ga.convex_weights = flag()?,
                 "gate" => plan.gate = flag()?,
@@ -203,6 +203,10 @@ const CALIBRATION_SPP: [u32; 2] = [2, 16];
 /// (`PlanConfig::time_limit`); the render gets the rest.
 pub const GA_BUDGET_SHARE: f64 = 0.25;
 
+/// With budgets in seconds, a spatial guide's training passes may take this share of each
+/// budget (`PlanConfig::spatial_time_limit`); their samples stay in the image.
+pub const SPATIAL_BUDGET_SHARE: f64 = 0.5;
+
 /// Samples per pixel that fill `seconds` of rendering with `prepared`: render time is a
 /// fixed part (per-pixel mixtures are built once per pixel whatever the spp) plus a cost per
 /// sample, measured by two short renders.
@@ -249,62 +253,63 @@ impl Sweep<'_> {
         let total = self.methods.len() * self.reps as usize * self.budgets.len();
         let bar = progress_bar(total as u64, "sweep", self.progress);
         let mut rows = Vec::with_capacity(total);
-        // With budgets in seconds, a GA plan is built per budget with its time limit
-        // (`GA_BUDGET_SHARE` of it); with budgets in samples, once.
-        let plans: Vec<(Option<f64>, Vec<f64>)> = match &self.budgets {
-            Budgets::Spp(b) => vec![(None, b.iter().map(|&s| f64::from(s)).collect())],
-            Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), vec![t])).collect(),
+        // Each budget prepares its method anew: with budgets in seconds, a GA plan gets its
+        // time limit (`GA_BUDGET_SHARE` of the budget) and a spatial guide's training
+        // `SPATIAL_BUDGET_SHARE`; with budgets in samples, a spatial guide trains on half
+        // of them (see `TrainingSchedule`).
+        let plans: Vec<(Option<f64>, u32)> = match &self.budgets {
+            Budgets::Spp(b) => b.iter().map(|&spp| (None, spp)).collect(),
+            Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), self.settings.spp)).collect(),
         };
         // The methods run one after the other at each budget, not each through all budgets
         // in turn: renders to be compared at equal time then run minutes closer together,
         // so that a shared machine's slow spells weigh on them more alike.
         for rep in 0..self.reps {
-            for (seconds, budgets) in &plans {
-                let (seconds, budgets) = (*seconds, budgets.as_slice());
+            for &(seconds, spp) in &plans {
                 for spec in &self.methods {
                     let settings = RenderSettings {
                         method: spec.config.method,
                         seed: self.settings.seed.wrapping_add(rep as u64),
                         progress: false,
+                        spp,
                         ..self.settings.clone()
                     };
                     let mut config = spec.config.clone();
                     config.plan.time_limit = seconds.map(|t| GA_BUDGET_SHARE * t);
+                    config.plan.spatial_time_limit = seconds.map(|t| SPATIAL_BUDGET_SHARE * t);
                     let t0 = Instant::now();
                     let prepared = Prepared::new(view, &config, &settings)?;
                     let prepare_s = t0.elapsed().as_secs_f64();
                     let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
-                    let spp_list: Vec<(f64, u32)> = match seconds {
-                        None => budgets.iter().map(|&spp| (spp, spp as u32)).collect(),
-                        Some(t) => {
-                            let spp = calibrated_spp(view, &settings, &prepared, t - prepare_s);
-                            vec![(t, spp)]
-                        }
+                    // Samples the render adds to those preparing took (a spatial guide's
+                    // training samples stay in the image).
+                    let taken = prepared.samples_taken();
+                    let (budget, rest) = match seconds {
+                        None => (f64::from(spp), spp.saturating_sub(taken)),
+                        Some(t) => (t, calibrated_spp(view, &settings, &prepared, t - prepare_s)),
                     };
-                    for (budget, spp) in spp_list {
-                        let settings = RenderSettings {
-                            spp,
-                            ..settings.clone()
-                        };
-                        let film = render(view, &settings, prepared.estimator());
-                        let Some(m) = metrics::compare(&film.image, self.reference) else {
-                            unreachable!("sizes checked above");
-                        };
-                        let row = Row {
-                            scene: self.scene_name.clone(),
-                            method: spec.label.clone(),
-                            budget,
-                            spp,
-                            seconds: prepare_s + film.elapsed.as_secs_f64(),
-                            ga_seconds,
-                            relmse: m.relmse,
-                            mse: m.mse,
-                            seed: settings.seed,
-                        };
-                        on_row(&row);
-                        rows.push(row);
-                        bar.inc(1);
-                    }
+                    let settings = RenderSettings {
+                        spp: rest,
+                        ..settings.clone()
+                    };
+                    let film = render(view, &settings, prepared.estimator());
+                    let Some(m) = metrics::compare(&film.image, self.reference) else {
+                        unreachable!("sizes checked above");
+                    };
+                    let row = Row {
+                        scene: self.scene_name.clone(),
+                        method: spec.label.clone(),
+                        budget,
+                        spp: taken + rest,
+                        seconds: prepare_s + film.elapsed.as_secs_f64(),
+                        ga_seconds,
+                        relmse: m.relmse,
+                        mse: m.mse,
+                        seed: settings.seed,
+                    };
+                    on_row(&row);
+                    rows.push(row);
+                    bar.inc(1);
                 }
             }
         }
