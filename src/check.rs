@@ -218,6 +218,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         view,
         &settings(Method::Pg),
         TrainingSchedule::new(&config.plan, config.spp),
+        None,
     );
     // pg's image holds its training samples: the render adds the rest of `spp`.
     let pg_settings = RenderSettings {

@@ -80,9 +80,9 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         progress: false,
     };
     // The guide trains on half the samples (the default), which stay in the image.
-    let train = || {
+    let train = |plan: Option<&Plan>| {
         let schedule = TrainingSchedule::new(&PlanConfig::default(), spp);
-        let t = train_spatial(&view, &settings, schedule);
+        let t = train_spatial(&view, &settings, schedule, plan);
         assert!(
             t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
             "{name}: the spatial guide did not train"
@@ -92,7 +92,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     let mixture = match which {
         Which::Pt => None,
         Which::Pg => {
-            spatial = train();
+            spatial = train(None);
             None
         }
         Which::GaPt { spatial: with } => {
@@ -101,7 +101,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             plan = Some(Plan::build(&view, &ga, &config, target, seed, false).unwrap());
             guided = true;
             if with {
-                spatial = train();
+                spatial = train(plan.as_ref());
             }
             None
         }

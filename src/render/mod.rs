@@ -87,13 +87,13 @@ impl Prepared {
         config: &MethodConfig,
         settings: &RenderSettings,
     ) -> Result<Self, PrepareError> {
-        let spatial = || {
+        let spatial = |plan| {
             let schedule = TrainingSchedule::new(&config.plan, settings.spp);
-            train_spatial(view, settings, schedule)
+            train_spatial(view, settings, schedule, plan)
         };
         Ok(match config.method {
             Method::Pt => Prepared::Pt,
-            Method::Pg => Prepared::Spatial(None, spatial()),
+            Method::Pg => Prepared::Spatial(None, spatial(None)),
             Method::Srt => Prepared::Mixture(mixture_file::srt(
                 view.scene,
                 settings.max_bounces,
@@ -124,7 +124,8 @@ impl Prepared {
                 if config.method == Method::Ga {
                     Prepared::Ga(plan)
                 } else if config.plan.spatial {
-                    Prepared::Spatial(Some(plan), spatial())
+                    let training = spatial(Some(&plan));
+                    Prepared::Spatial(Some(plan), training)
                 } else {
                     Prepared::GaPt(plan)
                 }
@@ -197,6 +198,9 @@ struct Tile {
 struct TileResult {
     mean: Vec<[f32; 3]>,
     variance: Vec<[f64; 3]>,
+    /// Per pixel: its index, and the sum and sum of squares of its samples (with those
+    /// taken before).
+    sums: Vec<(usize, DVec3, DVec3)>,
     rays: RayCounts,
 }
 
@@ -241,7 +245,7 @@ pub fn render(view: &SceneView, settings: &RenderSettings, estimator: Estimator)
     let results: Vec<TileResult> = tiles
         .par_iter()
         .map(|tile| {
-            let result = render_tile(view, settings, estimator, tile);
+            let result = render_tile(view, settings, estimator, tile, None);
             bar.inc(1);
             result
         })
@@ -300,11 +304,13 @@ fn render_tile(
     settings: &RenderSettings,
     estimator: Estimator,
     tile: &Tile,
+    mut recorder: Option<(&mut PathRecorder, u32)>,
 ) -> TileResult {
     let camera = &view.scene.camera;
     let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
     let mut mean = Vec::with_capacity(n);
     let mut variance = Vec::with_capacity(n);
+    let mut sums = Vec::with_capacity(n);
     let mut rays = RayCounts::default();
     let mut scratch = MixtureScratch::default();
     // A guide per pixel, made in the same storage.
@@ -353,15 +359,33 @@ fn render_tile(
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 // Box filter: a uniformly jittered position inside the pixel.
                 let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-                let value = sample(
-                    view,
-                    &ray,
-                    settings.max_bounces,
-                    (mixture, guided.then_some(&guide)),
-                    &mut rng,
-                    &mut rays,
-                    &mut scratch,
-                );
+                let guide = guided.then_some(&guide);
+                let recording = match &mut recorder {
+                    Some((r, recorded)) if s < *recorded && mixture.is_none() => Some(&mut **r),
+                    _ => None,
+                };
+                let value = match recording {
+                    // Training a spatial guide: path tracing that records.
+                    Some(r) => pt::radiance_guided(
+                        view,
+                        &ray,
+                        settings.max_bounces,
+                        &mut rng,
+                        &mut rays,
+                        guide,
+                        Some(r),
+                    )
+                    .as_dvec3(),
+                    None => sample(
+                        view,
+                        &ray,
+                        settings.max_bounces,
+                        (mixture, guide),
+                        &mut rng,
+                        &mut rays,
+                        &mut scratch,
+                    ),
+                };
                 sum += value;
                 sum_sq += value * value;
                 n += 1;
@@ -376,11 +400,13 @@ fn render_tile(
             };
             mean.push(m.as_vec3().to_array());
             variance.push(var.max(DVec3::ZERO).to_array());
+            sums.push((pixel as usize, sum, sum_sq));
         }
     }
     TileResult {
         mean,
         variance,
+        sums,
         rays,
     }
 }
@@ -390,6 +416,12 @@ const SPATIAL_STREAM: u64 = 0x7370_6174_6961_6c00;
 
 /// Most training passes (the last one of 2048 samples per pixel).
 pub const MAX_SPATIAL_PASSES: u32 = 12;
+
+/// Records one training pass may keep (24 bytes each), at about [`RECORDS_PER_SAMPLE`]
+/// records per path: a pass records that many of its samples per pixel and no more (at
+/// 256², 61 samples per pixel).
+const MAX_PASS_RECORDS: usize = 8_000_000;
+const RECORDS_PER_SAMPLE: usize = 2;
 
 /// Per pixel, the sums of the samples taken so far, which a render adds its own to.
 #[derive(Clone, Debug, Default)]
@@ -458,102 +490,83 @@ impl TrainingSchedule {
     }
 }
 
-/// A spatial guide trained by passes of path tracing (`schedule`): the first unguided, each
-/// later one guided by the guide learned from the pass before it. Records and samples are
-/// gathered per tile and merged in tile order, so the guide does not depend on the thread
-/// count.
+/// A spatial guide trained by passes of path tracing (`schedule`): the first unguided
+/// beyond `plan`'s levels (`ga-pt --spatial-guide`; `None` for `pg`), each later one guided
+/// by the guide learned from the pass before it, every pass rendered as the final image is
+/// (with `plan`'s per-pixel guides). Records and samples are gathered per tile and merged in
+/// tile order, so the guide does not depend on the thread count.
 pub fn train_spatial(
     view: &SceneView,
     settings: &RenderSettings,
     schedule: TrainingSchedule,
+    plan: Option<&Plan>,
 ) -> SpatialTraining {
     let start = Instant::now();
     let camera = &view.scene.camera;
-    let (width, height) = (camera.width, camera.height);
-    let tiles = tiles(width, height);
-    let pixels = (width * height) as usize;
-    let mut samples = PixelSums {
-        spp: 0,
-        sum: vec![DVec3::ZERO; pixels],
-        sum_sq: vec![DVec3::ZERO; pixels],
-    };
+    let tiles = tiles(camera.width, camera.height);
+    let pixels = (camera.width * camera.height) as usize;
     let mut records = Records::around(&view.scene.mesh);
+    // Before the first pass: no samples, and a guide that has learned nothing.
+    let mut training = SpatialTraining {
+        guide: Arc::new(records.guide()),
+        samples: PixelSums {
+            spp: 0,
+            sum: vec![DVec3::ZERO; pixels],
+            sum_sq: vec![DVec3::ZERO; pixels],
+        },
+    };
     let mut stats = SpatialStats::default();
-    // The guide learned from the last pass, which the next pass samples with.
-    let mut spatial: Option<Arc<SpatialGuide>> = None;
     let bar = progress_bar(0, "guide", settings.progress);
     let (mut pass, mut last) = (0, 0.0);
     while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
         let t0 = Instant::now();
-        let spp = 1u32 << pass;
-        bar.set_length(u64::from(samples.spp + spp));
-        let seed = derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass));
-        let guide = spatial
-            .take()
-            .map(|s| Guide::default().with_spatial(Some(s)));
+        let pass_settings = RenderSettings {
+            spp: 1 << pass,
+            seed: derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass)),
+            ..settings.clone()
+        };
+        bar.set_length(u64::from(training.samples.spp + pass_settings.spp));
+        let estimator = Estimator::Spatial(plan, &training);
+        // The pass records its first `recorded` samples per pixel: records take memory.
+        let recorded =
+            (MAX_PASS_RECORDS / (RECORDS_PER_SAMPLE * pixels)).clamp(1, 1 << pass) as u32;
         let per_tile: Vec<_> = tiles
             .par_iter()
             .map(|tile| {
                 let mut recorder = PathRecorder::default();
-                let mut counts = RayCounts::default();
-                let mut sums = Vec::new();
-                for y in tile.y0..tile.y1 {
-                    for x in tile.x0..tile.x1 {
-                        let pixel = y as u64 * width as u64 + x as u64;
-                        let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
-                        for s in 0..spp {
-                            let mut rng = sample_rng(seed, pixel, u64::from(s));
-                            let (px, py) = (uniform(&mut rng), uniform(&mut rng));
-                            let ray = camera.ray(x as f32 + px, y as f32 + py);
-                            let value = pt::radiance_guided(
-                                view,
-                                &ray,
-                                settings.max_bounces,
-                                &mut rng,
-                                &mut counts,
-                                guide.as_ref(),
-                                Some(&mut recorder),
-                            )
-                            .as_dvec3();
-                            sum += value;
-                            sum_sq += value * value;
-                        }
-                        sums.push((pixel as usize, sum, sum_sq));
-                    }
-                }
-                (recorder.records, sums)
+                let recording = Some((&mut recorder, recorded));
+                let result = render_tile(view, &pass_settings, estimator, tile, recording);
+                (recorder.records, result.sums)
             })
             .collect();
         records.clear();
         for (tile_records, sums) in per_tile {
             records.add(tile_records);
             for (i, sum, sum_sq) in sums {
-                samples.sum[i] += sum;
-                samples.sum_sq[i] += sum_sq;
+                training.samples.sum[i] = sum;
+                training.samples.sum_sq[i] = sum_sq;
             }
         }
-        samples.spp += spp;
+        training.samples.spp += pass_settings.spp;
         stats.records += records.len();
-        drop(guide);
-        spatial = Some(Arc::new(records.guide()));
-        bar.set_position(u64::from(samples.spp));
+        training.guide = Arc::new(records.guide());
+        bar.set_position(u64::from(training.samples.spp));
         last = t0.elapsed().as_secs_f64();
         pass += 1;
     }
     bar.finish_and_clear();
-    // The first pass always runs; the passes' guides are dropped, so this is no copy.
-    let mut guide = spatial
-        .map(Arc::unwrap_or_clone)
-        .unwrap_or_else(|| records.guide());
     stats.passes = pass;
-    stats.spp = samples.spp;
+    stats.spp = training.samples.spp;
     stats.seconds = start.elapsed().as_secs_f64();
-    stats.cells = guide.stats.cells;
-    stats.trained_cells = guide.stats.trained_cells;
-    stats.directional_nodes = guide.stats.directional_nodes;
+    let guide = &training.guide.stats;
+    stats.cells = guide.cells;
+    stats.trained_cells = guide.trained_cells;
+    stats.directional_nodes = guide.directional_nodes;
+    // No other owner is left: this moves the guide out.
+    let mut guide = Arc::unwrap_or_clone(training.guide);
     guide.stats = stats;
     SpatialTraining {
         guide: Arc::new(guide),
-        samples,
+        samples: training.samples,
     }
 }
