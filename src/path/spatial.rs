@@ -37,6 +37,7 @@
 
 use crate::accel::TriangleMesh;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// A spatial node is cut in two while it holds more than this many training records.
@@ -395,31 +396,52 @@ impl Records {
     /// The guide of the records added so far (see the module documentation). Builds reorder
     /// the records, deterministically.
     pub fn guide(&mut self) -> SpatialGuide {
-        let mut guide = SpatialGuide {
-            stats: SpatialStats {
-                records: self.records.len(),
-                ..SpatialStats::default()
-            },
-            lattice: Lattice::new(self.lo, self.hi),
+        let (lo, hi) = (self.lo, self.hi);
+        let lattice = Lattice::new(lo, hi);
+        let cells = lattice.cells();
+        let records = self.records.len();
+        // One tree per facing, built in parallel, then joined in facing order.
+        let mut facings = Vec::with_capacity(FACINGS);
+        let mut rest = &mut self.records[..];
+        for f in 0..FACINGS {
+            let n = partition(rest, |r| usize::from(r.facing) == f);
+            let (these, others) = rest.split_at_mut(n);
+            facings.push(these);
+            rest = others;
+        }
+        let empty = SpatialGuide {
+            stats: SpatialStats::default(),
+            lattice,
             regions: Vec::new(),
             space: Vec::new(),
             quads: vec![QuadNode::default()],
         };
-        let (lo, hi) = (self.lo, self.hi);
-        let mut rest = &mut self.records[..];
-        let cells = guide.lattice.cells();
-        guide.regions = vec![0; FACINGS * cells];
-        for f in 0..FACINGS {
-            let n = partition(rest, |r| usize::from(r.facing) == f);
-            let (these, others) = rest.split_at_mut(n);
-            guide.space.clear();
-            guide.build_space(these, lo, hi, 0);
-            for c in 0..cells {
-                guide.regions[f * cells + c] = guide.leaf(guide.lattice.centre(c));
-            }
-            rest = others;
+        let parts: Vec<SpatialGuide> = facings
+            .into_par_iter()
+            .map(|these| {
+                let mut part = empty.clone();
+                part.build_space(these, lo, hi, 0);
+                part.regions = (0..cells)
+                    .map(|c| part.leaf(part.lattice.centre(c)))
+                    .collect();
+                part.space = Vec::new();
+                part
+            })
+            .collect();
+        let mut guide = empty;
+        guide.stats.records = records;
+        for part in parts {
+            // Node indices move past the nodes before; 0 stays "none".
+            let offset = guide.quads.len() as u32 - 1;
+            let moved = |i: u32| if i == 0 { 0 } else { i + offset };
+            guide.quads.extend(part.quads[1..].iter().map(|q| QuadNode {
+                child: q.child.map(moved),
+                ..*q
+            }));
+            guide.regions.extend(part.regions.iter().map(|&r| moved(r)));
+            guide.stats.cells += part.stats.cells;
+            guide.stats.trained_cells += part.stats.trained_cells;
         }
-        guide.space = Vec::new();
         guide.stats.directional_nodes = guide.quads.len() - 1;
         guide
     }
