@@ -317,26 +317,12 @@ const LEAF: u32 = 3;
 
 /// A node of a directional quadtree: per quadrant of its square (see [`quadrant`]), the
 /// quadrant's probability given the node, and its child node (0: the quadrant is a leaf,
-/// uniform inside); and for sampling, the cumulative probabilities through quadrants 0, 1
-/// and 2, infinite from the last quadrant with any probability on, so that no rounding
-/// picks a quadrant without probability.
+/// uniform inside). 32 bytes, two to a cache line: a guide of fig1 at 1024 samples per
+/// pixel has 125 000 of them, and lookups wander over all.
 #[derive(Clone, Copy, Debug, Default)]
 struct QuadNode {
     prob: [f32; 4],
     child: [u32; 4],
-    cdf: [f64; 3],
-}
-
-impl QuadNode {
-    /// Sets the cumulative probabilities from `prob`.
-    fn finish(&mut self) {
-        let last = (0..4).rev().find(|&q| self.prob[q] > 0.0).unwrap_or(0);
-        let mut acc = 0.0;
-        for q in 0..3 {
-            acc += f64::from(self.prob[q]);
-            self.cdf[q] = if q < last { acc } else { f64::INFINITY };
-        }
-    }
 }
 
 /// A directional record: position on the node's square and value.
@@ -573,7 +559,6 @@ impl SpatialGuide {
                 node.child[q] = self.build_quad(part, e, total, depth + 1);
             }
         }
-        node.finish();
         self.quads[index] = node;
         index as u32
     }
@@ -627,10 +612,15 @@ impl SpatialGuide {
         let mut node = cell;
         loop {
             let n = &self.quads[node];
-            // The quadrant whose cumulative probability passes `r`, without branches.
-            let q = n.cdf.iter().map(|&c| usize::from(r >= c)).sum::<usize>();
-            let before = if q == 0 { 0.0 } else { n.cdf[q - 1] };
-            r = ((r - before) / f64::from(n.prob[q])).clamp(0.0, 1.0);
+            // The quadrant whose cumulative probability passes `r`, without branches
+            // (rounding past the end takes the last quadrant with any probability).
+            let p = n.prob.map(f64::from);
+            let cdf = [0.0, p[0], p[0] + p[1], p[0] + p[1] + p[2]];
+            let mut q = cdf[1..].iter().map(|&c| usize::from(r >= c)).sum::<usize>();
+            while q > 0 && p[q] <= 0.0 {
+                q -= 1;
+            }
+            r = ((r - cdf[q]) / p[q]).clamp(0.0, 1.0);
             size *= 0.5;
             x += size * (q & 1) as f64;
             y += size * (q >> 1) as f64;
