@@ -29,9 +29,9 @@ pub enum Method {
     /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
     /// evolved anchor samplers, with next-event estimation at every vertex.
     GaPt,
-    /// Beyond the paper: path tracing guided by a spatial guide learned from short
-    /// path-traced training passes (`path::spatial`), without the GA: the baseline that
-    /// shows what the GA adds.
+    /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
+    /// training passes whose samples stay in the image (`path::spatial`), without the GA:
+    /// the baseline that shows what the GA adds.
     Pg,
 }
 

@@ -304,8 +304,8 @@ impl Lattice {
 
 /// A node of the spatial kd-tree: cut at `split` along `axis` (0, 1, 2) into the children
 /// below and above it, or a leaf (`axis` [`LEAF`]) whose `children[0]` is its directional
-/// quadtree's root (0: no record there carried light). Plain fields rather than an enum, so
-/// that a lookup descends without branching on the side.
+/// quadtree's root (0: no record there carried light). Used while building only: the
+/// lattice's table answers lookups.
 #[derive(Clone, Copy, Debug)]
 struct SpaceNode {
     axis: u32,
