@@ -478,6 +478,13 @@ fn spatial_guide_renders_deterministically_with_its_training_stats() {
             &["--spatial-passes"],
         );
     }
+    // 3 passes take 1 + 2 + 4 samples per pixel: more than the image's 1.
+    assert_fails(
+        &fig5(),
+        &["--method", "pg", "--spatial-passes", "3"],
+        &out,
+        &["--spatial-passes 3 trains on 7 samples per pixel, more than --spp 1"],
+    );
 }
 
 #[test]

@@ -68,6 +68,11 @@ pub enum PrepareError {
     Ga(#[from] GaConfigError),
     #[error("--method mixture needs --generators FILE")]
     NoMixture,
+    #[error(
+        "--spatial-passes {passes} trains on {needs} samples per pixel, more than --spp {spp} \
+         (pass i takes 2^i)"
+    )]
+    TrainingExceedsSpp { passes: u32, needs: u64, spp: u32 },
 }
 
 /// A method made ready to render: the mixture or the GA plan it renders with.
@@ -87,10 +92,20 @@ impl Prepared {
         config: &MethodConfig,
         settings: &RenderSettings,
     ) -> Result<Self, PrepareError> {
-        let spatial = |plan| {
-            let schedule = TrainingSchedule::new(&config.plan, settings.spp);
-            train_spatial(view, settings, schedule, plan)
-        };
+        let schedule = TrainingSchedule::new(&config.plan, settings.spp);
+        if let TrainingSchedule::Passes(passes) = schedule {
+            let needs = (1u64 << passes) - 1;
+            let spatial = config.method == Method::Pg
+                || (config.method == Method::GaPt && config.plan.spatial);
+            if spatial
+                && config.plan.spatial_time_limit.is_none()
+                && needs > u64::from(settings.spp)
+            {
+                let spp = settings.spp;
+                return Err(PrepareError::TrainingExceedsSpp { passes, needs, spp });
+            }
+        }
+        let spatial = |plan| train_spatial(view, settings, schedule, plan);
         Ok(match config.method {
             Method::Pt => Prepared::Pt,
             Method::Pg => Prepared::Spatial(None, spatial(None)),
