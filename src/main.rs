@@ -295,7 +295,8 @@ struct GaArgs {
     #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     guide_steps: u32,
     /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
-    /// short path-traced passes, as --method pg does everywhere (beyond the paper).
+    /// path-traced training passes (see --spatial-passes), as --method pg does everywhere
+    /// (beyond the paper).
     #[arg(long)]
     spatial_guide: bool,
     /// pg, and ga-pt with --spatial-guide: passes of path tracing that train the spatial

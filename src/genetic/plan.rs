@@ -195,10 +195,9 @@ impl PlanConfig {
                 self.prune_variance
             ));
         }
-        if self
-            .time_limit
-            .is_some_and(|t| !(t.is_finite() && t >= 0.0))
-        {
+        // A time limit must be a finite, non-negative number of seconds.
+        let bad_seconds = |limit: Option<f64>| limit.is_some_and(|t| !(t.is_finite() && t >= 0.0));
+        if bad_seconds(self.time_limit) {
             return fail(format!(
                 "GA time limit {:?} must be finite and ≥ 0 seconds",
                 self.time_limit
@@ -213,10 +212,7 @@ impl PlanConfig {
         if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
             return fail(format!("spatial guide passes {p} is not in [1, 12]"));
         }
-        if self
-            .spatial_time_limit
-            .is_some_and(|t| !(t.is_finite() && t >= 0.0))
-        {
+        if bad_seconds(self.spatial_time_limit) {
             return fail(format!(
                 "spatial guide time limit {:?} must be finite and ≥ 0 seconds",
                 self.spatial_time_limit

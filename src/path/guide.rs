@@ -232,15 +232,6 @@ impl Guide {
         self
     }
 
-    /// Anchor cones and patches at vertex `k` (or the spatial guide): the densities one
-    /// evaluation of `pdf` there costs.
-    pub fn samplers(&self, k: usize) -> usize {
-        match self.level(k) {
-            Some(l) => l.anchors.len() + l.patches.len(),
-            None => usize::from(self.spatial.is_some()),
-        }
-    }
-
     /// Whether vertex `k` may sample anything but the BRDF.
     pub fn guides(&self, k: usize) -> bool {
         k < self.depth || self.spatial.is_some()
@@ -504,7 +495,7 @@ mod tests {
             (0.0..1.0 / 16.0).contains(&(u - tu)) && (0.0..1.0 / 16.0).contains(&(v - tv))
         };
         let guide = Guide::new(&mixture()).with_spatial(Some(spatial));
-        assert!(guide.guides(2) && guide.samplers(2) == 1);
+        assert!(guide.guides(2) && guide.at(2, Vec3::ZERO, Vec3::Y, false).samplers() == 1);
         let total = integral_at(&guide, &material, 2);
         assert!((total - 1.0).abs() < 0.01, "∫ p = {total}");
         // Half the density is the spatial guide's: ×1.1 there makes ∫ p ≈ 1.05.
@@ -626,7 +617,8 @@ mod tests {
         let mut rebuilt = Guide::new(&mixture());
         rebuilt.rebuild(&[(0.25, &m1), (0.75, &m2)]);
         let fresh = Guide::new(&Mixture::union(&[(0.25, &m1), (0.75, &m2)]));
-        assert!(!rebuilt.guides(1) && rebuilt.samplers(0) == fresh.samplers(0));
+        let samplers = |g: &Guide| g.at(0, Vec3::ZERO, Vec3::Y, false).samplers();
+        assert!(!rebuilt.guides(1) && samplers(&rebuilt) == samplers(&fresh));
         let same = max_difference(&rebuilt, &fresh);
         assert!(same < 1e-12, "rebuilt guide differs by {same}");
         // The comparison tells other weights apart.

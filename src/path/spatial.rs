@@ -129,9 +129,8 @@ pub struct PathRecorder {
 
 #[derive(Debug)]
 struct Pending {
-    p: Vec3,
-    facing: u8,
-    dir: [f32; 2],
+    /// The record, its value still to come.
+    record: Record,
     /// `|cos| / pdf` of the sampled direction.
     cos_over_pdf: f32,
     /// The path throughput right after this vertex's sample, and the radiance collected
@@ -172,9 +171,12 @@ impl PathRecorder {
         before: Vec3,
     ) {
         self.pending.push(Pending {
-            p: x,
-            facing: facing(n) as u8,
-            dir: to_square(wi),
+            record: Record {
+                p: x,
+                facing: facing(n) as u8,
+                dir: to_square(wi),
+                value: 0.0,
+            },
             cos_over_pdf,
             beta,
             before,
@@ -198,12 +200,7 @@ impl PathRecorder {
             let li = Vec3::select(p.beta.cmpgt(Vec3::ZERO), after / p.beta, Vec3::ZERO);
             let value = luminance(li) * p.cos_over_pdf;
             if value > 0.0 && value.is_finite() {
-                self.records.push(Record {
-                    p: p.p,
-                    facing: p.facing,
-                    dir: p.dir,
-                    value,
-                });
+                self.records.push(Record { value, ..p.record });
             }
         }
     }
@@ -333,8 +330,8 @@ struct DirRecord {
     value: f32,
 }
 
-/// The training records of every pass so far; the guide is rebuilt from all of them after
-/// each pass.
+/// Training records over the scene's box, and the guide built from them (`train_spatial`
+/// keeps one pass's at a time).
 #[derive(Clone, Debug)]
 pub struct Records {
     lo: Vec3,
@@ -395,28 +392,32 @@ impl Records {
             facings.push(these);
             rest = others;
         }
-        let empty = SpatialGuide {
-            stats: SpatialStats::default(),
-            lattice,
-            regions: Vec::new(),
-            space: Vec::new(),
-            quads: vec![QuadNode::default()],
-        };
-        let parts: Vec<SpatialGuide> = facings
+        // Per facing: its tree, and per lattice cell the root of the quadtree there.
+        let parts: Vec<(FacingTree, Vec<u32>)> = facings
             .into_par_iter()
             .map(|these| {
-                let mut part = empty.clone();
+                let mut part = FacingTree {
+                    finest: lattice.cell,
+                    space: Vec::new(),
+                    quads: vec![QuadNode::default()],
+                    cells: 0,
+                    trained_cells: 0,
+                };
                 part.build_space(these, lo, hi, 0);
-                part.regions = (0..cells)
-                    .map(|c| part.leaf(part.lattice.centre(c)))
-                    .collect();
-                part.space = Vec::new();
-                part
+                let regions = (0..cells).map(|c| part.leaf(lattice.centre(c))).collect();
+                (part, regions)
             })
             .collect();
-        let mut guide = empty;
-        guide.stats.records = records;
-        for part in parts {
+        let mut guide = SpatialGuide {
+            stats: SpatialStats {
+                records,
+                ..SpatialStats::default()
+            },
+            lattice,
+            regions: Vec::new(),
+            quads: vec![QuadNode::default()],
+        };
+        for (part, regions) in parts {
             // Node indices move past the nodes before; 0 stays "none".
             let offset = guide.quads.len() as u32 - 1;
             let moved = |i: u32| if i == 0 { 0 } else { i + offset };
@@ -424,9 +425,9 @@ impl Records {
                 child: q.child.map(moved),
                 ..*q
             }));
-            guide.regions.extend(part.regions.iter().map(|&r| moved(r)));
-            guide.stats.cells += part.stats.cells;
-            guide.stats.trained_cells += part.stats.trained_cells;
+            guide.regions.extend(regions.into_iter().map(moved));
+            guide.stats.cells += part.cells;
+            guide.stats.trained_cells += part.trained_cells;
         }
         guide.stats.directional_nodes = guide.quads.len() - 1;
         guide
@@ -460,10 +461,20 @@ pub struct SpatialGuide {
     /// Per facing and lattice cell, the root of the directional quadtree of the kd-tree leaf
     /// holding the cell (0: none).
     regions: Vec<u32>,
-    /// The kd-tree of the facing being built (not kept).
-    space: Vec<SpaceNode>,
     /// Every leaf's quadtree nodes; node 0 is unused, so that child 0 can mean "none".
     quads: Vec<QuadNode>,
+}
+
+/// One facing's kd-tree and quadtrees while they are built (see [`Records::guide`]).
+struct FacingTree {
+    /// A lattice cell's size: the finest cut.
+    finest: Vec3,
+    space: Vec<SpaceNode>,
+    /// Quadtree nodes; node 0 is unused, so that child 0 can mean "none".
+    quads: Vec<QuadNode>,
+    /// Leaves, and leaves with a quadtree.
+    cells: usize,
+    trained_cells: usize,
 }
 
 impl SpatialGuide {
@@ -474,6 +485,66 @@ impl SpatialGuide {
         all.guide()
     }
 
+    /// The trained region at `p` on a surface of normal `n`, if any: its directional
+    /// quadtree's root.
+    pub fn cell(&self, p: Vec3, n: Vec3) -> Option<usize> {
+        let i = facing(n) * self.lattice.cells() + self.lattice.index(p);
+        match self.regions[i] {
+            0 => None,
+            root => Some(root as usize),
+        }
+    }
+
+    /// The solid-angle density of region `cell`'s guide for unit `wi`.
+    pub fn pdf(&self, cell: usize, wi: Vec3) -> f64 {
+        let [mut u, mut v] = to_square(wi);
+        let mut node = cell;
+        let mut p = 1.0f64;
+        loop {
+            let n = &self.quads[node];
+            let q;
+            (q, u, v) = quadrant(u, v);
+            p *= 4.0 * f64::from(n.prob[q]);
+            match n.child[q] {
+                0 => break,
+                c => node = c as usize,
+            }
+        }
+        ((1.0 - UNIFORM_SHARE) * p + UNIFORM_SHARE) / (4.0 * PI)
+    }
+
+    /// A direction from region `cell`'s density, from three uniform numbers.
+    pub fn sample(&self, cell: usize, u: [f64; 3]) -> Vec3 {
+        if u[0] < UNIFORM_SHARE {
+            return from_square(u[1], u[2]);
+        }
+        let mut r = ((u[0] - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE)).clamp(0.0, 1.0);
+        let (mut x, mut y, mut size) = (0.0f64, 0.0f64, 1.0f64);
+        let mut node = cell;
+        loop {
+            let n = &self.quads[node];
+            // The quadrant whose cumulative probability passes `r`, without branches
+            // (rounding past the end takes the last quadrant with any probability).
+            let p = n.prob.map(f64::from);
+            let cdf = [0.0, p[0], p[0] + p[1], p[0] + p[1] + p[2]];
+            let mut q = cdf[1..].iter().map(|&c| usize::from(r >= c)).sum::<usize>();
+            while q > 0 && p[q] <= 0.0 {
+                q -= 1;
+            }
+            r = ((r - cdf[q]) / p[q]).clamp(0.0, 1.0);
+            size *= 0.5;
+            x += size * (q & 1) as f64;
+            y += size * (q >> 1) as f64;
+            match n.child[q] {
+                0 => break,
+                c => node = c as usize,
+            }
+        }
+        from_square(x + size * u[1], y + size * u[2])
+    }
+}
+
+impl FacingTree {
     /// Builds the spatial node of `records` in the box `[lo, hi]`; returns its index.
     fn build_space(
         &mut self,
@@ -489,7 +560,7 @@ impl SpatialGuide {
             children: [0; 2],
         });
         let cut = (records.len() > SPLIT_RECORDS && depth < MAX_SPATIAL_DEPTH)
-            .then(|| cut(records, &mut lo, &mut hi, self.lattice.cell))
+            .then(|| cut(records, &mut lo, &mut hi, self.finest))
             .flatten();
         if let Some((axis, split, below)) = cut {
             let (a, b) = records.split_at_mut(below);
@@ -506,10 +577,10 @@ impl SpatialGuide {
                 children,
             };
         } else {
-            self.stats.cells += 1;
+            self.cells += 1;
             let total: f64 = records.iter().map(|r| f64::from(r.value)).sum();
             if total > 0.0 && total.is_finite() {
-                self.stats.trained_cells += 1;
+                self.trained_cells += 1;
                 let mut dirs: Vec<DirRecord> = records
                     .iter()
                     .map(|r| DirRecord {
@@ -563,16 +634,6 @@ impl SpatialGuide {
         index as u32
     }
 
-    /// The trained region at `p` on a surface of normal `n`, if any: its directional
-    /// quadtree's root.
-    pub fn cell(&self, p: Vec3, n: Vec3) -> Option<usize> {
-        let i = facing(n) * self.lattice.cells() + self.lattice.index(p);
-        match self.regions[i] {
-            0 => None,
-            root => Some(root as usize),
-        }
-    }
-
     /// The root of the directional quadtree of the kd-tree leaf at `p` (0: none).
     fn leaf(&self, p: Vec3) -> u32 {
         let p = p.to_array();
@@ -582,54 +643,6 @@ impl SpatialGuide {
             node = self.space[node.children[usize::from(above)] as usize];
         }
         node.children[0]
-    }
-
-    /// The solid-angle density of region `cell`'s guide for unit `wi`.
-    pub fn pdf(&self, cell: usize, wi: Vec3) -> f64 {
-        let [mut u, mut v] = to_square(wi);
-        let mut node = cell;
-        let mut p = 1.0f64;
-        loop {
-            let n = &self.quads[node];
-            let q;
-            (q, u, v) = quadrant(u, v);
-            p *= 4.0 * f64::from(n.prob[q]);
-            match n.child[q] {
-                0 => break,
-                c => node = c as usize,
-            }
-        }
-        ((1.0 - UNIFORM_SHARE) * p + UNIFORM_SHARE) / (4.0 * PI)
-    }
-
-    /// A direction from region `cell`'s density, from three uniform numbers.
-    pub fn sample(&self, cell: usize, u: [f64; 3]) -> Vec3 {
-        if u[0] < UNIFORM_SHARE {
-            return from_square(u[1], u[2]);
-        }
-        let mut r = ((u[0] - UNIFORM_SHARE) / (1.0 - UNIFORM_SHARE)).clamp(0.0, 1.0);
-        let (mut x, mut y, mut size) = (0.0f64, 0.0f64, 1.0f64);
-        let mut node = cell;
-        loop {
-            let n = &self.quads[node];
-            // The quadrant whose cumulative probability passes `r`, without branches
-            // (rounding past the end takes the last quadrant with any probability).
-            let p = n.prob.map(f64::from);
-            let cdf = [0.0, p[0], p[0] + p[1], p[0] + p[1] + p[2]];
-            let mut q = cdf[1..].iter().map(|&c| usize::from(r >= c)).sum::<usize>();
-            while q > 0 && p[q] <= 0.0 {
-                q -= 1;
-            }
-            r = ((r - cdf[q]) / p[q]).clamp(0.0, 1.0);
-            size *= 0.5;
-            x += size * (q & 1) as f64;
-            y += size * (q >> 1) as f64;
-            match n.child[q] {
-                0 => break,
-                c => node = c as usize,
-            }
-        }
-        from_square(x + size * u[1], y + size * u[2])
     }
 }
 

@@ -8,7 +8,7 @@ use crate::image::Image;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
-use crate::path::spatial::{PathRecorder, Records, SpatialGuide, SpatialStats};
+use crate::path::spatial::{PathRecorder, Records, SpatialGuide};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{derive_seed, sample_rng, uniform, Rng};
 use glam::DVec3;
@@ -211,11 +211,11 @@ struct Tile {
 }
 
 struct TileResult {
-    mean: Vec<[f32; 3]>,
-    variance: Vec<[f64; 3]>,
     /// Per pixel: its index, and the sum and sum of squares of its samples (with those
     /// taken before).
     sums: Vec<(usize, DVec3, DVec3)>,
+    /// Samples per pixel in those sums.
+    spp: u32,
     rays: RayCounts,
 }
 
@@ -270,14 +270,18 @@ pub fn render(view: &SceneView, settings: &RenderSettings, estimator: Estimator)
     let mut image = Image::new(width, height);
     let mut variance_of_mean = vec![[0.0; 3]; (width * height) as usize];
     let mut rays = RayCounts::default();
-    for (tile, result) in tiles.iter().zip(&results) {
-        let tile_width = tile.x1 - tile.x0;
-        for y in tile.y0..tile.y1 {
-            for x in tile.x0..tile.x1 {
-                let i = ((y - tile.y0) * tile_width + (x - tile.x0)) as usize;
-                image.set(x, y, result.mean[i]);
-                variance_of_mean[(y * width + x) as usize] = result.variance[i];
-            }
+    for result in &results {
+        let spp = result.spp.max(1) as f64;
+        for &(i, sum, sum_sq) in &result.sums {
+            let m = sum / spp;
+            // Unbiased sample variance, divided by spp for the variance of the mean.
+            let var = if result.spp > 1 {
+                (sum_sq - sum * m) / (spp - 1.0) / spp
+            } else {
+                DVec3::ZERO
+            };
+            image.pixels[i] = m.as_vec3().to_array();
+            variance_of_mean[i] = var.max(DVec3::ZERO).to_array();
         }
         rays.add(result.rays);
     }
@@ -323,19 +327,14 @@ fn render_tile(
 ) -> TileResult {
     let camera = &view.scene.camera;
     let n = ((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize;
-    let mut mean = Vec::with_capacity(n);
-    let mut variance = Vec::with_capacity(n);
     let mut sums = Vec::with_capacity(n);
     let mut rays = RayCounts::default();
     let mut scratch = MixtureScratch::default();
     // A guide per pixel, made in the same storage.
-    let spatial = match estimator {
-        Estimator::Spatial(_, t) => Some(Arc::clone(&t.guide)),
-        _ => None,
-    };
-    let taken = match estimator {
-        Estimator::Spatial(_, t) => Some(&t.samples),
-        _ => None,
+    // With a spatial guide, the samples its training took start every pixel's sums.
+    let (spatial, taken) = match estimator {
+        Estimator::Spatial(_, t) => (Some(Arc::clone(&t.guide)), Some(&t.samples)),
+        _ => (None, None),
     };
     let spatial_guided = spatial.is_some();
     let mut guide = Guide::default().with_spatial(spatial);
@@ -366,9 +365,9 @@ fn render_tile(
                 Estimator::Mixture(m) => Some(m),
                 Estimator::Ga(_) => local.as_ref(),
             };
-            let (mut sum, mut sum_sq, mut n) = match taken {
+            let (mut sum, mut sum_sq) = match taken {
                 Some(t) => t.at(pixel as usize),
-                None => (DVec3::ZERO, DVec3::ZERO, 0),
+                None => (DVec3::ZERO, DVec3::ZERO),
             };
             for s in 0..settings.spp {
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
@@ -403,25 +402,13 @@ fn render_tile(
                 };
                 sum += value;
                 sum_sq += value * value;
-                n += 1;
             }
-            let spp = n.max(1) as f64;
-            let m = sum / spp;
-            // Unbiased sample variance, divided by spp for the variance of the mean.
-            let var = if n > 1 {
-                (sum_sq - sum * m) / (spp - 1.0) / spp
-            } else {
-                DVec3::ZERO
-            };
-            mean.push(m.as_vec3().to_array());
-            variance.push(var.max(DVec3::ZERO).to_array());
             sums.push((pixel as usize, sum, sum_sq));
         }
     }
     TileResult {
-        mean,
-        variance,
         sums,
+        spp: taken.map_or(0, |t| t.spp) + settings.spp,
         rays,
     }
 }
@@ -448,12 +435,9 @@ pub struct PixelSums {
 }
 
 impl PixelSums {
-    /// Pixel `i`'s sum, sum of squares and sample count.
-    fn at(&self, i: usize) -> (DVec3, DVec3, u32) {
-        match (self.sum.get(i), self.sum_sq.get(i)) {
-            (Some(&s), Some(&q)) => (s, q, self.spp),
-            _ => (DVec3::ZERO, DVec3::ZERO, 0),
-        }
+    /// Pixel `i`'s sum and sum of squares.
+    fn at(&self, i: usize) -> (DVec3, DVec3) {
+        (self.sum[i], self.sum_sq[i])
     }
 }
 
@@ -530,7 +514,7 @@ pub fn train_spatial(
             sum_sq: vec![DVec3::ZERO; pixels],
         },
     };
-    let mut stats = SpatialStats::default();
+    let mut recorded_in_all = 0;
     let bar = progress_bar(0, "guide", settings.progress);
     let (mut pass, mut last) = (0, 0.0);
     while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
@@ -563,23 +547,19 @@ pub fn train_spatial(
             }
         }
         training.samples.spp += pass_settings.spp;
-        stats.records += records.len();
+        recorded_in_all += records.len();
         training.guide = Arc::new(records.guide());
         bar.set_position(u64::from(training.samples.spp));
         last = t0.elapsed().as_secs_f64();
         pass += 1;
     }
     bar.finish_and_clear();
-    stats.passes = pass;
-    stats.spp = training.samples.spp;
-    stats.seconds = start.elapsed().as_secs_f64();
-    let guide = &training.guide.stats;
-    stats.cells = guide.cells;
-    stats.trained_cells = guide.trained_cells;
-    stats.directional_nodes = guide.directional_nodes;
     // No other owner is left: this moves the guide out.
     let mut guide = Arc::unwrap_or_clone(training.guide);
-    guide.stats = stats;
+    guide.stats.passes = pass;
+    guide.stats.spp = training.samples.spp;
+    guide.stats.records = recorded_in_all;
+    guide.stats.seconds = start.elapsed().as_secs_f64();
     SpatialTraining {
         guide: Arc::new(guide),
         samples: training.samples,
