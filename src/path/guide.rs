@@ -312,14 +312,16 @@ impl Vertex<'_> {
         }
     }
 
+    /// The density of a spatially guided vertex from the guide's and the BRDF's.
+    fn spatial_mix(&self, guide_pdf: f64, brdf_pdf: f64) -> f64 {
+        GUIDE_SHARE * self.scale * guide_pdf + (1.0 - GUIDE_SHARE) * brdf_pdf
+    }
+
     /// `p(wi)` for the material's BRDF pdf `brdf_pdf` here.
     fn pdf_with(&self, wi: DVec3, brdf_pdf: f64) -> f64 {
         match self.by {
             By::Brdf => brdf_pdf,
-            By::Spatial(s, cell) => {
-                let p = s.pdf(cell, wi.as_vec3());
-                GUIDE_SHARE * self.scale * p + (1.0 - GUIDE_SHARE) * brdf_pdf
-            }
+            By::Spatial(s, cell) => self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf),
             By::Level(level) => {
                 let x = self.x;
                 let anchors: f64 = level.anchors.iter().map(|a| a.weighted_pdf(x, wi)).sum();
@@ -355,11 +357,16 @@ impl Vertex<'_> {
                 });
             }
             By::Spatial(s, cell) => {
-                if u[0] < GUIDE_SHARE {
-                    s.sample(cell, rest)
+                // The guide's own sample brings its density from the descent that drew it.
+                let (wi, guided) = if u[0] < GUIDE_SHARE {
+                    let (wi, pdf) = s.sample(cell, rest);
+                    (wi, Some(pdf))
                 } else {
-                    brdf::sample_direction(material, n, wo, rest)?
-                }
+                    (brdf::sample_direction(material, n, wo, rest)?, None)
+                };
+                return self.finish_sample(material, wo, wi, |brdf_pdf| {
+                    self.spatial_mix(guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
+                });
             }
             By::Level(level) => {
                 let target = u[0] - level.brdf;
@@ -370,18 +377,27 @@ impl Vertex<'_> {
                 }
             }
         };
-        self.finish_sample(material, wo, wi)
+        self.finish_sample(material, wo, wi, |brdf_pdf| {
+            self.pdf_with(wi.as_dvec3(), brdf_pdf)
+        })
     }
 
-    /// The guide sample of direction `wi`: its density and weight.
-    fn finish_sample(&self, material: &Material, wo: Vec3, wi: Vec3) -> Option<GuideSample> {
+    /// The guide sample of direction `wi`: its density (`pdf` of the BRDF's density, asked
+    /// only where the direction carries something) and weight.
+    fn finish_sample(
+        &self,
+        material: &Material,
+        wo: Vec3,
+        wi: Vec3,
+        pdf: impl FnOnce(f64) -> f64,
+    ) -> Option<GuideSample> {
         let n = self.n;
         let cos = n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);
         if cos <= 0.0 || f.max_element() <= 0.0 {
             return None;
         }
-        let pdf = self.pdf_with(wi.as_dvec3(), brdf::pdf(material, n, wo, wi));
+        let pdf = pdf(brdf::pdf(material, n, wo, wi));
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -478,7 +494,7 @@ mod tests {
         let material = white();
         let target = Vec3::new(0.6, 0.7, -0.3).normalize();
         let [tu, tv] = to_square(target);
-        // Records spread over a square of side 1/16 of the equal-area map at `target`, all
+        // Records spread over a square of side 1/16 of the square map at `target`, all
         // at the origin, on a floor (facing +y).
         let mut rng = sample_rng(8, 0, 0);
         let records: Vec<Record> = (0..4100)
