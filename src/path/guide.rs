@@ -241,17 +241,25 @@ impl Guide {
     /// guide's region there, or the BRDF alone. Looked up once per vertex, used for every
     /// density and sample there. At the path's `last` vertex the spatial guide stays out:
     /// the direction sampled there can only find emission, which next-event estimation
-    /// finds better, and the guide would cost its lookups for nothing.
+    /// finds better, and the guide would cost its lookups for nothing. Past the levels,
+    /// the spatial guide also says how often next-event estimation runs there (at the last
+    /// vertex too).
     pub fn at(&self, k: usize, x: Vec3, n: Vec3, last: bool) -> Vertex<'_> {
-        let by = match self.level(k) {
-            Some(level) => By::Level(level),
-            None => match self.spatial.as_deref().filter(|_| !last) {
-                Some(s) => s.cell(x, n).map_or(By::Brdf, |cell| By::Spatial(s, cell)),
-                None => By::Brdf,
-            },
+        let (by, light_share) = match (self.level(k), self.spatial.as_deref()) {
+            (Some(level), _) => (By::Level(level), 1.0),
+            (None, Some(s)) => {
+                let (cell, light_share) = s.at(x, n);
+                let by = match cell.filter(|_| !last) {
+                    Some(cell) => By::Spatial(s, cell),
+                    None => By::Brdf,
+                };
+                (by, light_share)
+            }
+            (None, None) => (By::Brdf, 1.0),
         };
         Vertex {
             by,
+            light_share,
             scale: self.pdf_error.unwrap_or(1.0),
             x: x.as_dvec3(),
             n,
@@ -291,6 +299,8 @@ enum By<'a> {
 #[derive(Clone, Copy)]
 pub struct Vertex<'a> {
     by: By<'a>,
+    /// The probability of next-event estimation here.
+    light_share: f64,
     /// The guide's fault injection (1 without).
     scale: f64,
     x: DVec3,
@@ -298,6 +308,13 @@ pub struct Vertex<'a> {
 }
 
 impl Vertex<'_> {
+    /// The probability of next-event estimation here: 1, or less in a cell of the spatial
+    /// guide where training never saw a light sample reach a light. Multiple importance
+    /// sampling weighs the light sample's density times this.
+    pub fn light_share(&self) -> f64 {
+        self.light_share
+    }
+
     /// Whether this vertex samples anything but the BRDF.
     pub fn guides(&self) -> bool {
         !matches!(self.by, By::Brdf)

@@ -76,17 +76,21 @@ pub fn radiance_guided(
         // At a diffuse vertex the spatial guide's records leave out the direct light, which
         // next-event estimation samples well there (see `path::spatial`).
         let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
-        let guide = guide
+        let vertex = guide
             .filter(|g| !material.mirror && g.guides(k))
-            .map(|g| g.at(k, x.p, n, last))
-            .filter(|v| v.guides());
+            .map(|g| g.at(k, x.p, n, last));
+        // Next-event estimation runs with this probability: its density is the light
+        // sample's times it.
+        let light_share = vertex.map_or(1.0, |v| v.light_share());
+        let guide = vertex.filter(|v| v.guides());
         if let Some(v) = guide {
             // The light sample's and the guided sample's densities.
             counts.densities += 2 * v.samplers() as u64;
         }
 
-        // Next-event estimation (impossible through a mirror's delta).
-        if !material.mirror {
+        // Next-event estimation (impossible through a mirror's delta), where it runs.
+        if !material.mirror && (light_share >= 1.0 || f64::from(uniform(rng)) < light_share) {
+            let mut reached = false;
             let u = [uniform(rng), uniform(rng), uniform(rng)];
             let ls = scene.emitters.sample(&scene.mesh, u);
             let y = SurfacePoint {
@@ -105,7 +109,9 @@ pub fn radiance_guided(
                     && f.max_element() > 0.0
                     && view.unoccluded(&x, &y, counts)
                 {
-                    let pdf_light = light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
+                    reached = true;
+                    let pdf_light =
+                        light_share as f32 * light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
                     let pdf_brdf = match guide {
                         Some(g) => g.pdf(material, wo, wi),
                         None => brdf::pdf(material, n, wo, wi),
@@ -116,6 +122,9 @@ pub fn radiance_guided(
                         r.light(x.p, n, wi, le * (cos_x * weight / pdf_light));
                     }
                 }
+            }
+            if let Some(r) = recorder.as_deref_mut() {
+                r.light_try(x.p, n, reached);
             }
         }
 
@@ -163,8 +172,12 @@ pub fn radiance_guided(
                     1.0
                 } else {
                     let dist2 = (y.p - x.p).length_squared();
-                    let pdf_light =
-                        light_pdf_solid_angle(scene.emitters.total_area.recip(), dist2, cos_light);
+                    let pdf_light = light_share as f32
+                        * light_pdf_solid_angle(
+                            scene.emitters.total_area.recip(),
+                            dist2,
+                            cos_light,
+                        );
                     power_heuristic(bs.pdf as f32, pdf_light)
                 };
                 radiance += beta * emitted(y_material, &y, -wi) * weight;

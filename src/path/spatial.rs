@@ -35,6 +35,18 @@
 //! A guided vertex draws its direction from `GUIDE_SHARE · p_guide + (1 − GUIDE_SHARE) ·
 //! p_bsdf` and multiple importance sampling weighs next-event estimation against that
 //! density, so the estimator stays unbiased whatever was learned.
+//!
+//! The training also learns where light sampling is wasted: per facing and lattice cell, a
+//! cell is *dark* once [`DARK_AFTER_TRIES`] light samples in one pass reached no light
+//! (fig1's lower room, which sees the light only through its walls). There next-event
+//! estimation runs with probability [`DARK_LIGHT_SHARE`] only, and multiple importance
+//! sampling weighs it at that share of its density (so emission found by the sampled
+//! direction takes nearly all the weight): still unbiased, and the shadow rays that could
+//! not arrive are not traced. A dark cell turns lit when one of its light samples reaches
+//! a light. fig1, 38 spp, seeds 7 / 11 / 13: 2.03 → 1.79 s, relMSE 0.0341 → 0.0355 (the
+//! shifted random streams alone give 0.0352: a share of 0.999); 1 236 of 24 576 cells
+//! dark, shadow rays 4.8 → 2.4 million. fig5 (32 spp) 0.66 → 0.54 s, glossy 0.56 → 0.53 s,
+//! cbox unchanged, at the same error.
 
 use crate::accel::TriangleMesh;
 use glam::Vec3;
@@ -61,6 +73,13 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 pub const LATTICE_LONGEST: u32 = 16;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF.
 pub const GUIDE_SHARE: f64 = 0.5;
+/// Probability of next-event estimation in a dark lattice cell: one where the training's
+/// light samples never reached a light (see [`Records::guide`]).
+pub const DARK_LIGHT_SHARE: f64 = 0.1;
+/// A lattice cell turns dark after this many light samples in one pass, none of which
+/// reached a light (had the light been visible to one in ten of them, the chance of that
+/// would be 0.9^32 = 3 %).
+pub const DARK_AFTER_TRIES: u32 = 32;
 
 /// The position of unit direction `d` on the square: `u = (cos θ + 1) / 2` about the world
 /// `y` axis (equal-area in θ), and `v` the "diamond angle" of `(x, z)` over 4: a quarter of
@@ -158,13 +177,20 @@ pub struct Record {
     pub value: f32,
 }
 
-/// Records collected along one path: the sampled directions' records wait for the radiance
-/// the rest of the path brings back.
-#[derive(Debug, Default)]
+/// Records collected along paths: the sampled directions' records wait for the radiance
+/// the rest of the path brings back; the light samples' outcomes are kept per lattice cell.
+#[derive(Debug)]
 pub struct PathRecorder {
     pending: Vec<Pending>,
     pub records: Vec<Record>,
+    lattice: Lattice,
+    /// Per light sample, its facing and lattice cell's index (as [`SpatialGuide`]'s tables
+    /// index them), with [`REACHED`] set where it reached a light.
+    pub light_tries: Vec<u32>,
 }
+
+/// The bit of a light try that says it reached a light.
+const REACHED: u32 = 1 << 31;
 
 #[derive(Debug)]
 struct Pending {
@@ -183,6 +209,23 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 impl PathRecorder {
+    /// No records yet, for `records`' lattice.
+    pub fn new(records: &Records) -> Self {
+        Self {
+            pending: Vec::new(),
+            records: Vec::new(),
+            lattice: records.lattice.clone(),
+            light_tries: Vec::new(),
+        }
+    }
+
+    /// A light sample taken at `x` (normal `n`), and whether it reached a light (an
+    /// unoccluded emitter that the BSDF reflects).
+    pub fn light_try(&mut self, x: Vec3, n: Vec3, reached: bool) {
+        let i = self.lattice.index_facing(x, n) as u32;
+        self.light_tries.push(i | if reached { REACHED } else { 0 });
+    }
+
     /// A light sample's record at `x` (normal `n`): `value` is its MIS-weighted `L_e |cos| /
     /// pdf` (throughput excluded).
     pub fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3) {
@@ -322,6 +365,12 @@ impl Lattice {
         self.res.iter().map(|&r| r as usize).product()
     }
 
+    /// The index of the cell of `p` on a surface of normal `n` in a table of all facings'
+    /// cells, facing after facing.
+    fn index_facing(&self, p: Vec3, n: Vec3) -> usize {
+        facing(n) * self.cells() + self.index(p)
+    }
+
     /// The cell of `p` (points outside the box go to the nearest cell).
     fn index(&self, p: Vec3) -> usize {
         let t = ((p - self.lo) * self.inv).to_array();
@@ -375,16 +424,25 @@ struct DirRecord {
 pub struct Records {
     lo: Vec3,
     hi: Vec3,
+    lattice: Lattice,
     records: Vec<Record>,
+    /// The light tries added (see [`PathRecorder::light_try`]).
+    light_tries: Vec<u32>,
+    /// Per facing and lattice cell, whether it is dark: kept from guide to guide.
+    dark: Vec<bool>,
 }
 
 impl Records {
     /// No records yet, for a guide over the box `[lo, hi]`.
     pub fn new(lo: Vec3, hi: Vec3) -> Self {
+        let lattice = Lattice::new(lo, hi);
         Self {
             lo,
             hi,
+            dark: vec![false; FACINGS * lattice.cells()],
+            lattice,
             records: Vec::new(),
+            light_tries: Vec::new(),
         }
     }
 
@@ -402,6 +460,12 @@ impl Records {
         self.records.extend(records);
     }
 
+    /// Adds a recorder's records and light tries.
+    pub fn add_recorded(&mut self, recorder: PathRecorder) {
+        self.records.extend(recorder.records);
+        self.light_tries.extend(recorder.light_tries);
+    }
+
     pub fn len(&self) -> usize {
         self.records.len()
     }
@@ -410,16 +474,34 @@ impl Records {
         self.records.is_empty()
     }
 
-    /// Forgets the records, keeping the storage.
+    /// Forgets the records and light tries, keeping the storage (and which cells are dark).
     pub fn clear(&mut self) {
         self.records.clear();
+        self.light_tries.clear();
+    }
+
+    /// Updates which cells are dark from the light tries added: a cell where a try reached
+    /// a light is lit; one without is dark after [`DARK_AFTER_TRIES`] tries, and a dark one
+    /// stays dark (its tries now taken at [`DARK_LIGHT_SHARE`]).
+    fn update_dark(&mut self) {
+        let mut tries = vec![0u32; self.dark.len()];
+        let mut reached = vec![false; self.dark.len()];
+        for &t in &self.light_tries {
+            let i = (t & !REACHED) as usize;
+            tries[i] += 1;
+            reached[i] |= t & REACHED != 0;
+        }
+        for (i, dark) in self.dark.iter_mut().enumerate() {
+            *dark = !reached[i] && (*dark || tries[i] >= DARK_AFTER_TRIES);
+        }
     }
 
     /// The guide of the records added so far (see the module documentation). Builds reorder
     /// the records, deterministically.
     pub fn guide(&mut self) -> SpatialGuide {
+        self.update_dark();
         let (lo, hi) = (self.lo, self.hi);
-        let lattice = Lattice::new(lo, hi);
+        let lattice = self.lattice.clone();
         let cells = lattice.cells();
         let records = self.records.len();
         // One tree per facing, built in parallel, then joined in facing order.
@@ -450,9 +532,11 @@ impl Records {
         let mut guide = SpatialGuide {
             stats: SpatialStats {
                 records,
+                dark_cells: self.dark.iter().filter(|&&d| d).count(),
                 ..SpatialStats::default()
             },
             lattice,
+            dark: self.dark.clone(),
             regions: Vec::new(),
             quads: vec![QuadNode::default()],
         };
@@ -488,6 +572,8 @@ pub struct SpatialStats {
     pub trained_cells: usize,
     /// Nodes of all directional quadtrees.
     pub directional_nodes: usize,
+    /// Lattice cells (per facing) where next-event estimation runs at [`DARK_LIGHT_SHARE`].
+    pub dark_cells: usize,
     /// Wall-clock seconds of the training passes.
     pub seconds: f64,
 }
@@ -500,6 +586,8 @@ pub struct SpatialGuide {
     /// Per facing and lattice cell, the root of the directional quadtree of the kd-tree leaf
     /// holding the cell (0: none).
     regions: Vec<u32>,
+    /// Per facing and lattice cell, whether it is dark (see [`Records::guide`]).
+    dark: Vec<bool>,
     /// Every leaf's quadtree nodes; node 0 is unused, so that child 0 can mean "none".
     quads: Vec<QuadNode>,
 }
@@ -524,14 +612,29 @@ impl SpatialGuide {
         all.guide()
     }
 
+    /// This guide with every cell dark: next-event estimation at [`DARK_LIGHT_SHARE`]
+    /// everywhere, where light arrives too (the estimator must stay unbiased there: a test
+    /// of its weights).
+    pub fn with_every_cell_dark(mut self) -> Self {
+        self.dark.fill(true);
+        self
+    }
+
     /// The trained region at `p` on a surface of normal `n`, if any: its directional
     /// quadtree's root.
     pub fn cell(&self, p: Vec3, n: Vec3) -> Option<usize> {
-        let i = facing(n) * self.lattice.cells() + self.lattice.index(p);
-        match self.regions[i] {
+        self.at(p, n).0
+    }
+
+    /// The trained region at `p` on a surface of normal `n` (see [`Self::cell`]), and the
+    /// probability of next-event estimation there: 1, or [`DARK_LIGHT_SHARE`] in a dark cell.
+    pub fn at(&self, p: Vec3, n: Vec3) -> (Option<usize>, f64) {
+        let i = self.lattice.index_facing(p, n);
+        let cell = match self.regions[i] {
             0 => None,
             root => Some(root as usize),
-        }
+        };
+        (cell, if self.dark[i] { DARK_LIGHT_SHARE } else { 1.0 })
     }
 
     /// The solid-angle density of region `cell`'s guide for unit `wi`.
@@ -866,6 +969,42 @@ mod tests {
             }
         }
         out
+    }
+
+    /// A cell turns dark after enough light tries of which none reached a light, stays
+    /// dark while no try reaches one, and turns lit when one does; a cell with too few tries
+    /// stays lit.
+    #[test]
+    fn cells_turn_dark_where_light_samples_never_arrive() {
+        let mut records = Records::new(Vec3::ZERO, Vec3::ONE);
+        let (a, b, c) = (Vec3::splat(0.1), Vec3::splat(0.5), Vec3::splat(0.9));
+        let tries = |records: &mut Records, p: Vec3, n: u32, reached: u32| {
+            let mut recorder = PathRecorder::new(records);
+            for i in 0..n {
+                recorder.light_try(p, Vec3::Y, i < reached);
+            }
+            records.add_recorded(recorder);
+        };
+        tries(&mut records, a, DARK_AFTER_TRIES, 0);
+        tries(&mut records, b, DARK_AFTER_TRIES, 1);
+        tries(&mut records, c, DARK_AFTER_TRIES - 1, 0);
+        let guide = records.guide();
+        let share = |g: &SpatialGuide, p: Vec3, n: Vec3| g.at(p, n).1;
+        assert_eq!(share(&guide, a, Vec3::Y), DARK_LIGHT_SHARE);
+        // The other side of the same place was not tried.
+        assert_eq!(share(&guide, a, -Vec3::Y), 1.0);
+        assert_eq!(share(&guide, b, Vec3::Y), 1.0);
+        assert_eq!(share(&guide, c, Vec3::Y), 1.0);
+        assert_eq!(guide.stats.dark_cells, 1);
+        // The next pass tries the dark cell at its share: a few tries keep it dark ...
+        records.clear();
+        tries(&mut records, a, 3, 0);
+        assert_eq!(share(&records.guide(), a, Vec3::Y), DARK_LIGHT_SHARE);
+        // ... no try keeps it dark, and one that reaches a light makes it lit.
+        records.clear();
+        assert_eq!(share(&records.guide(), a, Vec3::Y), DARK_LIGHT_SHARE);
+        tries(&mut records, a, 3, 1);
+        assert_eq!(share(&records.guide(), a, Vec3::Y), 1.0);
     }
 
     #[test]

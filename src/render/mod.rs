@@ -532,15 +532,15 @@ pub fn train_spatial(
         let per_tile: Vec<_> = tiles
             .par_iter()
             .map(|tile| {
-                let mut recorder = PathRecorder::default();
+                let mut recorder = PathRecorder::new(&records);
                 let recording = Some((&mut recorder, recorded));
                 let result = render_tile(view, &pass_settings, estimator, tile, recording);
-                (recorder.records, result.sums)
+                (recorder, result.sums)
             })
             .collect();
         records.clear();
-        for (tile_records, sums) in per_tile {
-            records.add(tile_records);
+        for (recorder, sums) in per_tile {
+            records.add_recorded(recorder);
             for (i, sum, sum_sq) in sums {
                 training.samples.sum[i] = sum;
                 training.samples.sum_sq[i] = sum_sq;
