@@ -191,6 +191,8 @@ pub struct PathRecorder {
 
 /// The bit of a light try that says it reached a light.
 const REACHED: u32 = 1 << 31;
+/// The bit of a [`SpatialGuide`]'s region that says its cell is dark.
+const DARK: u32 = 1 << 31;
 
 #[derive(Debug)]
 struct Pending {
@@ -536,7 +538,6 @@ impl Records {
                 ..SpatialStats::default()
             },
             lattice,
-            dark: self.dark.clone(),
             regions: Vec::new(),
             quads: vec![QuadNode::default()],
         };
@@ -553,6 +554,9 @@ impl Records {
             guide.stats.trained_cells += part.trained_cells;
         }
         guide.stats.directional_nodes = guide.quads.len() - 1;
+        for (region, &dark) in guide.regions.iter_mut().zip(&self.dark) {
+            *region |= if dark { DARK } else { 0 };
+        }
         guide
     }
 }
@@ -584,10 +588,9 @@ pub struct SpatialGuide {
     pub stats: SpatialStats,
     lattice: Lattice,
     /// Per facing and lattice cell, the root of the directional quadtree of the kd-tree leaf
-    /// holding the cell (0: none).
+    /// holding the cell (0: none), with [`DARK`] set where the cell is dark (see
+    /// [`Records::guide`]): a lookup is one read.
     regions: Vec<u32>,
-    /// Per facing and lattice cell, whether it is dark (see [`Records::guide`]).
-    dark: Vec<bool>,
     /// Every leaf's quadtree nodes; node 0 is unused, so that child 0 can mean "none".
     quads: Vec<QuadNode>,
 }
@@ -616,7 +619,7 @@ impl SpatialGuide {
     /// everywhere, where light arrives too (the estimator must stay unbiased there: a test
     /// of its weights).
     pub fn with_every_cell_dark(mut self) -> Self {
-        self.dark.fill(true);
+        self.regions.iter_mut().for_each(|r| *r |= DARK);
         self
     }
 
@@ -629,12 +632,17 @@ impl SpatialGuide {
     /// The trained region at `p` on a surface of normal `n` (see [`Self::cell`]), and the
     /// probability of next-event estimation there: 1, or [`DARK_LIGHT_SHARE`] in a dark cell.
     pub fn at(&self, p: Vec3, n: Vec3) -> (Option<usize>, f64) {
-        let i = self.lattice.index_facing(p, n);
-        let cell = match self.regions[i] {
+        let region = self.regions[self.lattice.index_facing(p, n)];
+        let cell = match region & !DARK {
             0 => None,
             root => Some(root as usize),
         };
-        (cell, if self.dark[i] { DARK_LIGHT_SHARE } else { 1.0 })
+        let light_share = if region & DARK != 0 {
+            DARK_LIGHT_SHARE
+        } else {
+            1.0
+        };
+        (cell, light_share)
     }
 
     /// The solid-angle density of region `cell`'s guide for unit `wi`.
