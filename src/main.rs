@@ -296,10 +296,10 @@ struct GaArgs {
     guide_steps: u32,
     /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
     /// path-traced training passes (see --spatial-passes), as --method pg does everywhere
-    /// (beyond the paper).
-    #[arg(long)]
+    /// (beyond the paper). `false`: path tracing's own sampling there.
+    #[arg(long, default_value_t = PlanConfig::default().spatial, action = clap::ArgAction::Set, value_name = "BOOL")]
     spatial_guide: bool,
-    /// pg, and ga-pt with --spatial-guide: passes of path tracing that train the spatial
+    /// pg, and ga-pt with the spatial guide: passes of path tracing that train the spatial
     /// guide, pass i with 2^i samples per pixel; their samples count in --spp and stay in
     /// the image. Default: as many as fit in half of --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=12))]

@@ -435,21 +435,16 @@ fn bad_generator_files() {
     );
 }
 
-/// `--method pg` (and `ga-pt --spatial-guide`): bit-identical for 1 and 2 threads (the
-/// training records merge in tile order), with the training in the JSON: 2 passes of 1
-/// and 2 samples per pixel, of the image's 4.
+/// `--method pg` and `ga-pt` (whose spatial guide is on by default): bit-identical for 1
+/// and 2 threads (the training records merge in tile order), with the training in the
+/// JSON: 2 passes of 1 and 2 samples per pixel, of the image's 4. `--spatial-guide false`
+/// trains none.
 #[test]
 fn spatial_guide_renders_deterministically_with_its_training_stats() {
     let dir = tempfile::tempdir().unwrap();
     for method in [
         &["--method", "pg", "--spatial-passes", "2"][..],
-        &[
-            "--method",
-            "ga-pt",
-            "--spatial-guide",
-            "--spatial-passes",
-            "2",
-        ],
+        &["--method", "ga-pt", "--spatial-passes", "2"],
     ] {
         let render = |threads: &str| {
             let out = dir.path().join(format!("pg{threads}.exr"));
@@ -469,6 +464,13 @@ fn spatial_guide_renders_deterministically_with_its_training_stats() {
         assert!(spatial["trained_cells"].as_u64().unwrap() > 0, "{spatial}");
         assert!(json["times_s"]["spatial"].as_f64().unwrap() > 0.0);
     }
+    let out = dir.path().join("off.exr");
+    render_small_fig5(&out, &["--method", "ga-pt", "--spatial-guide", "false"]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("off.exr.json")).unwrap())
+            .unwrap();
+    assert!(json["spatial"].is_null(), "{json}");
+    assert_eq!(json["times_s"]["spatial"], 0.0, "{json}");
     let out = dir.path().join("o.exr");
     for passes in ["0", "13"] {
         assert_fails(

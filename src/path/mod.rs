@@ -27,7 +27,8 @@ pub enum Method {
     /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
     Ga,
     /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
-    /// evolved anchor samplers, with next-event estimation at every vertex.
+    /// evolved anchor samplers, and past them by `pg`'s spatial guide (`--spatial-guide`),
+    /// with next-event estimation at every vertex.
     GaPt,
     /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
     /// training passes whose samples stay in the image (`path::spatial`), without the GA:

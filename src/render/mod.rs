@@ -41,7 +41,8 @@ pub enum Estimator<'a> {
     Mixture(&'a Mixture),
     /// Per pixel, the mixture the GA plan gives it (`ga`): eq. 8.
     Ga(&'a Plan),
-    /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt`).
+    /// Per pixel, path tracing guided by the GA plan's mixture there (`ga-pt --spatial-guide
+    /// false`).
     GaPt(&'a Plan),
     /// Path tracing guided by a spatial guide beyond the GA plan's levels (`ga-pt
     /// --spatial-guide`), or at every vertex without a plan (`pg`); the samples its training
