@@ -239,11 +239,11 @@ impl Guide {
 
     /// What guides the `k`-th non-delta vertex at `x` (normal `n`): its level, the spatial
     /// guide's region there, or the BRDF alone. Looked up once per vertex, used for every
-    /// density and sample there. At the path's `last` vertex the spatial guide stays out:
-    /// the direction sampled there can only find emission, which next-event estimation
-    /// finds better, and the guide would cost its lookups for nothing. Past the levels,
-    /// the spatial guide also says how often next-event estimation runs there (at the last
-    /// vertex too).
+    /// density and sample there. Past the levels, the spatial guide says how often
+    /// next-event estimation runs there, at every vertex; at the path's `last` vertex it
+    /// does not guide the direction: that direction can only find emission, which
+    /// next-event estimation finds better, and the quadtree's descents would cost for
+    /// nothing.
     pub fn at(&self, k: usize, x: Vec3, n: Vec3, last: bool) -> Vertex<'_> {
         let (by, light_share) = match (self.level(k), self.spatial.as_deref()) {
             (Some(level), _) => (By::Level(level), 1.0),

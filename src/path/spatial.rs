@@ -484,11 +484,12 @@ impl Records {
 
     /// Updates which cells are dark from the light tries added: a cell where a try reached
     /// a light is lit; one without is dark after [`DARK_AFTER_TRIES`] tries, and a dark one
-    /// stays dark (its tries now taken at [`DARK_LIGHT_SHARE`]).
+    /// stays dark (its tries now taken at [`DARK_LIGHT_SHARE`]). The tries are used up, so
+    /// that a second guide from the same records does not count them again.
     fn update_dark(&mut self) {
         let mut tries = vec![0u32; self.dark.len()];
         let mut reached = vec![false; self.dark.len()];
-        for &t in &self.light_tries {
+        for t in self.light_tries.drain(..) {
             let i = (t & !REACHED) as usize;
             tries[i] += 1;
             reached[i] |= t & REACHED != 0;
@@ -623,14 +624,9 @@ impl SpatialGuide {
         self
     }
 
-    /// The trained region at `p` on a surface of normal `n`, if any: its directional
-    /// quadtree's root.
-    pub fn cell(&self, p: Vec3, n: Vec3) -> Option<usize> {
-        self.at(p, n).0
-    }
-
-    /// The trained region at `p` on a surface of normal `n` (see [`Self::cell`]), and the
-    /// probability of next-event estimation there: 1, or [`DARK_LIGHT_SHARE`] in a dark cell.
+    /// The trained region at `p` on a surface of normal `n`, if any (its directional
+    /// quadtree's root), and the probability of next-event estimation there: 1, or
+    /// [`DARK_LIGHT_SHARE`] in a dark cell.
     pub fn at(&self, p: Vec3, n: Vec3) -> (Option<usize>, f64) {
         let region = self.regions[self.lattice.index_facing(p, n)];
         let cell = match region & !DARK {
@@ -891,8 +887,8 @@ mod tests {
     fn quadtree_refines_where_the_light_is() {
         let guide = trained();
         assert_eq!(guide.stats.trained_cells, 1);
-        assert!(guide.cell(Vec3::splat(0.5), -Vec3::Y).is_none());
-        let cell = guide.cell(Vec3::splat(0.5), Vec3::Y).unwrap();
+        assert!(guide.at(Vec3::splat(0.5), -Vec3::Y).0.is_none());
+        let cell = guide.at(Vec3::splat(0.5), Vec3::Y).0.unwrap();
         // A quarter of the light in 3e-5 of the square: the density there is thousands of
         // times the mean, and the spread records' quadrants stay coarse.
         let bright = guide.pdf(cell, from_square(0.305, 0.7015)) * 4.0 * PI;
@@ -908,7 +904,7 @@ mod tests {
     #[test]
     fn density_integrates_to_one_and_matches_samples() {
         let guide = trained();
-        let cell = guide.cell(Vec3::splat(0.5), Vec3::Y).unwrap();
+        let cell = guide.at(Vec3::splat(0.5), Vec3::Y).0.unwrap();
         // ∫ p dω by sampling directions from the guide itself: E[1 / p] over its samples is
         // the solid angle where p > 0, the whole sphere.
         let mut rng = sample_rng(3, 0, 0);
@@ -1035,17 +1031,17 @@ mod tests {
         let guide = SpatialGuide::train(Vec3::ZERO, Vec3::ONE, records);
         assert!(guide.stats.cells > 1, "{:?}", guide.stats);
         let (a, b) = (
-            guide.cell(Vec3::splat(0.1), Vec3::X).unwrap(),
-            guide.cell(Vec3::splat(0.9), Vec3::X).unwrap(),
+            guide.at(Vec3::splat(0.1), Vec3::X).0.unwrap(),
+            guide.at(Vec3::splat(0.9), Vec3::X).0.unwrap(),
         );
         // The same place facing another way has no records.
-        assert!(guide.cell(Vec3::splat(0.9), -Vec3::X).is_none());
+        assert!(guide.at(Vec3::splat(0.9), -Vec3::X).0.is_none());
         assert_ne!(a, b);
         let (da, db) = (from_square(0.2, 0.2), from_square(0.8, 0.8));
         assert!(guide.pdf(a, da) > 100.0 * guide.pdf(a, db));
         assert!(guide.pdf(b, db) > 100.0 * guide.pdf(b, da));
         // Nothing recorded: untrained.
         let empty = SpatialGuide::train(Vec3::ZERO, Vec3::ONE, []);
-        assert!(empty.cell(Vec3::splat(0.5), Vec3::Y).is_none());
+        assert!(empty.at(Vec3::splat(0.5), Vec3::Y).0.is_none());
     }
 }
