@@ -14,10 +14,13 @@
 //! the `k`-th directional samplers of the mixture's generators (anchor cones and patches),
 //! each with its generator's weight (a generator without a `k`-th step, and the defensive
 //! `srt` one, count as BRDF sampling). The weights sum to 1 and every cone and patch sampler
-//! covers the whole sphere, so `p_k`
-//! is a density wherever the BSDF is non-zero: the estimator stays unbiased. Absorptions and
-//! light samplers of the generators are not used: path length is path tracing's (Russian
-//! roulette), light points are sampled by area.
+//! covers the whole sphere, so `p_k` is a density wherever the BSDF is non-zero: the
+//! estimator stays unbiased. With `pg`'s spatial guide (`ga-pt`'s default), `p_brdf` is
+//! replaced where the guide has learned something by what `pg` samples there, `GUIDE_SHARE
+//! · p_spatial + (1 − GUIDE_SHARE) · p_brdf`, itself a density, and the vertices past the
+//! levels sample that alone. Absorptions and light samplers of the generators are not
+//! used: path length is path tracing's (Russian roulette), light points are sampled by
+//! area.
 
 use super::generator::DirectionSampler;
 use super::mixture::Mixture;
@@ -552,20 +555,31 @@ mod tests {
         );
         let (n, wo) = (Vec3::Y, Vec3::new(0.3, 1.0, 0.1).normalize());
         let mut rng = sample_rng(7, 0, 0);
-        let mut towards = 0;
-        for _ in 0..10_000 {
-            let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
-            if let Some(s) = guide.sample(2, &material, Vec3::ZERO, n, wo, u) {
-                let p = guide.pdf(2, &material, Vec3::ZERO, n, wo, s.wi);
-                assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
-                towards += usize::from(near(s.wi));
+        // Of 10 000 samples at level `k`, each carrying the density `pdf` reports: how
+        // many are near the records.
+        let mut samples_near = |k: usize| {
+            let mut count = 0;
+            for _ in 0..10_000 {
+                let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
+                if let Some(s) = guide.sample(k, &material, Vec3::ZERO, n, wo, u) {
+                    let p = guide.pdf(k, &material, Vec3::ZERO, n, wo, s.wi);
+                    assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
+                    count += usize::from(near(s.wi));
+                }
             }
-        }
+            count
+        };
         // 0.5 · 0.9 of the samples near the records (1/64 of the square with the margin).
+        let towards = samples_near(2);
         assert!(towards > 4_000, "{towards} samples near the records");
         // At the levels, the BRDF share samples as the spatial guide does: still a density,
         // whose samples carry the density `pdf` reports, and the check rejects it off by
         // 10 % (the cone, the patch and the spatial guide hold 0.85 of level 0: ∫ ≈ 1.085).
+        let by_spatial = samples_near(0);
+        assert!(
+            by_spatial > 500,
+            "{by_spatial} samples near the records at level 0"
+        );
         for k in 0..2 {
             assert_eq!(guide.at(k, Vec3::ZERO, Vec3::Y, false).samplers(), 3 - k);
             let total = integral_at(&guide, &material, k);
@@ -575,19 +589,6 @@ mod tests {
         assert!(
             (wrong - 1.0).abs() > 0.02,
             "∫ p = {wrong} with a wrong density"
-        );
-        let mut by_spatial = 0;
-        for _ in 0..10_000 {
-            let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
-            if let Some(s) = guide.sample(0, &material, Vec3::ZERO, n, wo, u) {
-                let p = guide.pdf(0, &material, Vec3::ZERO, n, wo, s.wi);
-                assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
-                by_spatial += usize::from(near(s.wi));
-            }
-        }
-        assert!(
-            by_spatial > 500,
-            "{by_spatial} samples near the records at level 0"
         );
         // On a surface facing another way, where nothing was recorded: BRDF sampling alone.
         let (n, wo) = (Vec3::X, Vec3::new(1.0, 0.3, 0.1).normalize());
