@@ -31,9 +31,9 @@
 //!    predict a loss; with the spatial guide (`ga-pt`'s default) a failed pilot leaves
 //!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
 //!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`). (A mixture's pilot stops
-//!    starting pixels once it cannot pay, so there it is `pt` everywhere. cbox, `ga`, 64 spp: the plan took 0.09–0.16 s of baseline and
-//!    0.16–0.26 s of GA with the baseline first, 0.01 s of grid rays and 0.16 s of GA with
-//!    the pilot first.) Where they do, the pilot pixels go on from their best individuals
+//!    starting pixels once it cannot pay, so there it is `pt` everywhere. cbox, `ga`, 64
+//!    spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the baseline
+//!    first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they do, the pilot pixels go on from their best individuals
 //!    (with a fresh random stream). For a guide the other GA pixels then run no trial and
 //!    keep their guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so
 //!    it rarely loses much, and on fig5 the trials cost 40 % of the GA phase while the

@@ -189,7 +189,7 @@ pub struct PathRecorder {
     pub records: Vec<Record>,
     lattice: Lattice,
     /// Per light sample, its facing and lattice cell's index (as [`SpatialGuide`]'s tables
-    /// index them), with [`REACHED`] set where it reached a light.
+    /// index them), with the bit `REACHED` set where it reached a light.
     pub light_tries: Vec<u32>,
 }
 
