@@ -16,6 +16,10 @@ use genpath::path::generator::{
 use genpath::path::mixture::{Mixture, MixtureScratch};
 use genpath::path::mixture_file::{self, check_generator};
 use genpath::path::{RayCounts, SceneView};
+use genpath::render::{
+    train_spatial, Levels, RenderSettings, TrainingSchedule, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO,
+};
+use genpath::sampling::anchor::AnchorSampler;
 use genpath::sampling::patch::{PatchSampler, PatchShape};
 use genpath::sampling::{sample_rng, uniform, Rng};
 use genpath::scene::Scene;
@@ -983,4 +987,76 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     assert!(ungated.pixels.len() > PILOT_PIXELS);
     assert!(ungated.stats.baseline_ran);
     assert!((0..48).all(|y| (0..48).all(|x| ungated.local(x, y).is_some())));
+}
+
+/// `ga-pt`'s training passes try the plan's per-pixel guides against the spatial guide
+/// alone, which one pixel in sixteen keeps, and keep them only if the pixels they guide are
+/// not noisier. On fig5 the evolved guides win the first trial; the same plan with every
+/// evolved first-vertex sampler replaced by a narrow cone aimed at the camera, with 90 % of
+/// the weight (a deliberately wrong guide), must lose it, and then no pixel renders with the
+/// plan's guides.
+#[test]
+fn training_passes_keep_the_plans_guides_only_where_they_help() {
+    let (scene, accel) = fig5_sized(AccelKind::default_available(), 96);
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = GaConfig {
+        population: 16,
+        generations: 8,
+        test_paths: 4000,
+        ..GaConfig::default()
+    };
+    let config = PlanConfig {
+        grid: 12,
+        ..PlanConfig::default()
+    };
+    let plan =
+        Plan::build(&view, &ga, &config, (MAX_BOUNCES, Target::Guide), 5, false).expect("plan");
+    assert!(
+        !plan.is_closed(),
+        "the pilot must pay on fig5 for this test"
+    );
+    let settings = RenderSettings {
+        method: genpath::path::Method::GaPt,
+        spp: 64,
+        max_bounces: MAX_BOUNCES,
+        seed: 9,
+        progress: false,
+    };
+    let schedule = TrainingSchedule::Passes(5);
+    let trial_of = |plan: &Plan| {
+        let training = train_spatial(&view, &settings, schedule, Some(plan));
+        let trial = training.guide.stats.levels_trial.expect("a trial ran");
+        eprintln!("{trial:?}");
+        assert_eq!(
+            trial.pass, FIRST_TRIAL_PASS,
+            "a clear outcome ends the trials"
+        );
+        assert!(trial.control_pixels >= 400, "{trial:?}");
+        (trial, training.levels)
+    };
+    let (evolved, levels) = trial_of(&plan);
+    assert!(evolved.kept && evolved.ratio < 1.0, "{evolved:?}");
+    assert_eq!(levels, Levels::All);
+
+    let mut wrong = plan.clone();
+    let aim = scene.camera.origin.as_dvec3();
+    let cone = AnchorSampler::new(aim, 0.05, 0.95).expect("a valid cone");
+    for pixel in &mut wrong.pixels {
+        // Component 0 is the defensive `srt` generator; the others' first steps go astray,
+        // and take 90 % of the weight.
+        let mut generators = pixel.mixture.generators.clone();
+        for g in generators.iter_mut().skip(1) {
+            g.steps[0].sampler = DirectionSampler::Anchor(cone);
+        }
+        let others = (generators.len() - 1) as f64;
+        let mut weights = vec![0.9 / others; generators.len()];
+        weights[0] = 0.1;
+        pixel.mixture = Mixture::new(generators, weights);
+    }
+    let (astray, levels) = trial_of(&wrong);
+    assert!(
+        !astray.kept && astray.ratio > LEVELS_KEEP_RATIO,
+        "{astray:?}"
+    );
+    assert_eq!(levels, Levels::Off);
 }

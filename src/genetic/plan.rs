@@ -1237,6 +1237,12 @@ impl Plan {
             .then(|| Mixture::union(&parts))
     }
 
+    /// Whether no pixel renders with the plan's mixtures or guides (the gate's pilot
+    /// closed the GA).
+    pub fn is_closed(&self) -> bool {
+        self.closed
+    }
+
     /// [`Self::local`] without building the union: `false` for `pt`, else `true` with the
     /// weighted mixtures of the union in `parts` (`srt` alone where there is no point to
     /// interpolate). `weights` is scratch. The renderer passes the same buffers for every

@@ -585,6 +585,38 @@ pub struct SpatialStats {
     pub dark_cells: usize,
     /// Wall-clock seconds of the training passes.
     pub seconds: f64,
+    /// With a GA plan's per-pixel guides: the last training pass's trial of them against
+    /// this guide alone, which left them beside it or not.
+    pub levels_trial: Option<LevelsTrial>,
+}
+
+/// A training pass's trial of a GA plan's per-pixel guides against this guide alone: the
+/// mean relative variance of a sample (variance over `mean² + 0.01`, as relMSE weighs
+/// errors) over the pixels the plan guides, against that over the control arm, the one
+/// pixel in sixteen that the pass leaves to this guide alone.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct LevelsTrial {
+    /// The training pass that ran the trial.
+    pub pass: u32,
+    /// Pixels in each arm.
+    pub guided_pixels: usize,
+    pub control_pixels: usize,
+    /// Mean relative variance of the guided arm over the control arm's.
+    pub ratio: f64,
+    /// Whether the plan's guides stayed (for the later passes and the render).
+    pub kept: bool,
+}
+
+impl LevelsTrial {
+    /// Whether the next pass tries again: the guides stayed, but without a clear win (or
+    /// with too few control pixels to tell).
+    pub fn undecided(&self) -> bool {
+        use crate::render::{LEVELS_KEEP_RATIO, MIN_TRIAL_PIXELS};
+        self.kept
+            && (self.control_pixels < MIN_TRIAL_PIXELS
+                || self.ratio.is_nan()
+                || self.ratio >= 1.0 / LEVELS_KEEP_RATIO)
+    }
 }
 
 /// The trained guide: a spatial kd-tree whose leaves hold directional quadtrees.

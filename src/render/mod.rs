@@ -8,7 +8,7 @@ use crate::image::Image;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::mixture_file;
-use crate::path::spatial::{PathRecorder, Records, SpatialGuide};
+use crate::path::spatial::{LevelsTrial, PathRecorder, Records, SpatialGuide};
 use crate::path::{emitted, pt, Method, RayCounts, SceneView};
 use crate::sampling::{derive_seed, sample_rng, uniform, Rng};
 use glam::DVec3;
@@ -349,7 +349,9 @@ fn render_tile(
             };
             let guided = match estimator {
                 Estimator::GaPt(plan) | Estimator::Spatial(Some(plan), _) => {
-                    let guided = plan.local_parts(x, y, &mut weights, &mut parts);
+                    let off =
+                        matches!(estimator, Estimator::Spatial(_, t) if t.levels.off_at(x, y));
+                    let guided = !off && plan.local_parts(x, y, &mut weights, &mut parts);
                     if guided {
                         guide.rebuild(&parts);
                     } else if spatial_guided {
@@ -448,7 +450,47 @@ impl PixelSums {
 pub struct SpatialTraining {
     pub guide: Arc<SpatialGuide>,
     pub samples: PixelSums,
+    /// Where a GA plan's per-pixel guides sample beside the spatial guide.
+    pub levels: Levels,
 }
+
+/// Where a GA plan's per-pixel guides (`ga-pt`) sample beside the spatial guide.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Levels {
+    /// At every pixel the plan guides.
+    All,
+    /// At fifteen pixels in sixteen: the sixteenth (row and column 3 modulo 4) is a
+    /// training pass's control arm, left to the spatial guide alone.
+    Trial,
+    /// Nowhere: the trial found that they cost the spatial guide more than they gave.
+    Off,
+}
+
+impl Levels {
+    /// Whether pixel `(x, y)` renders without the plan's guides.
+    fn off_at(self, x: u32, y: u32) -> bool {
+        match self {
+            Levels::All => false,
+            Levels::Trial => x % 4 == 3 && y % 4 == 3,
+            Levels::Off => true,
+        }
+    }
+}
+
+/// A training pass's trial of the plan's per-pixel guides decides when the pixels they
+/// guide have more than this many times the mean relative variance of the control arm
+/// (then the guides go), or less than its inverse (then they stay and trials stop); in
+/// between, they stay for the next pass, which tries again. (2 s budgets, seeds 401–406:
+/// glossy's pilot passes on seeds 404 and 405 only, and the trial of pass 2 gives 2.11 and
+/// 1.91 there, where the guides doubled `ga-pt`'s error against `pg`; fig5 0.28–0.44.)
+pub const LEVELS_KEEP_RATIO: f64 = 1.15;
+
+/// The first training pass that tries the plan's guides: the guide that pass 1 samples with
+/// has learned from one sample per pixel, too little to judge against.
+pub const FIRST_TRIAL_PASS: u32 = 2;
+
+/// A trial with fewer control pixels decides nothing: the plan's guides stay.
+pub const MIN_TRIAL_PIXELS: usize = 256;
 
 /// How long the spatial guide trains: pass `i` takes `2^i` samples per pixel, and the guide
 /// the next pass samples with is learned from that pass's records alone (as in "practical
@@ -495,6 +537,15 @@ impl TrainingSchedule {
 /// by the guide learned from the pass before it, every pass rendered as the final image is
 /// (with `plan`'s per-pixel guides). Records and samples are gathered per tile and merged in
 /// tile order, so the guide does not depend on the thread count.
+///
+/// With a plan that guides, the passes from [`FIRST_TRIAL_PASS`] on also try its guides:
+/// each leaves one pixel in sixteen to the spatial guide alone ([`Levels::Trial`]) and
+/// compares the two arms' relative variance, until the ratio leaves
+/// `[1 / LEVELS_KEEP_RATIO, LEVELS_KEEP_RATIO]`; above it, the plan's guides sample nowhere
+/// from then on ([`Levels::Off`]). The gate's pilot could only compare them with `pt`, since
+/// the spatial guide learns after the plan (with the plan's guides: fig5 needs that). Which
+/// estimator a later pass or the render uses depends on the samples of the passes before, as
+/// the spatial guide itself does, never on its own samples: every sample stays unbiased.
 pub fn train_spatial(
     view: &SceneView,
     settings: &RenderSettings,
@@ -514,12 +565,22 @@ pub fn train_spatial(
             sum: vec![DVec3::ZERO; pixels],
             sum_sq: vec![DVec3::ZERO; pixels],
         },
+        levels: Levels::All,
     };
+    let mut levels_trial = None;
+    let open_plan = plan.filter(|p| !p.is_closed());
+    let mut trialling = open_plan.is_some();
     let mut recorded_in_all = 0;
     let bar = progress_bar(0, "guide", settings.progress);
     let (mut pass, mut last) = (0, 0.0);
     while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
         let t0 = Instant::now();
+        // From pass `FIRST_TRIAL_PASS` on, each pass tries the plan's guides against the
+        // spatial guide alone until a trial decides (the guides stay where it does not).
+        let trial = trialling && pass >= FIRST_TRIAL_PASS;
+        if trial {
+            training.levels = Levels::Trial;
+        }
         let pass_settings = RenderSettings {
             spp: 1 << pass,
             seed: derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass)),
@@ -540,12 +601,37 @@ pub fn train_spatial(
             })
             .collect();
         records.clear();
+        let mut arms = TrialArms::default();
         for (recorder, sums) in per_tile {
             records.add_recorded(recorder);
             for (i, sum, sum_sq) in sums {
+                if let (true, Some(plan)) = (trial, open_plan) {
+                    let before = training.samples.at(i);
+                    let n = pass_settings.spp;
+                    // The mean of the passes before, independent of this pass's samples: a
+                    // rare large sample must not lower its own pixel's relative variance.
+                    let mean = before.0 / f64::from(training.samples.spp);
+                    arms.add(
+                        plan,
+                        i,
+                        camera.width,
+                        (sum - before.0, sum_sq - before.1, n),
+                        mean,
+                    );
+                }
                 training.samples.sum[i] = sum;
                 training.samples.sum_sq[i] = sum_sq;
             }
+        }
+        if trial {
+            let outcome = arms.decide(pass);
+            training.levels = if outcome.kept {
+                Levels::All
+            } else {
+                Levels::Off
+            };
+            trialling = outcome.undecided();
+            levels_trial = Some(outcome);
         }
         training.samples.spp += pass_settings.spp;
         recorded_in_all += records.len();
@@ -561,8 +647,57 @@ pub fn train_spatial(
     guide.stats.spp = training.samples.spp;
     guide.stats.records = recorded_in_all;
     guide.stats.seconds = start.elapsed().as_secs_f64();
+    guide.stats.levels_trial = levels_trial;
     SpatialTraining {
         guide: Arc::new(guide),
         samples: training.samples,
+        levels: training.levels,
+    }
+}
+
+/// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
+/// over its pixels of a sample's relative variance, and its pixels.
+#[derive(Default)]
+struct TrialArms {
+    guided: (f64, usize),
+    control: (f64, usize),
+    weights: Vec<(f64, usize)>,
+}
+
+impl TrialArms {
+    /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
+    /// sum of squares `pass`, and whose mean over the passes before is `mean`. Pixels the plan
+    /// does not guide (`pt`'s points, a closed plan) are in neither arm.
+    fn add(&mut self, plan: &Plan, i: usize, width: u32, pass: (DVec3, DVec3, u32), mean: DVec3) {
+        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
+        let mut parts = Vec::new();
+        if !plan.local_parts(x, y, &mut self.weights, &mut parts) {
+            return;
+        }
+        let (sum, sum_sq, n) = (pass.0, pass.1, f64::from(pass.2));
+        // Unbiased sample variance of one sample, per channel, weighed as relMSE weighs.
+        let variance = (sum_sq - sum * sum / n) / (n - 1.0);
+        let relative = variance / (mean * mean + DVec3::splat(1e-2));
+        let arm = if Levels::Trial.off_at(x, y) {
+            &mut self.control
+        } else {
+            &mut self.guided
+        };
+        arm.0 += relative.max(DVec3::ZERO).element_sum() / 3.0;
+        arm.1 += 1;
+    }
+
+    /// The trial's outcome in pass `pass`.
+    fn decide(&self, pass: u32) -> LevelsTrial {
+        let mean = |arm: (f64, usize)| arm.0 / arm.1.max(1) as f64;
+        let ratio = mean(self.guided) / mean(self.control);
+        LevelsTrial {
+            pass,
+            guided_pixels: self.guided.1,
+            control_pixels: self.control.1,
+            ratio,
+            // A ratio that is not a number (no variance in either arm) decides nothing.
+            kept: self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan() || ratio <= LEVELS_KEEP_RATIO,
+        }
     }
 }
