@@ -30,7 +30,9 @@
 //!    run: the image renders with `pt`, for a guide except near a pilot pixel that does not
 //!    predict a loss; with the spatial guide (`ga-pt`'s default) a failed pilot leaves
 //!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
-//!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`). (A mixture's pilot stops
+//!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`); where it passes, the
+//!    spatial guide's training passes try the guides against that guide alone
+//!    ([`crate::render::train_spatial`]). (A mixture's pilot stops
 //!    starting pixels once it cannot pay, so there it is `pt` everywhere. cbox, `ga`, 64
 //!    spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the baseline
 //!    first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they do, the pilot pixels go on from their best individuals
