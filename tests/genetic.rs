@@ -50,6 +50,16 @@ fn fig5_sized(kind: AccelKind, size: u32) -> (Scene, Box<dyn Accel>) {
     (scene, accel)
 }
 
+/// A GA small enough for a test, with which fig5's pilot still pays for a guide.
+fn small_guide_ga() -> GaConfig {
+    GaConfig {
+        population: 16,
+        generations: 8,
+        test_paths: 4000,
+        ..GaConfig::default()
+    }
+}
+
 /// The back-ends built into this test binary.
 fn backends() -> Vec<AccelKind> {
     let mut kinds = Vec::new();
@@ -872,12 +882,7 @@ fn step_targets_lie_along_the_sampled_directions() {
 fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     let (scene, accel) = fig5_sized(AccelKind::default_available(), 64);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = GaConfig {
-        population: 16,
-        generations: 8,
-        test_paths: 4000,
-        ..GaConfig::default()
-    };
+    let ga = small_guide_ga();
     let config = PlanConfig {
         grid: 8,
         time_limit: Some(0.0),
@@ -999,12 +1004,7 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
 fn training_passes_keep_the_plans_guides_only_where_they_help() {
     let (scene, accel) = fig5_sized(AccelKind::default_available(), 96);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = GaConfig {
-        population: 16,
-        generations: 8,
-        test_paths: 4000,
-        ..GaConfig::default()
-    };
+    let ga = small_guide_ga();
     let config = PlanConfig {
         grid: 12,
         ..PlanConfig::default()
