@@ -607,18 +607,6 @@ pub struct LevelsTrial {
     pub kept: bool,
 }
 
-impl LevelsTrial {
-    /// Whether the next pass tries again: the guides stayed, but without a clear win (or
-    /// with too few control pixels to tell).
-    pub fn undecided(&self) -> bool {
-        use crate::render::{LEVELS_KEEP_RATIO, MIN_TRIAL_PIXELS};
-        self.kept
-            && (self.control_pixels < MIN_TRIAL_PIXELS
-                || self.ratio.is_nan()
-                || self.ratio >= 1.0 / LEVELS_KEEP_RATIO)
-    }
-}
-
 /// The trained guide: a spatial kd-tree whose leaves hold directional quadtrees.
 #[derive(Clone, Debug)]
 pub struct SpatialGuide {

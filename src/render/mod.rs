@@ -333,9 +333,10 @@ fn render_tile(
     let mut scratch = MixtureScratch::default();
     // A guide per pixel, made in the same storage.
     // With a spatial guide, the samples its training took start every pixel's sums.
-    let (spatial, taken) = match estimator {
-        Estimator::Spatial(_, t) => (Some(Arc::clone(&t.guide)), Some(&t.samples)),
-        _ => (None, None),
+    // And where the plan's guides sample beside it.
+    let (spatial, taken, levels) = match estimator {
+        Estimator::Spatial(_, t) => (Some(Arc::clone(&t.guide)), Some(&t.samples), t.levels),
+        _ => (None, None, Levels::All),
     };
     let spatial_guided = spatial.is_some();
     let mut guide = Guide::default().with_spatial(spatial);
@@ -349,9 +350,8 @@ fn render_tile(
             };
             let guided = match estimator {
                 Estimator::GaPt(plan) | Estimator::Spatial(Some(plan), _) => {
-                    let off =
-                        matches!(estimator, Estimator::Spatial(_, t) if t.levels.off_at(x, y));
-                    let guided = !off && plan.local_parts(x, y, &mut weights, &mut parts);
+                    let guided =
+                        !levels.off_at(x, y) && plan.local_parts(x, y, &mut weights, &mut parts);
                     if guided {
                         guide.rebuild(&parts);
                     } else if spatial_guided {
@@ -601,7 +601,7 @@ pub fn train_spatial(
             })
             .collect();
         records.clear();
-        let mut arms = TrialArms::default();
+        let mut arms = TrialArms::new();
         for (recorder, sums) in per_tile {
             records.add_recorded(recorder);
             for (i, sum, sum_sq) in sums {
@@ -624,13 +624,13 @@ pub fn train_spatial(
             }
         }
         if trial {
-            let outcome = arms.decide(pass);
+            let outcome;
+            (outcome, trialling) = arms.decide(pass);
             training.levels = if outcome.kept {
                 Levels::All
             } else {
                 Levels::Off
             };
-            trialling = outcome.undecided();
             levels_trial = Some(outcome);
         }
         training.samples.spp += pass_settings.spp;
@@ -656,22 +656,38 @@ pub fn train_spatial(
 }
 
 /// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
-/// over its pixels of a sample's relative variance, and its pixels.
-#[derive(Default)]
-struct TrialArms {
+/// over its pixels of a sample's relative variance, and its pixels. `weights` and `parts`
+/// are [`Plan::local_parts`]'s buffers, reused for every pixel.
+struct TrialArms<'a> {
     guided: (f64, usize),
     control: (f64, usize),
     weights: Vec<(f64, usize)>,
+    parts: Vec<(f64, &'a Mixture)>,
 }
 
-impl TrialArms {
+impl<'a> TrialArms<'a> {
+    fn new() -> Self {
+        Self {
+            guided: (0.0, 0),
+            control: (0.0, 0),
+            weights: Vec::new(),
+            parts: Vec::new(),
+        }
+    }
+
     /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
     /// sum of squares `pass`, and whose mean over the passes before is `mean`. Pixels the plan
     /// does not guide (`pt`'s points, a closed plan) are in neither arm.
-    fn add(&mut self, plan: &Plan, i: usize, width: u32, pass: (DVec3, DVec3, u32), mean: DVec3) {
+    fn add(
+        &mut self,
+        plan: &'a Plan,
+        i: usize,
+        width: u32,
+        pass: (DVec3, DVec3, u32),
+        mean: DVec3,
+    ) {
         let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
-        let mut parts = Vec::new();
-        if !plan.local_parts(x, y, &mut self.weights, &mut parts) {
+        if !plan.local_parts(x, y, &mut self.weights, &mut self.parts) {
             return;
         }
         let (sum, sum_sq, n) = (pass.0, pass.1, f64::from(pass.2));
@@ -687,17 +703,24 @@ impl TrialArms {
         arm.1 += 1;
     }
 
-    /// The trial's outcome in pass `pass`.
-    fn decide(&self, pass: u32) -> LevelsTrial {
+    /// The trial's outcome in pass `pass`, and whether the next pass tries again: the
+    /// guides stayed, but without a clear win (or with too few control pixels to tell).
+    fn decide(&self, pass: u32) -> (LevelsTrial, bool) {
         let mean = |arm: (f64, usize)| arm.0 / arm.1.max(1) as f64;
         let ratio = mean(self.guided) / mean(self.control);
-        LevelsTrial {
+        // A ratio that is not a number (no variance in either arm) decides nothing.
+        let undecided = self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan();
+        let kept = undecided || ratio <= LEVELS_KEEP_RATIO;
+        let trial = LevelsTrial {
             pass,
             guided_pixels: self.guided.1,
             control_pixels: self.control.1,
             ratio,
-            // A ratio that is not a number (no variance in either arm) decides nothing.
-            kept: self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan() || ratio <= LEVELS_KEEP_RATIO,
-        }
+            kept,
+        };
+        (
+            trial,
+            kept && (undecided || ratio >= 1.0 / LEVELS_KEEP_RATIO),
+        )
     }
 }
