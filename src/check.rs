@@ -1,23 +1,24 @@
 //! `genpath check SCENE`: the numerical invariants of design §8 on any scene, at a small
 //! size.
 //!
-//! * Every method (`pt`, `srt`, `ga`, `ga-pt`, `pg`) renders without a NaN, infinite or
-//!   negative pixel.
+//! * Every method ([`Method`]'s list, `ga-pt` with and without the spatial guide, and
+//!   `mixture` when given one) renders without a NaN, infinite or negative pixel; each is
+//!   prepared and rendered as `genpath render` does it.
 //! * Every density a generator samples with — the `srt` generator and every generator the GA
 //!   evolved — is finite and positive, and so is the mixture density of every light-carrying
 //!   path (the estimator divides by it).
 //! * Every fitness value (eq. 10) the GA computed is finite.
-//! * The image means of `srt`, `ga`, `ga-pt` and `pg` agree with `pt`'s per channel, inside a
+//! * The image means of the other methods agree with `pt`'s per channel, inside a
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
-use crate::genetic::plan::{Plan, PlanConfig, Target};
-use crate::genetic::{GaConfig, GaConfigError};
+use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::GaConfig;
+use crate::integrators::{prepare, Film, Method, MethodConfig, PrepareError, RenderSettings};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
-use crate::path::{mixture_file, Method, RayCounts, SceneView};
-use crate::render::{render, train_spatial, Estimator, Film, RenderSettings, TrainingSchedule};
-use crate::sampling::{sample_rng, uniform};
+use crate::path::{mixture_file, RayCounts, SceneView};
+use crate::sampling::{camera_ray, sample_rng};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// What `check` renders and samples.
@@ -28,12 +29,9 @@ pub struct CheckConfig {
     pub seed: u64,
     /// Paths sampled per generator for the density survey.
     pub paths_per_generator: usize,
-    pub ga: GaConfig,
-    pub plan: PlanConfig,
-    /// Fault injection for tests: scales the `srt` estimator's density when evaluated, which
-    /// biases its image; the check must then fail.
+    /// The methods' settings; `mixture` is rendered when it holds one.
     #[serde(skip)]
-    pub srt_pdf_error: Option<f64>,
+    pub methods: MethodConfig,
 }
 
 impl CheckConfig {
@@ -44,20 +42,23 @@ impl CheckConfig {
             max_bounces,
             seed,
             paths_per_generator: 200,
-            ga: GaConfig {
-                population: 12,
-                generations: 6,
-                test_paths: 4000,
-                ..GaConfig::default()
+            methods: MethodConfig {
+                srt_absorption: GaConfig::default().srt_absorption,
+                mixture: None,
+                ga: GaConfig {
+                    population: 12,
+                    generations: 6,
+                    test_paths: 4000,
+                    ..GaConfig::default()
+                },
+                // Without the gate, so that `ga` and `ga-pt` render with evolved mixtures
+                // wherever the GA found one, not with `pt`.
+                plan: PlanConfig {
+                    grid: 8,
+                    gate: false,
+                    ..PlanConfig::default()
+                },
             },
-            // Without the gate, so that `ga` and `ga-pt` render with evolved mixtures
-            // wherever the GA found one, not with `pt`.
-            plan: PlanConfig {
-                grid: 8,
-                gate: false,
-                ..PlanConfig::default()
-            },
-            srt_pdf_error: None,
         }
     }
 }
@@ -65,7 +66,8 @@ impl CheckConfig {
 /// One method's render.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct MethodCheck {
-    pub method: Method,
+    /// The method, with `:key=value` for a variant (as `sweep --methods` writes it).
+    pub method: String,
     /// Pixels with a NaN, infinite or negative channel.
     pub bad_pixels: usize,
     /// Image mean per channel and its standard error.
@@ -159,7 +161,7 @@ impl PdfSurvey {
                 u64::from(y) * u64::from(camera.width) + u64::from(x),
                 j as u64,
             );
-            let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+            let ray = camera_ray(camera, (x, y), &mut rng);
             let Some(x1) = view.trace(&ray, &mut counts) else {
                 continue;
             };
@@ -191,66 +193,41 @@ impl PdfSurvey {
     }
 }
 
+/// The methods `check` renders: every [`Method`] with `config`'s settings (`mixture` only
+/// with a mixture), and `ga-pt` without the spatial guide.
+fn variants(config: &MethodConfig) -> Vec<(String, Method, MethodConfig)> {
+    use clap::ValueEnum as _;
+    let mut out: Vec<_> = Method::value_variants()
+        .iter()
+        .filter(|&&m| m != Method::Mixture || config.mixture.is_some())
+        .map(|&m| {
+            let name = m.to_possible_value().map(|v| v.get_name().to_string());
+            (name.unwrap_or_default(), m, config.clone())
+        })
+        .collect();
+    let mut without = config.clone();
+    without.plan.spatial = false;
+    out.push(("ga-pt:spatial=0".to_string(), Method::GaPt, without));
+    out
+}
+
 /// Runs every check on `view`'s scene at its camera's size.
-pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaConfigError> {
+pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, PrepareError> {
     let mut failures = Vec::new();
-    let settings = |method| RenderSettings {
-        method,
-        spp: config.spp,
-        max_bounces: config.max_bounces,
-        seed: config.seed,
-        progress: false,
-    };
-    let srt = mixture_file::srt(view.scene, config.max_bounces, config.ga.srt_absorption);
-    let srt_rendered = match config.srt_pdf_error {
-        Some(factor) => srt.clone().with_pdf_error(0, factor),
-        None => srt.clone(),
-    };
-    let plan = Plan::build(
-        view,
-        &config.ga,
-        &config.plan,
-        (config.max_bounces, Target::Mixture),
-        config.seed,
-        false,
-    )?;
-    let training = train_spatial(
-        view,
-        &settings(Method::Pg),
-        TrainingSchedule::new(&config.plan, config.spp),
-        None,
-    );
-    // pg's image holds its training samples: the render adds the rest of `spp`.
-    let pg_settings = RenderSettings {
-        spp: config.spp.saturating_sub(training.samples.spp),
-        ..settings(Method::Pg)
-    };
-    let films: Vec<(Method, Film)> = vec![
-        (
-            Method::Pt,
-            render(view, &settings(Method::Pt), Estimator::Pt),
-        ),
-        (
-            Method::Srt,
-            render(
-                view,
-                &settings(Method::Srt),
-                Estimator::Mixture(&srt_rendered),
-            ),
-        ),
-        (
-            Method::Ga,
-            render(view, &settings(Method::Ga), Estimator::Ga(&plan)),
-        ),
-        (
-            Method::GaPt,
-            render(view, &settings(Method::GaPt), Estimator::GaPt(&plan)),
-        ),
-        (
-            Method::Pg,
-            render(view, &pg_settings, Estimator::Spatial(None, &training)),
-        ),
-    ];
+    let mut films: Vec<(String, Film)> = Vec::new();
+    let mut plans: Vec<Plan> = Vec::new();
+    for (label, method, methods) in variants(&config.methods) {
+        let settings = RenderSettings {
+            method,
+            spp: config.spp,
+            max_bounces: config.max_bounces,
+            seed: config.seed,
+            progress: false,
+        };
+        let integrator = prepare(view, &methods, &settings)?;
+        films.push((label, integrator.render(view, &settings)));
+        plans.extend(integrator.plan().cloned());
+    }
     let comparisons = 3 * (films.len() - 1);
     let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
     let z_critical = Normal::new(0.0, 1.0)
@@ -272,7 +249,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         }
         let (mean, se) = image_mean(film);
         let mut z: f64 = 0.0;
-        if *method != Method::Pt {
+        if method != "pt" {
             for c in 0..3 {
                 let s = (se[c] * se[c] + pt_se[c] * pt_se[c]).sqrt();
                 if s > 0.0 {
@@ -288,7 +265,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
             }
         }
         methods.push(MethodCheck {
-            method: *method,
+            method: method.clone(),
             bad_pixels,
             mean,
             standard_error: se,
@@ -298,6 +275,11 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
     }
 
     // Densities: srt and every evolved generator, from their GA pixels.
+    let srt = mixture_file::srt(
+        view.scene,
+        config.max_bounces,
+        config.methods.srt_absorption,
+    );
     let mut survey = PdfSurvey::default();
     let camera = &view.scene.camera;
     let centre = (camera.width / 2, camera.height / 2);
@@ -310,7 +292,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
         config.max_bounces,
         config.seed,
     );
-    for p in &plan.pixels {
+    for p in plans.iter().flat_map(|plan| &plan.pixels) {
         for g in &p.mixture.generators {
             survey.sample(
                 view,
@@ -331,9 +313,9 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, GaCo
     }
 
     // Fitness values.
-    let values: Vec<f64> = plan
-        .pixels
+    let values: Vec<f64> = plans
         .iter()
+        .flat_map(|plan| &plan.pixels)
         .flat_map(|p| {
             [p.v_srt, p.v_best]
                 .into_iter()

@@ -5,10 +5,11 @@ use clap::{Args, Parser, Subcommand};
 use genpath::accel::{self, Accel, AccelKind, Coherence};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::genetic::GaConfig;
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{prepare, Integrator, Method, MethodConfig, RenderSettings};
 use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
-use genpath::path::{Method, RayCounts, SceneView};
-use genpath::render::{self, Estimator, MethodConfig, Prepared, RenderSettings};
+use genpath::path::{RayCounts, SceneView};
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -54,6 +55,9 @@ struct CompareArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Also compare every channel bit for bit; exits with status 1 if any differs.
+    #[arg(long)]
+    bits: bool,
 }
 
 /// What every command that renders needs: the scene, how to trace it, and the seed.
@@ -496,7 +500,7 @@ fn write_stats(outputs: &[PathBuf], stats: &serde_json::Value) -> Result<()> {
 
 impl SettingsArgs {
     /// `method`'s configuration; loads the mixture file when one is given.
-    fn config(&self, method: Method, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+    fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
         let mixture = match &self.generators {
             Some(file) => Some(mixture_file::load(
                 file,
@@ -508,7 +512,6 @@ impl SettingsArgs {
         };
         let (ga, plan) = self.ga.configs(self.srt_absorption)?;
         Ok(MethodConfig {
-            method,
             srt_absorption: self.srt_absorption,
             mixture,
             ga,
@@ -525,7 +528,7 @@ impl MethodArgs {
                 bail!("--generators is only used with --method mixture")
             }
             (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
-            _ => self.settings.config(self.method, scene, max_bounces),
+            _ => self.settings.config(scene, max_bounces),
         }
     }
 }
@@ -551,16 +554,9 @@ fn run_render(args: RenderArgs) -> Result<()> {
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let prepared = session
         .pool
-        .install(|| Prepared::new(&view, &config, &settings))?;
+        .install(|| prepare(&view, &config, &settings))?;
     let plan = prepared.plan();
-    // The spatial guide's training samples are already in the image.
-    let rest = RenderSettings {
-        spp: settings.spp.saturating_sub(prepared.samples_taken()),
-        ..settings.clone()
-    };
-    let film = session
-        .pool
-        .install(|| render::render(&view, &rest, prepared.estimator()));
+    let film = session.pool.install(|| prepared.render(&view, &settings));
     let render_s = film.elapsed.as_secs_f64();
     let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
     let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
@@ -655,9 +651,10 @@ fn run_reference(args: ReferenceArgs) -> Result<()> {
             seed,
             ..session.settings(&args.scene, Method::Pt, args.spp / 2)
         };
-        session
-            .pool
-            .install(|| render::render(&view, &settings, Estimator::Pt))
+        let pt = PathTracing {
+            max_bounces: settings.max_bounces,
+        };
+        session.pool.install(|| pt.render(&view, &settings))
     };
     // The halves use seeds derived from the given one, so neither shares random numbers with
     // a render made with the same `--seed` (that would correlate its error with the
@@ -745,15 +742,13 @@ fn run_sweep(args: SweepArgs) -> Result<()> {
     let reference = genpath::image::read_exr(&args.reference)?;
     let session = Session::open(&args.scene)?;
     let settings = session.settings(&args.scene, Method::Pt, 1);
-    let base = args
-        .settings
-        .config(Method::Pt, &session.scene, settings.max_bounces)?;
+    let base = args.settings.config(&session.scene, settings.max_bounces)?;
     let methods = args
         .methods
         .iter()
         .map(|m| MethodSpec::parse(m.trim(), &base).map_err(|e| anyhow::anyhow!("--methods: {e}")))
         .collect::<Result<Vec<_>>>()?;
-    if methods.iter().any(|m| m.config.method == Method::Mixture) && base.mixture.is_none() {
+    if methods.iter().any(|m| m.method == Method::Mixture) && base.mixture.is_none() {
         bail!("--methods mixture needs --generators FILE");
     }
     let scene_name = args
@@ -933,10 +928,9 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             .num_threads(t as usize)
             .build()
             .context("cannot start the worker threads")?;
+        let pt = PathTracing { max_bounces };
         let (elapsed, _) = best(passes, || {
-            pool.install(|| render::render(&view, &settings, Estimator::Pt))
-                .rays
-                .total() as usize
+            pool.install(|| pt.render(&view, &settings)).rays.total() as usize
         });
         let seconds = elapsed.as_secs_f64();
         let base = *base.get_or_insert(seconds * f64::from(threads[0]));
@@ -1123,6 +1117,12 @@ fn run_compare(args: CompareArgs) -> Result<()> {
             reference.height
         );
     };
+    let differing = image
+        .pixels
+        .iter()
+        .zip(&reference.pixels)
+        .filter(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))
+        .count();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&m)?);
     } else {
@@ -1133,6 +1133,12 @@ fn run_compare(args: CompareArgs) -> Result<()> {
             m.mape,
             100.0 * m.bad_fraction
         );
+    }
+    if args.bits {
+        if differing > 0 {
+            bail!("{differing} of {} pixels differ in their bits", image.pixels.len());
+        }
+        println!("bit-identical: all {} pixels", image.pixels.len());
     }
     Ok(())
 }

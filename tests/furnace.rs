@@ -4,8 +4,9 @@
 mod common;
 
 use genpath::accel::{self, AccelKind};
-use genpath::path::{Method, SceneView};
-use genpath::render::{render, Estimator, RenderSettings};
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Integrator, Method, RenderSettings};
+use genpath::path::SceneView;
 use genpath::scene::Scene;
 
 const RHO: f32 = 0.5;
@@ -42,7 +43,7 @@ fn furnace(rho: f32, max_bounces: u32) -> (f64, f64) {
         seed: 7,
         progress: false,
     };
-    let film = render(&view, &settings, Estimator::Pt);
+    let film = PathTracing { max_bounces }.render(&view, &settings);
     let n = film.image.pixels.len() as f64;
     let mean = film.image.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / n;
     let var_of_grand_mean = film.variance_of_mean.iter().map(|v| v[0]).sum::<f64>() / (n * n);

@@ -10,15 +10,16 @@ use genpath::genetic::plan::{Plan, PlanConfig, Target, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
+use genpath::integrators::pg::{
+    train_spatial, Levels, TrainingSchedule, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO,
+};
+use genpath::integrators::RenderSettings;
 use genpath::path::generator::{
     DirectionSampler, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use genpath::path::mixture::{Mixture, MixtureScratch};
 use genpath::path::mixture_file::{self, check_generator};
 use genpath::path::{RayCounts, SceneView};
-use genpath::render::{
-    train_spatial, Levels, RenderSettings, TrainingSchedule, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO,
-};
 use genpath::sampling::anchor::AnchorSampler;
 use genpath::sampling::patch::{PatchSampler, PatchShape};
 use genpath::sampling::{sample_rng, uniform, Rng};
@@ -1016,7 +1017,7 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         "the pilot must pay on fig5 for this test"
     );
     let settings = RenderSettings {
-        method: genpath::path::Method::GaPt,
+        method: genpath::integrators::Method::GaPt,
         spp: 64,
         max_bounces: MAX_BOUNCES,
         seed: 9,

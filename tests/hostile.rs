@@ -10,10 +10,14 @@
 use genpath::accel::{self, AccelKind};
 use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
+use genpath::integrators::ga::Ga;
+use genpath::integrators::ga_pt::GaPt;
+use genpath::integrators::mixture::MixtureIntegrator;
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
-use genpath::path::{mixture_file, Method, SceneView};
-use genpath::render::{render, Estimator, RenderSettings};
+use genpath::path::{mixture_file, SceneView};
 use genpath::scene::Scene;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -218,8 +222,12 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         vec![1.0],
     );
     let mut films = vec![
-        render(&view, &settings, Estimator::Pt),
-        render(&view, &settings, Estimator::Mixture(&srt)),
+        PathTracing { max_bounces }.render(&view, &settings),
+        MixtureIntegrator {
+            mixture: srt,
+            max_bounces,
+        }
+        .render(&view, &settings),
     ];
     if with_ga {
         let ga = GaConfig {
@@ -235,8 +243,12 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         let target = (max_bounces, Target::Mixture);
         let plan =
             Plan::build(&view, &ga, &config, target, 3, false).map_err(|e| format!("GA: {e}"))?;
-        films.push(render(&view, &settings, Estimator::Ga(&plan)));
-        films.push(render(&view, &settings, Estimator::GaPt(&plan)));
+        let plan_ga = Ga {
+            plan: plan.clone(),
+            max_bounces,
+        };
+        films.push(plan_ga.render(&view, &settings));
+        films.push(GaPt { plan, max_bounces }.render(&view, &settings));
     }
     for film in &films {
         if let Some(p) = film

@@ -6,12 +6,13 @@
 
 use genpath::accel::{self, Accel, AccelKind};
 use genpath::check::{check, CheckConfig};
+use genpath::integrators::mixture::MixtureIntegrator;
+use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::generator::{
     DirectionSampler, PathGenerator, PathVertices, Step, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use genpath::path::mixture::Mixture;
-use genpath::path::{mixture_file, Method, RayCounts, SceneView};
-use genpath::render::{render, Estimator, RenderSettings};
+use genpath::path::{mixture_file, RayCounts, SceneView};
 use genpath::sampling::anchor::AnchorSampler;
 use genpath::sampling::light_point::{LightPointSampler, LightRegion};
 use genpath::sampling::{sample_rng, uniform};
@@ -73,14 +74,14 @@ fn every_stiff_scene_passes_the_check() {
 fn the_check_rejects_a_biased_estimator() {
     let (scene, accel) = load("coincident", 24);
     let view = SceneView::new(&scene, accel.as_ref());
-    let config = CheckConfig {
-        srt_pdf_error: Some(1.5),
-        ..CheckConfig::new(64, 5, 1)
-    };
+    // srt, its density scaled by 1.5 when evaluated, rendered as `mixture`.
+    let mut config = CheckConfig::new(64, 5, 1);
+    let srt = mixture_file::srt(&scene, 5, config.methods.srt_absorption);
+    config.methods.mixture = Some(srt.with_pdf_error(0, 1.5));
     let report = check(&view, &config).unwrap();
     assert!(!report.passed(), "a density off by 50 % went unnoticed");
     assert!(
-        report.failures.iter().any(|f| f.contains("Srt")),
+        report.failures.iter().any(|f| f.starts_with("mixture:")),
         "{:?}",
         report.failures
     );
@@ -143,7 +144,11 @@ fn generators_at_their_bounds_stay_finite() {
             seed: 2,
             progress: false,
         };
-        let film = render(&view, &settings, Estimator::Mixture(&mixture));
+        let integrator = MixtureIntegrator {
+            mixture: mixture.clone(),
+            max_bounces: 5,
+        };
+        let film = integrator.render(&view, &settings);
         let bad = film
             .image
             .pixels

@@ -8,10 +8,15 @@
 use genpath::accel::{self, AccelKind};
 use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;
+use genpath::integrators::ga::Ga;
+use genpath::integrators::ga_pt::GaPt;
+use genpath::integrators::mixture::MixtureIntegrator;
+use genpath::integrators::pg::{train_spatial, SpatialIntegrator, TrainingSchedule};
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Film, Integrator, Method, RenderSettings};
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
-use genpath::path::{mixture_file, Method, SceneView};
-use genpath::render::{render, train_spatial, Estimator, Film, RenderSettings, TrainingSchedule};
+use genpath::path::{mixture_file, SceneView};
 use genpath::scene::Scene;
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::path::{Path, PathBuf};
@@ -156,19 +161,21 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             })
         }
     };
-    let estimator = match (&plan, &mixture) {
-        _ if spatial.is_some() => Estimator::Spatial(plan.as_ref(), spatial.as_ref().unwrap()),
-        (Some(plan), _) if guided => Estimator::GaPt(plan),
-        (Some(plan), _) => Estimator::Ga(plan),
-        (None, Some(mixture)) => Estimator::Mixture(mixture),
-        (None, None) => Estimator::Pt,
+    let integrator: Box<dyn Integrator> = match (plan, mixture, spatial) {
+        (plan, _, Some(training)) => Box::new(SpatialIntegrator {
+            plan,
+            training,
+            max_bounces,
+        }),
+        (Some(plan), _, None) if guided => Box::new(GaPt { plan, max_bounces }),
+        (Some(plan), _, None) => Box::new(Ga { plan, max_bounces }),
+        (None, Some(mixture), None) => Box::new(MixtureIntegrator {
+            mixture,
+            max_bounces,
+        }),
+        (None, None, None) => Box::new(PathTracing { max_bounces }),
     };
-    let taken = spatial.as_ref().map_or(0, |t| t.samples.spp);
-    let rest = RenderSettings {
-        spp: spp - taken,
-        ..settings.clone()
-    };
-    render(&view, &rest, estimator)
+    integrator.render(&view, &settings)
 }
 
 /// Per block and channel: (mean, variance of that mean).

@@ -53,9 +53,9 @@ use super::test_paths::TestPaths;
 use super::{fitness, luminance, ChannelWeights, GaConfig, GaConfigError};
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
-use crate::path::{emitted, mixture_file, RayCounts, SceneView};
-use crate::render::{progress_bar, sample};
-use crate::sampling::{sample_rng, uniform};
+use crate::path::{camera_sample, emitted, mixture_file, RayCounts, SceneView};
+use crate::progress::progress_bar;
+use crate::sampling::{camera_ray, sample_rng};
 use crate::scene::SceneAnalysis;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -498,8 +498,7 @@ fn baseline(
                     let (mut sum, mut sum_sq, mut scatters) = (0.0, 0.0, false);
                     for s in 0..config.baseline_spp {
                         let mut rng = sample_rng(seed, pixel, s as u64);
-                        let ray =
-                            camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
+                        let ray = camera_ray(camera, (x, y), &mut rng);
                         let Some(x1) = view.trace(&ray, &mut counts) else {
                             continue;
                         };
@@ -778,8 +777,8 @@ fn sample_moments(
     let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
     for s in 0..n {
         let mut rng = sample_rng(seed, pixel, s as u64);
-        let ray = camera.ray(x as f32 + uniform(&mut rng), y as f32 + uniform(&mut rng));
-        let value = sample(
+        let ray = camera_ray(camera, (x, y), &mut rng);
+        let value = camera_sample(
             view,
             &ray,
             max_bounces,

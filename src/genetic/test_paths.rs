@@ -25,7 +25,7 @@ use crate::path::generator::{
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
-use crate::sampling::{brdf, sample_rng, uniform, Rng};
+use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use glam::{DVec3, Vec3};
 
 /// Test paths of one pixel.
@@ -68,13 +68,6 @@ pub struct TestPaths {
 /// Index of pixel `(x, y)` in its random streams `sample_rng(seed, pixel, j)`.
 fn pixel_index(view: &SceneView, (x, y): (u32, u32)) -> u64 {
     y as u64 * view.scene.camera.width as u64 + x as u64
-}
-
-/// The jittered camera ray through pixel `(x, y)` (two random numbers).
-fn camera_ray(view: &SceneView, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
-    view.scene
-        .camera
-        .ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
 }
 
 /// One path of a packet: its random stream, walk, pending query, and buffers reused from
@@ -158,7 +151,7 @@ impl Packet {
         let lanes = &mut self.lanes[..self.n];
         for ((lane, ray), j) in lanes.iter_mut().zip(&mut self.rays).zip(js) {
             lane.rng = sample_rng(seed, index, j as u64);
-            *ray = camera_ray(view, pixel, &mut lane.rng);
+            *ray = camera_ray(&view.scene.camera, pixel, &mut lane.rng);
         }
         let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
         // One pixel's camera rays: the coherent case packets are made for.
@@ -337,7 +330,7 @@ impl TestPaths {
         let mut contributions = Vec::new();
         for j in 0..m {
             let mut rng: Rng = sample_rng(seed, pixel, j as u64);
-            let ray = camera_ray(view, (x, y), &mut rng);
+            let ray = camera_ray(&view.scene.camera, (x, y), &mut rng);
             contributions.clear();
             if let Some(x1) = view.trace(&ray, &mut counts) {
                 let g = q.choose(uniform(&mut rng) as f64);

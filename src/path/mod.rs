@@ -8,33 +8,12 @@ pub mod pt;
 pub mod spatial;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
+use crate::sampling::Rng;
 use crate::scene::{Material, Scene};
+use glam::DVec3;
 use glam::Vec3;
-
-/// Rendering methods selectable with `--method`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
-    /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
-    Pt,
-    /// The paper's baseline "stochastic ray tracing": BRDF sampling with fixed absorption,
-    /// next-event estimation only at the path's end.
-    Srt,
-    /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
-    Mixture,
-    /// Genetic path generation: per GA pixel, a mixture evolved to minimise the variance
-    /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
-    Ga,
-    /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
-    /// evolved anchor samplers, and past them by `pg`'s spatial guide (`--spatial-guide`),
-    /// with next-event estimation at every vertex.
-    GaPt,
-    /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
-    /// training passes whose samples stay in the image (`path::spatial`), without the GA:
-    /// the baseline that shows what the GA adds.
-    Pg,
-}
+use guide::Guide;
+use mixture::{Mixture, MixtureScratch};
 
 /// A surface point reached by a ray.
 #[derive(Clone, Copy, Debug, Default)]
@@ -181,5 +160,30 @@ pub fn emitted(material: &Material, x: &SurfacePoint, w: Vec3) -> Vec3 {
         material.ke
     } else {
         Vec3::ZERO
+    }
+}
+
+/// One sample of the radiance along camera ray `ray`: path tracing, guided by the guide when
+/// given, or with a mixture the emission seen at the first hit plus the mixture's estimator
+/// (eq. 8) from there.
+#[allow(clippy::too_many_arguments)]
+pub fn camera_sample(
+    view: &SceneView,
+    ray: &Ray,
+    max_bounces: u32,
+    (mixture, guide): (Option<&Mixture>, Option<&Guide>),
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+    scratch: &mut MixtureScratch,
+) -> DVec3 {
+    let Some(mixture) = mixture else {
+        return pt::radiance_guided(view, ray, max_bounces, rng, counts, guide, None).as_dvec3();
+    };
+    match view.trace(ray, counts) {
+        None => DVec3::ZERO,
+        Some(x1) => {
+            let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();
+            direct + mixture.estimate(view, ray.origin, x1, max_bounces, rng, counts, scratch)
+        }
     }
 }

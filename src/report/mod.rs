@@ -11,8 +11,9 @@ pub mod plot;
 use crate::genetic::plan::PlanConfig;
 use crate::genetic::GaConfig;
 use crate::image::{metrics, Image};
-use crate::path::{Method, SceneView};
-use crate::render::{progress_bar, render, MethodConfig, PrepareError, Prepared, RenderSettings};
+use crate::integrators::{prepare, Integrator, Method, MethodConfig, PrepareError, RenderSettings};
+use crate::path::SceneView;
+use crate::progress::progress_bar;
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -20,6 +21,7 @@ use std::time::Instant;
 #[derive(Clone, Debug)]
 pub struct MethodSpec {
     pub label: String,
+    pub method: Method,
     pub config: MethodConfig,
 }
 
@@ -36,19 +38,9 @@ impl MethodSpec {
     pub fn parse(text: &str, base: &MethodConfig) -> Result<Self, String> {
         let mut parts = text.split(':');
         let name = parts.next().unwrap_or_default();
-        let method = match name {
-            "pt" => Method::Pt,
-            "srt" => Method::Srt,
-            "mixture" => Method::Mixture,
-            "ga" => Method::Ga,
-            "ga-pt" => Method::GaPt,
-            "pg" => Method::Pg,
-            _ => return Err(format!("unknown method `{name}` in `{text}`")),
-        };
-        let mut config = MethodConfig {
-            method,
-            ..base.clone()
-        };
+        let method = <Method as clap::ValueEnum>::from_str(name, false)
+            .map_err(|_| format!("unknown method `{name}` in `{text}`"))?;
+        let mut config = base.clone();
         for part in parts {
             if !matches!(method, Method::Ga | Method::GaPt | Method::Pg) {
                 return Err(format!("`{text}`: only ga, ga-pt and pg take settings"));
@@ -95,6 +87,7 @@ impl MethodSpec {
             .map_err(|e| format!("`{text}`: {e}"))?;
         Ok(Self {
             label: text.to_string(),
+            method,
             config,
         })
     }
@@ -213,15 +206,12 @@ pub const SPATIAL_BUDGET_SHARE: f64 = 0.5;
 fn calibrated_spp(
     view: &SceneView,
     settings: &RenderSettings,
-    prepared: &Prepared,
+    integrator: &dyn Integrator,
     seconds: f64,
 ) -> u32 {
     let time = |spp: u32| {
-        let calibration = RenderSettings {
-            spp,
-            ..settings.clone()
-        };
-        render(view, &calibration, prepared.estimator())
+        integrator
+            .render_more(view, settings, spp)
             .elapsed
             .as_secs_f64()
     };
@@ -268,7 +258,7 @@ impl Sweep<'_> {
             for &(seconds, spp) in &plans {
                 for spec in &self.methods {
                     let settings = RenderSettings {
-                        method: spec.config.method,
+                        method: spec.method,
                         seed: self.settings.seed.wrapping_add(rep as u64),
                         progress: false,
                         spp,
@@ -278,21 +268,16 @@ impl Sweep<'_> {
                     config.plan.time_limit = seconds.map(|t| GA_BUDGET_SHARE * t);
                     config.plan.spatial_time_limit = seconds.map(|t| SPATIAL_BUDGET_SHARE * t);
                     let t0 = Instant::now();
-                    let prepared = Prepared::new(view, &config, &settings)?;
+                    let integrator = prepare(view, &config, &settings)?;
                     let prepare_s = t0.elapsed().as_secs_f64();
-                    let ga_seconds = prepared.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
-                    // Samples the render adds to those preparing took (a spatial guide's
-                    // training samples stay in the image).
-                    let taken = prepared.samples_taken();
-                    let (budget, rest) = match seconds {
-                        None => (f64::from(spp), spp.saturating_sub(taken)),
-                        Some(t) => (t, calibrated_spp(view, &settings, &prepared, t - prepare_s)),
+                    let ga_seconds = integrator.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
+                    let (budget, film) = match seconds {
+                        None => (f64::from(spp), integrator.render(view, &settings)),
+                        Some(t) => {
+                            let more = calibrated_spp(view, &settings, &*integrator, t - prepare_s);
+                            (t, integrator.render_more(view, &settings, more))
+                        }
                     };
-                    let settings = RenderSettings {
-                        spp: rest,
-                        ..settings.clone()
-                    };
-                    let film = render(view, &settings, prepared.estimator());
                     let Some(m) = metrics::compare(&film.image, self.reference) else {
                         unreachable!("sizes checked above");
                     };
@@ -300,7 +285,7 @@ impl Sweep<'_> {
                         scene: self.scene_name.clone(),
                         method: spec.label.clone(),
                         budget,
-                        spp: taken + rest,
+                        spp: film.spp,
                         seconds: prepare_s + film.elapsed.as_secs_f64(),
                         ga_seconds,
                         relmse: m.relmse,

@@ -9,6 +9,8 @@ pub mod brdf;
 pub mod light_point;
 pub mod patch;
 
+use crate::accel::Ray;
+use crate::scene::Camera;
 use glam::DVec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;
@@ -39,6 +41,12 @@ pub fn derive_seed(seed: u64, tag: u64) -> u64 {
 #[inline]
 pub fn uniform(rng: &mut Rng) -> f32 {
     rng.random::<f32>()
+}
+
+/// The camera ray of one sample of pixel `(x, y)`: through a uniformly jittered position
+/// inside the pixel (a box filter), from two uniform numbers, horizontal first.
+pub fn camera_ray(camera: &Camera, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
+    camera.ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
 }
 
 /// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal

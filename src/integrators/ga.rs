@@ -1,0 +1,88 @@
+//! `ga`: genetic path generation (paper §4–5). Each pixel renders eq. 8 with the mixture its
+//! neighbouring GA pixels evolved, or with `pt` where the plan has none for it.
+
+use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use crate::accel::Ray;
+use crate::genetic::plan::{Plan, Target};
+use crate::genetic::GaConfig;
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{camera_sample, RayCounts, SceneView};
+use crate::sampling::Rng;
+use glam::DVec3;
+
+/// A GA plan rendered by its mixtures.
+pub struct Ga {
+    pub plan: Plan,
+    pub max_bounces: u32,
+}
+
+/// Builds the GA plan for `target` with `context`'s settings.
+pub fn build_plan(context: &Context, target: Target) -> Result<Plan, PrepareError> {
+    let (config, settings) = (context.config, context.settings);
+    let ga = GaConfig {
+        srt_absorption: config.srt_absorption,
+        ..config.ga.clone()
+    };
+    Ok(Plan::build(
+        context.view,
+        &ga,
+        &config.plan,
+        (settings.max_bounces, target),
+        settings.seed,
+        settings.progress,
+    )?)
+}
+
+pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    Ok(Box::new(Ga {
+        plan: build_plan(context, Target::Mixture)?,
+        max_bounces: context.settings.max_bounces,
+    }))
+}
+
+/// A pixel's mixture from the plan (none: `pt`).
+pub struct GaEstimator<'a> {
+    plan: &'a Plan,
+    max_bounces: u32,
+    local: Option<Mixture>,
+    scratch: MixtureScratch,
+}
+
+impl PixelIntegrator for Ga {
+    type Estimator<'a> = GaEstimator<'a>;
+    fn estimator(&self) -> GaEstimator<'_> {
+        GaEstimator {
+            plan: &self.plan,
+            max_bounces: self.max_bounces,
+            local: None,
+            scratch: MixtureScratch::default(),
+        }
+    }
+    fn plan(&self) -> Option<&Plan> {
+        Some(&self.plan)
+    }
+}
+
+impl PixelEstimator for GaEstimator<'_> {
+    fn start(&mut self, x: u32, y: u32) {
+        self.local = self.plan.local(x, y);
+    }
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3 {
+        let mixture = (self.local.as_ref(), None);
+        camera_sample(
+            view,
+            ray,
+            self.max_bounces,
+            mixture,
+            rng,
+            counts,
+            &mut self.scratch,
+        )
+    }
+}

@@ -1,0 +1,113 @@
+//! `ga-pt`: path tracing guided at each pixel by the directional samplers of the mixtures
+//! its neighbouring GA pixels evolved ([`Guide`]); with the spatial guide (the default),
+//! the vertices past them are guided as `pg` guides them ([`super::pg`]).
+
+use super::ga::build_plan;
+use super::{pg, Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use crate::accel::Ray;
+use crate::genetic::plan::{Plan, Target};
+use crate::path::guide::Guide;
+use crate::path::mixture::Mixture;
+use crate::path::spatial::PathRecorder;
+use crate::path::{pt, RayCounts, SceneView};
+use crate::sampling::Rng;
+use glam::DVec3;
+
+/// A GA plan's guides, with path tracing's own sampling past them.
+pub struct GaPt {
+    pub plan: Plan,
+    pub max_bounces: u32,
+}
+
+pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    let spatial = context.config.plan.spatial;
+    if spatial {
+        pg::check_schedule(context)?;
+    }
+    let plan = build_plan(context, Target::Guide)?;
+    if spatial {
+        return Ok(Box::new(pg::train(context, Some(plan))));
+    }
+    Ok(Box::new(GaPt {
+        plan,
+        max_bounces: context.settings.max_bounces,
+    }))
+}
+
+/// A pixel's guide, rebuilt in the same storage at every pixel.
+pub struct GuideEstimator<'a> {
+    plan: Option<&'a Plan>,
+    max_bounces: u32,
+    guide: Guide,
+    guided: bool,
+    weights: Vec<(f64, usize)>,
+    parts: Vec<(f64, &'a Mixture)>,
+}
+
+impl<'a> GuideEstimator<'a> {
+    pub fn new(plan: Option<&'a Plan>, max_bounces: u32, guide: Guide) -> Self {
+        Self {
+            plan,
+            max_bounces,
+            guide,
+            guided: false,
+            weights: Vec::new(),
+            parts: Vec::new(),
+        }
+    }
+
+    /// Rebuilds the guide for pixel `(x, y)` from the plan's levels there, unless
+    /// `levels_off`; whether they guide it. Where they do not, a plan's guide is remade
+    /// with no levels when `clear`.
+    pub fn start_levels(&mut self, (x, y): (u32, u32), levels_off: bool, clear: bool) -> bool {
+        let Some(plan) = self.plan else {
+            return false;
+        };
+        let guided = !levels_off && plan.local_parts(x, y, &mut self.weights, &mut self.parts);
+        if guided {
+            self.guide.rebuild(&self.parts);
+        } else if clear {
+            self.guide.rebuild(&[]);
+        }
+        guided
+    }
+
+    /// Path tracing guided by the guide as set for the pixel (`guided`), recording into
+    /// `recorder` when given.
+    pub fn radiance(
+        &self,
+        (view, ray): (&SceneView, &Ray),
+        guided: bool,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        recorder: Option<&mut PathRecorder>,
+    ) -> DVec3 {
+        let guide = guided.then_some(&self.guide);
+        pt::radiance_guided(view, ray, self.max_bounces, rng, counts, guide, recorder).as_dvec3()
+    }
+}
+
+impl PixelIntegrator for GaPt {
+    type Estimator<'a> = GuideEstimator<'a>;
+    fn estimator(&self) -> GuideEstimator<'_> {
+        GuideEstimator::new(Some(&self.plan), self.max_bounces, Guide::default())
+    }
+    fn plan(&self) -> Option<&Plan> {
+        Some(&self.plan)
+    }
+}
+
+impl PixelEstimator for GuideEstimator<'_> {
+    fn start(&mut self, x: u32, y: u32) {
+        self.guided = self.start_levels((x, y), false, false);
+    }
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3 {
+        self.radiance((view, ray), self.guided, rng, counts, None)
+    }
+}

@@ -1,0 +1,84 @@
+//! `srt` and `mixture`: one mixture of path generators at every pixel, estimated by eq. 8.
+
+use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use crate::accel::Ray;
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{camera_sample, mixture_file, RayCounts, SceneView};
+use crate::sampling::Rng;
+use glam::DVec3;
+
+/// The same mixture at every pixel.
+pub struct MixtureIntegrator {
+    pub mixture: Mixture,
+    pub max_bounces: u32,
+}
+
+/// `srt`: the paper's stochastic ray tracing, a mixture of its one generator.
+pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    let max_bounces = context.settings.max_bounces;
+    let mixture = mixture_file::srt(
+        context.view.scene,
+        max_bounces,
+        context.config.srt_absorption,
+    );
+    Ok(Box::new(MixtureIntegrator {
+        mixture,
+        max_bounces,
+    }))
+}
+
+/// `mixture`: the mixture read from `--generators`.
+pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    let mixture = context
+        .config
+        .mixture
+        .clone()
+        .ok_or(PrepareError::NoMixture)?;
+    Ok(Box::new(MixtureIntegrator {
+        mixture,
+        max_bounces: context.settings.max_bounces,
+    }))
+}
+
+/// A mixture's estimator, with the buffers it reuses.
+pub struct MixtureEstimator<'a> {
+    mixture: &'a Mixture,
+    max_bounces: u32,
+    scratch: MixtureScratch,
+}
+
+impl PixelIntegrator for MixtureIntegrator {
+    type Estimator<'a> = MixtureEstimator<'a>;
+    fn estimator(&self) -> MixtureEstimator<'_> {
+        MixtureEstimator {
+            mixture: &self.mixture,
+            max_bounces: self.max_bounces,
+            scratch: MixtureScratch::default(),
+        }
+    }
+    fn mixture(&self) -> Option<&Mixture> {
+        Some(&self.mixture)
+    }
+}
+
+impl PixelEstimator for MixtureEstimator<'_> {
+    fn start(&mut self, _x: u32, _y: u32) {}
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3 {
+        let mixture = (Some(self.mixture), None);
+        camera_sample(
+            view,
+            ray,
+            self.max_bounces,
+            mixture,
+            rng,
+            counts,
+            &mut self.scratch,
+        )
+    }
+}

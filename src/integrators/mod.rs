@@ -1,0 +1,207 @@
+//! The rendering methods behind one seam, in the manner of pbrt-v4's `Integrator` →
+//! `ImageTileIntegrator::EvaluatePixelSample` and Mitsuba 3's `SamplingIntegrator::sample`.
+//!
+//! A method is *prepared* once per render by [`prepare`]: it builds what it renders with
+//! (a mixture, a GA plan, a spatial guide with its training passes) and owns it, as a
+//! [`Integrator`]. Every command renders an integrator the same way,
+//! [`Integrator::render`], which runs the shared image loop ([`tiles`]): each tile asks the
+//! integrator for a [`PixelEstimator`], starts it at each pixel, and sums the radiance of
+//! its samples. Samples an integrator took while preparing (a spatial guide's training
+//! passes) are part of its image, and only the integrator counts them.
+//!
+//! Adding a method is one file here with a `prepare` function and one line in
+//! [`methods!`]'s list below.
+
+pub mod ga;
+pub mod ga_pt;
+pub mod mixture;
+pub mod pg;
+pub mod pt;
+#[cfg(feature = "test-method")]
+pub mod test_method;
+pub mod tiles;
+
+use crate::accel::Ray;
+use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::{GaConfig, GaConfigError};
+use crate::path::mixture::Mixture;
+use crate::path::spatial::SpatialGuide;
+use crate::path::{RayCounts, SceneView};
+use crate::sampling::Rng;
+use glam::DVec3;
+pub use tiles::{Film, PixelSums};
+
+/// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
+/// variant (its documentation is its help text) and the function that prepares it.
+macro_rules! methods {
+    ($($(#[doc = $doc:literal])* $(#[cfg($cfg:meta)])? $variant:ident => $prepare:path,)*) => {
+        /// Rendering methods selectable with `--method`.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum Method {
+            $($(#[doc = $doc])* $(#[cfg($cfg)])? $variant,)*
+        }
+
+        /// Prepares `settings.method`: builds and trains what it renders with.
+        pub fn prepare(
+            view: &SceneView,
+            config: &MethodConfig,
+            settings: &RenderSettings,
+        ) -> Result<Box<dyn Integrator>, PrepareError> {
+            let context = Context { view, config, settings };
+            match settings.method {
+                $($(#[cfg($cfg)])? Method::$variant => $prepare(&context),)*
+            }
+        }
+    };
+}
+
+methods! {
+    /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
+    /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
+    Pt => pt::prepare,
+    /// The paper's baseline "stochastic ray tracing": BRDF sampling with fixed absorption,
+    /// next-event estimation only at the path's end.
+    Srt => mixture::prepare_srt,
+    /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
+    Mixture => mixture::prepare,
+    /// Genetic path generation: per GA pixel, a mixture evolved to minimise the variance
+    /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
+    Ga => ga::prepare,
+    /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
+    /// evolved anchor samplers, and past them by `pg`'s spatial guide (`--spatial-guide`),
+    /// with next-event estimation at every vertex.
+    GaPt => ga_pt::prepare,
+    /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
+    /// training passes whose samples stay in the image (`path::spatial`), without the GA:
+    /// the baseline that shows what the GA adds.
+    Pg => pg::prepare,
+    /// Test-only (feature `test-method`): path tracing by BSDF sampling alone, with no
+    /// next-event estimation; shows that a method is one file and one line.
+    #[cfg(feature = "test-method")]
+    BsdfOnly => test_method::prepare,
+}
+
+/// What one render needs besides the scene.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RenderSettings {
+    pub method: Method,
+    pub spp: u32,
+    pub max_bounces: u32,
+    pub seed: u64,
+    /// Show a progress bar on stderr.
+    #[serde(skip)]
+    pub progress: bool,
+}
+
+/// Everything a method needs besides the render settings.
+#[derive(Clone, Debug)]
+pub struct MethodConfig {
+    /// Absorption of the `srt` generator (`srt`, and the defensive component of `ga`).
+    pub srt_absorption: f64,
+    /// The mixture of `--method mixture`, already loaded.
+    pub mixture: Option<Mixture>,
+    pub ga: GaConfig,
+    pub plan: PlanConfig,
+}
+
+/// Why a method cannot be prepared.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error(transparent)]
+    Ga(#[from] GaConfigError),
+    #[error("--method mixture needs --generators FILE")]
+    NoMixture,
+    #[error(
+        "--spatial-passes {passes} trains on {needs} samples per pixel, more than --spp {spp} \
+         (pass i takes 2^i)"
+    )]
+    TrainingExceedsSpp { passes: u32, needs: u64, spp: u32 },
+}
+
+/// What a method's `prepare` is given.
+pub struct Context<'a> {
+    pub view: &'a SceneView<'a>,
+    pub config: &'a MethodConfig,
+    pub settings: &'a RenderSettings,
+}
+
+/// The estimator of one pixel's samples, reused from pixel to pixel of a tile.
+pub trait PixelEstimator {
+    /// Makes this the estimator of pixel `(x, y)` (its neighbours' mixture, its guide).
+    fn start(&mut self, x: u32, y: u32);
+    /// One sample of the radiance along camera ray `ray`, drawn from `rng` (the sample's
+    /// own stream, after the camera ray's two numbers).
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3;
+}
+
+/// A prepared method as the image loop sees it: it gives each tile a [`PixelEstimator`].
+/// Every such method is an [`Integrator`].
+pub trait PixelIntegrator: Send + Sync {
+    type Estimator<'a>: PixelEstimator
+    where
+        Self: 'a;
+    /// An estimator for one tile's pixels.
+    fn estimator(&self) -> Self::Estimator<'_>;
+    /// The per-pixel sums of the samples preparing took, which the image keeps.
+    fn taken(&self) -> Option<&PixelSums> {
+        None
+    }
+    /// The GA plan it renders with.
+    fn plan(&self) -> Option<&Plan> {
+        None
+    }
+    /// The spatial guide it renders with.
+    fn spatial(&self) -> Option<&SpatialGuide> {
+        None
+    }
+    /// The one mixture it renders every pixel with.
+    fn mixture(&self) -> Option<&Mixture> {
+        None
+    }
+}
+
+/// A prepared method, as every command renders it.
+pub trait Integrator: Send + Sync {
+    /// Renders the image with `settings.spp` samples per pixel in all, those preparing took
+    /// included.
+    fn render(&self, view: &SceneView, settings: &RenderSettings) -> Film {
+        let more = settings.spp.saturating_sub(self.samples_taken());
+        self.render_more(view, settings, more)
+    }
+    /// Renders `spp` samples per pixel more than preparing took (a time budget's render).
+    fn render_more(&self, view: &SceneView, settings: &RenderSettings, spp: u32) -> Film;
+    /// Samples per pixel preparing took, which are in every image it renders.
+    fn samples_taken(&self) -> u32;
+    fn plan(&self) -> Option<&Plan>;
+    fn spatial(&self) -> Option<&SpatialGuide>;
+    fn mixture(&self) -> Option<&Mixture>;
+}
+
+impl<I: PixelIntegrator> Integrator for I {
+    fn render_more(&self, view: &SceneView, settings: &RenderSettings, spp: u32) -> Film {
+        let settings = RenderSettings {
+            spp,
+            ..settings.clone()
+        };
+        tiles::render(view, &settings, self)
+    }
+    fn samples_taken(&self) -> u32 {
+        self.taken().map_or(0, |t| t.spp)
+    }
+    fn plan(&self) -> Option<&Plan> {
+        PixelIntegrator::plan(self)
+    }
+    fn spatial(&self) -> Option<&SpatialGuide> {
+        PixelIntegrator::spatial(self)
+    }
+    fn mixture(&self) -> Option<&Mixture> {
+        PixelIntegrator::mixture(self)
+    }
+}

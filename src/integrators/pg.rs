@@ -1,0 +1,424 @@
+//! `pg`: path tracing guided by a spatial guide ([`crate::path::spatial`]) learned from
+//! path-traced training passes whose samples stay in the image; also `ga-pt` with the
+//! spatial guide, whose training passes render with the GA plan's per-pixel guides.
+//!
+//! The integrator owns its training loop (as in Müller's `guided_path.cpp`): pass `i` takes
+//! `2^i` samples per pixel, rendered by the shared image loop with an estimator that
+//! records, and the next pass samples with the guide learned from it.
+
+use super::ga_pt::GuideEstimator;
+use super::tiles::{self, render_tile, PixelSums};
+use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings};
+use crate::accel::Ray;
+use crate::genetic::plan::{Plan, PlanConfig};
+use crate::path::guide::Guide;
+use crate::path::mixture::Mixture;
+use crate::path::spatial::{LevelsTrial, PathRecorder, Records, SpatialGuide};
+use crate::path::{RayCounts, SceneView};
+use crate::progress::progress_bar;
+use crate::sampling::{derive_seed, Rng};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::Instant;
+
+pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    check_schedule(context)?;
+    Ok(Box::new(train(context, None)))
+}
+
+/// Refuses `--spatial-passes` whose training would take more samples than `--spp`.
+pub fn check_schedule(context: &Context) -> Result<(), PrepareError> {
+    let (plan, spp) = (&context.config.plan, context.settings.spp);
+    if let TrainingSchedule::Passes(passes) = TrainingSchedule::new(plan, spp) {
+        let needs = (1u64 << passes) - 1;
+        if plan.spatial_time_limit.is_none() && needs > u64::from(spp) {
+            return Err(PrepareError::TrainingExceedsSpp { passes, needs, spp });
+        }
+    }
+    Ok(())
+}
+
+/// Trains the spatial guide with `context`'s settings, beside `plan`'s per-pixel guides.
+pub fn train(context: &Context, plan: Option<Plan>) -> SpatialIntegrator {
+    let schedule = TrainingSchedule::new(&context.config.plan, context.settings.spp);
+    let training = train_spatial(context.view, context.settings, schedule, plan.as_ref());
+    SpatialIntegrator {
+        plan,
+        training,
+        max_bounces: context.settings.max_bounces,
+    }
+}
+
+/// Path tracing guided by a trained spatial guide, beside a GA plan's per-pixel guides
+/// where it has one (`ga-pt`) and where the training's trial left them.
+pub struct SpatialIntegrator {
+    pub plan: Option<Plan>,
+    pub training: SpatialTraining,
+    pub max_bounces: u32,
+}
+
+impl PixelIntegrator for SpatialIntegrator {
+    type Estimator<'a> = SpatialEstimator<'a>;
+    fn estimator(&self) -> SpatialEstimator<'_> {
+        SpatialEstimator::new(self.plan.as_ref(), &self.training, self.max_bounces, None)
+    }
+    fn taken(&self) -> Option<&PixelSums> {
+        Some(&self.training.samples)
+    }
+    fn plan(&self) -> Option<&Plan> {
+        self.plan.as_ref()
+    }
+    fn spatial(&self) -> Option<&SpatialGuide> {
+        Some(&self.training.guide)
+    }
+}
+
+/// A pixel's guide: the plan's levels where they sample, the spatial guide everywhere
+/// else. In a training pass it records its pixel's first samples.
+pub struct SpatialEstimator<'a> {
+    guide: GuideEstimator<'a>,
+    levels: Levels,
+    recorder: Option<(PathRecorder, u32)>,
+    /// Samples of the pixel so far.
+    taken: u32,
+}
+
+impl<'a> SpatialEstimator<'a> {
+    /// With `recorder`, each pixel's first `.1` samples record into it.
+    fn new(
+        plan: Option<&'a Plan>,
+        training: &SpatialTraining,
+        max_bounces: u32,
+        recorder: Option<(PathRecorder, u32)>,
+    ) -> Self {
+        let guide = Guide::default().with_spatial(Some(Arc::clone(&training.guide)));
+        Self {
+            guide: GuideEstimator::new(plan, max_bounces, guide),
+            levels: training.levels,
+            recorder,
+            taken: 0,
+        }
+    }
+}
+
+impl PixelEstimator for SpatialEstimator<'_> {
+    fn start(&mut self, x: u32, y: u32) {
+        self.guide
+            .start_levels((x, y), self.levels.off_at(x, y), true);
+        self.taken = 0;
+    }
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3 {
+        let recorder = match &mut self.recorder {
+            Some((r, recorded)) if self.taken < *recorded => Some(r),
+            _ => None,
+        };
+        self.taken += 1;
+        self.guide
+            .radiance((view, ray), true, rng, counts, recorder)
+    }
+}
+
+/// Stream tag of the spatial guide's training passes: disjoint from the render's streams.
+const SPATIAL_STREAM: u64 = 0x7370_6174_6961_6c00;
+
+/// Most training passes (the last one of 2048 samples per pixel).
+pub const MAX_SPATIAL_PASSES: u32 = 12;
+
+/// Records one training pass may keep (24 bytes each), at about [`RECORDS_PER_SAMPLE`]
+/// records per path: a pass records that many of its samples per pixel and no more (at
+/// 256², 61 samples per pixel).
+const MAX_PASS_RECORDS: usize = 8_000_000;
+const RECORDS_PER_SAMPLE: usize = 2;
+
+/// A spatial guide and the path-traced samples its training took: they are samples of the
+/// image like any other (each unbiased given the guide it was drawn with), and renders
+/// keep them.
+pub struct SpatialTraining {
+    pub guide: Arc<SpatialGuide>,
+    pub samples: PixelSums,
+    /// Where a GA plan's per-pixel guides sample beside the spatial guide.
+    pub levels: Levels,
+}
+
+/// Where a GA plan's per-pixel guides (`ga-pt`) sample beside the spatial guide.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Levels {
+    /// At every pixel the plan guides.
+    All,
+    /// At fifteen pixels in sixteen: the sixteenth (row and column 3 modulo 4) is a
+    /// training pass's control arm, left to the spatial guide alone.
+    Trial,
+    /// Nowhere: the trial found that they cost the spatial guide more than they gave.
+    Off,
+}
+
+impl Levels {
+    /// Whether pixel `(x, y)` renders without the plan's guides.
+    fn off_at(self, x: u32, y: u32) -> bool {
+        match self {
+            Levels::All => false,
+            Levels::Trial => x % 4 == 3 && y % 4 == 3,
+            Levels::Off => true,
+        }
+    }
+}
+
+/// A training pass's trial of the plan's per-pixel guides decides when the pixels they
+/// guide have more than this many times the mean relative variance of the control arm
+/// (then the guides go), or less than its inverse (then they stay and trials stop); in
+/// between, they stay for the next pass, which tries again. (2 s budgets, seeds 401–406:
+/// glossy's pilot passes on seeds 404 and 405 only, and the trial of pass 2 gives 2.11 and
+/// 1.91 there, where the guides doubled `ga-pt`'s error against `pg`; fig5 0.28–0.44.)
+pub const LEVELS_KEEP_RATIO: f64 = 1.15;
+
+/// The first training pass that tries the plan's guides: the guide that pass 1 samples with
+/// has learned from one sample per pixel, too little to judge against.
+pub const FIRST_TRIAL_PASS: u32 = 2;
+
+/// A trial with fewer control pixels decides nothing: the plan's guides stay.
+pub const MIN_TRIAL_PIXELS: usize = 256;
+
+/// How long the spatial guide trains: pass `i` takes `2^i` samples per pixel, and the guide
+/// the next pass samples with is learned from that pass's records alone (as in "practical
+/// path guiding": each pass has as many samples as all the passes before it, and better
+/// ones).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrainingSchedule {
+    /// This many passes.
+    Passes(u32),
+    /// Passes while their samples stay within half of `spp`.
+    Samples(u32),
+    /// Passes while the next one (twice the last one's time) fits in `seconds` in all.
+    Seconds(f64),
+}
+
+impl TrainingSchedule {
+    /// `plan.spatial_passes` if set, else a share of `plan.spatial_time_limit` if set, else
+    /// half of `spp`.
+    pub fn new(plan: &PlanConfig, spp: u32) -> Self {
+        match (plan.spatial_passes, plan.spatial_time_limit) {
+            (Some(p), _) => Self::Passes(p),
+            (None, Some(t)) => Self::Seconds(t),
+            (None, None) => Self::Samples(spp),
+        }
+    }
+
+    /// Whether pass `pass` (`2^pass` samples per pixel) runs, after `elapsed` seconds of
+    /// passes of which the last took `last` seconds.
+    fn runs(&self, pass: u32, elapsed: f64, last: f64) -> bool {
+        if pass == 0 {
+            return true;
+        }
+        pass < MAX_SPATIAL_PASSES
+            && match *self {
+                Self::Passes(p) => pass < p,
+                Self::Samples(spp) => (2u64 << pass) - 1 <= u64::from(spp / 2),
+                Self::Seconds(t) => elapsed + 2.0 * last <= t,
+            }
+    }
+}
+
+/// A spatial guide trained by passes of path tracing (`schedule`): the first unguided
+/// beyond `plan`'s levels (`ga-pt --spatial-guide`; `None` for `pg`), each later one guided
+/// by the guide learned from the pass before it, every pass rendered as the final image is
+/// (with `plan`'s per-pixel guides). Records and samples are gathered per tile and merged in
+/// tile order, so the guide does not depend on the thread count.
+///
+/// With a plan that guides, the passes from [`FIRST_TRIAL_PASS`] on also try its guides:
+/// each leaves one pixel in sixteen to the spatial guide alone ([`Levels::Trial`]) and
+/// compares the two arms' relative variance, until the ratio leaves
+/// `[1 / LEVELS_KEEP_RATIO, LEVELS_KEEP_RATIO]`; above it, the plan's guides sample nowhere
+/// from then on ([`Levels::Off`]). The gate's pilot could only compare them with `pt`, since
+/// the spatial guide learns after the plan (with the plan's guides: fig5 needs that). Which
+/// estimator a later pass or the render uses depends on the samples of the passes before, as
+/// the spatial guide itself does, never on its own samples: every sample stays unbiased.
+pub fn train_spatial(
+    view: &SceneView,
+    settings: &RenderSettings,
+    schedule: TrainingSchedule,
+    plan: Option<&Plan>,
+) -> SpatialTraining {
+    let start = Instant::now();
+    let camera = &view.scene.camera;
+    let tiles = tiles::tiles(camera.width, camera.height);
+    let pixels = (camera.width * camera.height) as usize;
+    let mut records = Records::around(&view.scene.mesh);
+    // Before the first pass: no samples, and a guide that has learned nothing.
+    let mut training = SpatialTraining {
+        guide: Arc::new(records.guide()),
+        samples: PixelSums::zero(pixels),
+        levels: Levels::All,
+    };
+    let mut levels_trial = None;
+    let open_plan = plan.filter(|p| !p.is_closed());
+    let mut trialling = open_plan.is_some();
+    let mut recorded_in_all = 0;
+    let bar = progress_bar(0, "guide", settings.progress);
+    let (mut pass, mut last) = (0, 0.0);
+    while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
+        let t0 = Instant::now();
+        // From pass `FIRST_TRIAL_PASS` on, each pass tries the plan's guides against the
+        // spatial guide alone until a trial decides (the guides stay where it does not).
+        let trial = trialling && pass >= FIRST_TRIAL_PASS;
+        if trial {
+            training.levels = Levels::Trial;
+        }
+        let pass_settings = RenderSettings {
+            spp: 1 << pass,
+            seed: derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass)),
+            ..settings.clone()
+        };
+        bar.set_length(u64::from(training.samples.spp + pass_settings.spp));
+        // The pass records its first `recorded` samples per pixel: records take memory.
+        let recorded =
+            (MAX_PASS_RECORDS / (RECORDS_PER_SAMPLE * pixels)).clamp(1, 1 << pass) as u32;
+        let per_tile: Vec<_> = tiles
+            .par_iter()
+            .map(|tile| {
+                let recorder = Some((PathRecorder::new(&records), recorded));
+                let max_bounces = settings.max_bounces;
+                let mut estimator = SpatialEstimator::new(plan, &training, max_bounces, recorder);
+                let result = render_tile(
+                    view,
+                    &pass_settings,
+                    &mut estimator,
+                    Some(&training.samples),
+                    tile,
+                );
+                let Some((recorder, _)) = estimator.recorder else {
+                    unreachable!("made with a recorder");
+                };
+                (recorder, result.sums)
+            })
+            .collect();
+        records.clear();
+        let mut arms = TrialArms::new();
+        for (recorder, sums) in per_tile {
+            records.add_recorded(recorder);
+            for (i, sum, sum_sq) in sums {
+                if let (true, Some(plan)) = (trial, open_plan) {
+                    let before = training.samples.at(i);
+                    let n = pass_settings.spp;
+                    // The mean of the passes before, independent of this pass's samples: a
+                    // rare large sample must not lower its own pixel's relative variance.
+                    let mean = before.0 / f64::from(training.samples.spp);
+                    arms.add(
+                        plan,
+                        i,
+                        camera.width,
+                        (sum - before.0, sum_sq - before.1, n),
+                        mean,
+                    );
+                }
+                training.samples.sum[i] = sum;
+                training.samples.sum_sq[i] = sum_sq;
+            }
+        }
+        if trial {
+            let outcome;
+            (outcome, trialling) = arms.decide(pass);
+            training.levels = if outcome.kept {
+                Levels::All
+            } else {
+                Levels::Off
+            };
+            levels_trial = Some(outcome);
+        }
+        training.samples.spp += pass_settings.spp;
+        recorded_in_all += records.len();
+        training.guide = Arc::new(records.guide());
+        bar.set_position(u64::from(training.samples.spp));
+        last = t0.elapsed().as_secs_f64();
+        pass += 1;
+    }
+    bar.finish_and_clear();
+    // No other owner is left: this moves the guide out.
+    let mut guide = Arc::unwrap_or_clone(training.guide);
+    guide.stats.passes = pass;
+    guide.stats.spp = training.samples.spp;
+    guide.stats.records = recorded_in_all;
+    guide.stats.seconds = start.elapsed().as_secs_f64();
+    guide.stats.levels_trial = levels_trial;
+    SpatialTraining {
+        guide: Arc::new(guide),
+        samples: training.samples,
+        levels: training.levels,
+    }
+}
+
+/// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
+/// over its pixels of a sample's relative variance, and its pixels. `weights` and `parts`
+/// are [`Plan::local_parts`]'s buffers, reused for every pixel.
+struct TrialArms<'a> {
+    guided: (f64, usize),
+    control: (f64, usize),
+    weights: Vec<(f64, usize)>,
+    parts: Vec<(f64, &'a Mixture)>,
+}
+
+impl<'a> TrialArms<'a> {
+    fn new() -> Self {
+        Self {
+            guided: (0.0, 0),
+            control: (0.0, 0),
+            weights: Vec::new(),
+            parts: Vec::new(),
+        }
+    }
+
+    /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
+    /// sum of squares `pass`, and whose mean over the passes before is `mean`. Pixels the plan
+    /// does not guide (`pt`'s points, a closed plan) are in neither arm.
+    fn add(
+        &mut self,
+        plan: &'a Plan,
+        i: usize,
+        width: u32,
+        pass: (DVec3, DVec3, u32),
+        mean: DVec3,
+    ) {
+        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
+        if !plan.local_parts(x, y, &mut self.weights, &mut self.parts) {
+            return;
+        }
+        let (sum, sum_sq, n) = (pass.0, pass.1, f64::from(pass.2));
+        // Unbiased sample variance of one sample, per channel, weighed as relMSE weighs.
+        let variance = (sum_sq - sum * sum / n) / (n - 1.0);
+        let relative = variance / (mean * mean + DVec3::splat(1e-2));
+        let arm = if Levels::Trial.off_at(x, y) {
+            &mut self.control
+        } else {
+            &mut self.guided
+        };
+        arm.0 += relative.max(DVec3::ZERO).element_sum() / 3.0;
+        arm.1 += 1;
+    }
+
+    /// The trial's outcome in pass `pass`, and whether the next pass tries again: the
+    /// guides stayed, but without a clear win (or with too few control pixels to tell).
+    fn decide(&self, pass: u32) -> (LevelsTrial, bool) {
+        let mean = |arm: (f64, usize)| arm.0 / arm.1.max(1) as f64;
+        let ratio = mean(self.guided) / mean(self.control);
+        // A ratio that is not a number (no variance in either arm) decides nothing.
+        let undecided = self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan();
+        let kept = undecided || ratio <= LEVELS_KEEP_RATIO;
+        let trial = LevelsTrial {
+            pass,
+            guided_pixels: self.guided.1,
+            control_pixels: self.control.1,
+            ratio,
+            kept,
+        };
+        (
+            trial,
+            kept && (undecided || ratio >= 1.0 / LEVELS_KEEP_RATIO),
+        )
+    }
+}

@@ -1,0 +1,39 @@
+//! `pt`: path tracing with next-event estimation at every vertex ([`crate::path::pt`]).
+
+use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use crate::accel::Ray;
+use crate::path::{pt, RayCounts, SceneView};
+use crate::sampling::Rng;
+use glam::DVec3;
+
+/// Path tracing to at most `max_bounces` scattering events; its own pixel estimator.
+#[derive(Clone, Copy, Debug)]
+pub struct PathTracing {
+    pub max_bounces: u32,
+}
+
+pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+    Ok(Box::new(PathTracing {
+        max_bounces: context.settings.max_bounces,
+    }))
+}
+
+impl PixelIntegrator for PathTracing {
+    type Estimator<'a> = PathTracing;
+    fn estimator(&self) -> PathTracing {
+        *self
+    }
+}
+
+impl PixelEstimator for PathTracing {
+    fn start(&mut self, _x: u32, _y: u32) {}
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> DVec3 {
+        pt::radiance(view, ray, self.max_bounces, rng, counts).as_dvec3()
+    }
+}
