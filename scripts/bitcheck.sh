@@ -8,7 +8,7 @@
 # target directory of their own there (kept between runs, so a second run only rebuilds
 # genpath itself). Without NEW the working tree is built as it is, uncommitted changes
 # included. SCENES, SPP (16), SEED (7) and FEATURES (the default features) may be set in
-# the environment. Writes the images to target/bitcheck/out/{base,new}/ and prints one line
+# the environment, and BASE_BIN, a binary already built from BASE, saves building it. Writes the images to target/bitcheck/out/{base,new}/ and prints one line
 # per render; exits 1 if any image's pixels differ in their bits (with its relMSE against
 # BASE's), 0 otherwise.
 set -euo pipefail
@@ -36,12 +36,16 @@ build() {
     echo "$work/target-$name/release/genpath"
 }
 
-base_bin=$(build "$1" base)
+if [[ -n ${BASE_BIN:-} ]]; then
+    base_bin=$BASE_BIN # a binary already built from BASE
+else
+    base_bin=$(build "$1" base)
+fi
 if [[ $# -eq 2 ]]; then
     new_bin=$(build "$2" new)
 else
     cargo build -q --release "${features[@]}" >&2
-    new_bin=$here/target/release/genpath
+    new_bin=${CARGO_TARGET_DIR:-$here/target}/release/genpath
 fi
 echo "bitcheck: base $(git rev-parse --short "$1") against ${2:-the working tree}; $spp spp, seed $seed"
 
