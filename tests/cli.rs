@@ -867,8 +867,20 @@ fn check_passes_on_fig5() {
     assert!(stdout.contains("check passed"), "{stdout}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
-    // pt, srt, ga, ga-pt, pg.
-    assert_eq!(report["methods"].as_array().unwrap().len(), 5);
+    // Every method of the list (pt, srt, ga, ga-pt, pg, and bsdf-only where the test-only
+    // method is built), and ga-pt without the spatial guide.
+    let names: Vec<&str> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["method"].as_str().unwrap())
+        .collect();
+    let mut expected = vec!["pt", "srt", "ga", "ga-pt", "pg"];
+    if cfg!(feature = "test-method") {
+        expected.push("bsdf-only");
+    }
+    expected.push("ga-pt:spatial=0");
+    assert_eq!(names, expected);
     assert_eq!(report["pdf_bad"], 0);
     let out = genpath(&["check", "/nonexistent/scene.toml"]);
     assert!(!out.status.success());

@@ -1,0 +1,265 @@
+//! The arguments every command that renders shares: the scene, the method and its settings.
+
+use anyhow::{bail, Result};
+use clap::Args;
+use genpath::accel::AccelKind;
+use genpath::genetic::plan::PlanConfig;
+use genpath::genetic::GaConfig;
+use genpath::integrators::{Method, MethodConfig};
+use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
+use genpath::path::mixture_file;
+use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
+use std::path::PathBuf;
+
+/// What every command that renders needs: the scene, how to trace it, and the seed.
+#[derive(Args)]
+pub struct SceneArgs {
+    /// Scene description (TOML).
+    pub scene: PathBuf,
+    /// Scattering events per path; defaults to the scene's `render.max_bounces`.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES_LIMIT as i64))]
+    pub max_bounces: Option<u32>,
+    /// Seed of every random stream; the same seed gives the same image for any thread count.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub threads: Option<u32>,
+    /// Ray-tracing back-end.
+    #[arg(long, value_enum, default_value_t = AccelKind::default_available())]
+    pub accel: AccelKind,
+    /// Override the scene's image width (the horizontal field of view is kept).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub width: Option<u32>,
+    /// Override the scene's image height.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub height: Option<u32>,
+    /// No progress bar and no warnings on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The method and its own settings.
+#[derive(Args)]
+pub struct MethodArgs {
+    /// Rendering method.
+    #[arg(long, value_enum, default_value_t = Method::Pt)]
+    pub method: Method,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+/// What the methods other than `pt` are made of.
+#[derive(Args)]
+pub struct SettingsArgs {
+    /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
+    #[arg(long, value_name = "FILE")]
+    pub generators: Option<PathBuf>,
+    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
+    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
+    pub srt_absorption: f64,
+    #[command(flatten)]
+    pub ga: GaArgs,
+}
+
+/// Settings of `--method ga` (paper §4–5, design §6–7); defaults from `GaConfig::default()`.
+#[derive(Args)]
+#[command(next_help_heading = "Genetic algorithm (--method ga)")]
+pub struct GaArgs {
+    /// Individuals per generation (the paper: 150).
+    #[arg(long, default_value_t = GaConfig::default().population as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub population: u32,
+    /// Generations, the random first one included (the paper: 200).
+    #[arg(long, default_value_t = GaConfig::default().generations as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub generations: u32,
+    /// Evolved generators per individual (S), besides the defensive srt one.
+    #[arg(long, value_name = "S", default_value_t = GaConfig::default().generators as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub ga_generators: u32,
+    /// Test paths per GA pixel (M of eq. 10), zero-contribution paths included.
+    #[arg(long, value_name = "M", default_value_t = GaConfig::default().test_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    pub test_paths: u32,
+    /// Best individuals copied unchanged into the next generation (E).
+    #[arg(long, value_name = "E", default_value_t = GaConfig::default().elitism)]
+    pub elitism: usize,
+    /// Crossover probability per pair of parents.
+    #[arg(long, default_value_t = GaConfig::default().p_cross, value_parser = parse_probability)]
+    pub p_cross: f64,
+    /// Mutation probability per sampler.
+    #[arg(long, default_value_t = GaConfig::default().p_sampler_mutate, value_parser = parse_probability)]
+    pub p_mutate: f64,
+    /// Probability per individual that two generators switch positions.
+    #[arg(long, default_value_t = GaConfig::default().p_switch, value_parser = parse_probability)]
+    pub p_switch: f64,
+    /// Probability per individual of a weight mutation.
+    #[arg(long, default_value_t = GaConfig::default().p_weight, value_parser = parse_probability)]
+    pub p_weight: f64,
+    /// Probability per generator of an absorption mutation.
+    #[arg(long, default_value_t = GaConfig::default().p_absorb, value_parser = parse_probability)]
+    pub p_absorb: f64,
+    /// Smallest weight of the defensive srt component of every evolved mixture.
+    #[arg(long, default_value_t = GaConfig::default().defensive_weight)]
+    pub defensive_weight: f64,
+    /// Standard deviation of an anchor shift, relative to the scene's size.
+    #[arg(long, default_value_t = GaConfig::default().anchor_shift)]
+    pub anchor_shift: f64,
+    /// After evolution, set each GA pixel's mixture weights to the optimum of eq. 10 for its
+    /// evolved generators (convex optimisation, beyond the paper).
+    #[arg(long, default_value_t = GaConfig::default().convex_weights, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub convex_weights: bool,
+    /// Share of random anchor points drawn where light-carrying test paths went (0: the
+    /// paper's, uniform by area on all surfaces).
+    #[arg(long, default_value_t = GaConfig::default().data_anchors, value_parser = parse_probability)]
+    pub data_anchors: f64,
+    /// Share of data-driven directional samplers that are patches (parallelograms where the
+    /// light-carrying test paths' directions arrived on one plane) rather than cones (0:
+    /// the paper's cones only).
+    #[arg(long, default_value_t = GaConfig::default().patches, value_parser = parse_probability)]
+    pub patches: f64,
+    /// Stop sampling a pixel's test paths once this many carry light.
+    #[arg(long, value_name = "L", default_value_t = GaConfig::default().max_light_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
+    pub max_light_paths: u32,
+    /// Distance between GA pixels on the grid, in pixels.
+    #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub ga_grid: u32,
+    /// Extra GA pixels where the baseline variance is high, as a fraction of the grid's.
+    #[arg(long, default_value_t = PlanConfig::default().extra)]
+    pub ga_extra: f64,
+    /// srt samples per pixel of the baseline pass that places the extra GA pixels.
+    #[arg(long, default_value_t = PlanConfig::default().baseline_spp, value_parser = clap::value_parser!(u32).range(1..=65_536))]
+    pub baseline_spp: u32,
+    /// Nearest GA pixels whose mixtures each pixel combines.
+    #[arg(long, default_value_t = PlanConfig::default().neighbours)]
+    pub ga_neighbours: usize,
+    /// Run the GA everywhere and with every step: no cells left out for low baseline
+    /// variance, no generator steps cut at the depth the test paths need (ga-pt: still at
+    /// most --guide-steps).
+    #[arg(long)]
+    pub no_prune: bool,
+    /// Grid cells whose pooled baseline relative variance (of one srt sample, Var/(mean² +
+    /// 0.01)) is below this get no GA pixel.
+    #[arg(long, default_value_t = PlanConfig::default().prune_variance)]
+    pub prune_variance: f64,
+    /// The paper's method everywhere: no pilot, and every pixel renders with its evolved
+    /// mixture even where pt is predicted to do better (see the README's "gate").
+    #[arg(long)]
+    pub no_gate: bool,
+    /// Evolve half the GA pixels (a checkerboard of grid cells) first and the others from
+    /// their evolved neighbours' best individuals, with half the generations.
+    #[arg(long, default_value_t = PlanConfig::default().warm_start, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub warm_start: bool,
+    /// Seconds the GA plan may take (baseline included); GA pixels not evolved by then are
+    /// left out. The plan then depends on timing, not only on the seed.
+    #[arg(long, value_name = "SECONDS")]
+    pub ga_time_limit: Option<f64>,
+    /// ga-pt: vertices the evolved guide steers (the GA evolves that many directional steps,
+    /// at most as many as the test paths need); path tracing's own sampling beyond.
+    #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub guide_steps: u32,
+    /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
+    /// path-traced training passes (see --spatial-passes), as --method pg does everywhere
+    /// (beyond the paper). `false`: path tracing's own sampling there.
+    #[arg(long, default_value_t = PlanConfig::default().spatial, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub spatial_guide: bool,
+    /// pg, and ga-pt with the spatial guide: passes of path tracing that train the spatial
+    /// guide, pass i with 2^i samples per pixel; their samples count in --spp and stay in
+    /// the image. Default: as many as fit in half of --spp.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=12))]
+    pub spatial_passes: Option<u32>,
+}
+
+impl GaArgs {
+    pub fn configs(&self, srt_absorption: f64) -> Result<(GaConfig, PlanConfig)> {
+        let ga = GaConfig {
+            population: self.population as usize,
+            generations: self.generations as usize,
+            generators: self.ga_generators as usize,
+            test_paths: self.test_paths as usize,
+            elitism: self.elitism,
+            p_cross: self.p_cross,
+            p_sampler_mutate: self.p_mutate,
+            p_switch: self.p_switch,
+            p_weight: self.p_weight,
+            p_absorb: self.p_absorb,
+            defensive_weight: self.defensive_weight,
+            srt_absorption,
+            anchor_shift: self.anchor_shift,
+            max_steps: None,
+            convex_weights: self.convex_weights,
+            max_light_paths: self.max_light_paths as usize,
+            data_anchors: self.data_anchors,
+            patches: self.patches,
+            directions_only: false,
+        };
+        let plan = PlanConfig {
+            grid: self.ga_grid,
+            extra: self.ga_extra,
+            baseline_spp: self.baseline_spp,
+            neighbours: self.ga_neighbours,
+            prune: !self.no_prune,
+            prune_variance: self.prune_variance,
+            gate: !self.no_gate,
+            warm_start: self.warm_start,
+            time_limit: self.ga_time_limit,
+            guide_steps: self.guide_steps as usize,
+            spatial: self.spatial_guide,
+            spatial_passes: self.spatial_passes,
+            spatial_time_limit: None,
+        };
+        ga.validate()?;
+        plan.validate()?;
+        Ok((ga, plan))
+    }
+}
+
+pub fn parse_probability(text: &str) -> Result<f64, String> {
+    let p: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=1.0).contains(&p) {
+        Ok(p)
+    } else {
+        Err("must be in [0, 1]".into())
+    }
+}
+
+pub fn parse_absorption(text: &str) -> Result<f64, String> {
+    let a: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
+        Ok(a)
+    } else {
+        Err(format!("must be in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]"))
+    }
+}
+
+impl SettingsArgs {
+    /// `method`'s configuration; loads the mixture file when one is given.
+    pub fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+        let mixture = match &self.generators {
+            Some(file) => Some(mixture_file::load(
+                file,
+                scene,
+                max_bounces,
+                self.srt_absorption,
+            )?),
+            None => None,
+        };
+        let (ga, plan) = self.ga.configs(self.srt_absorption)?;
+        Ok(MethodConfig {
+            srt_absorption: self.srt_absorption,
+            mixture,
+            ga,
+            plan,
+        })
+    }
+}
+
+impl MethodArgs {
+    /// The method's configuration; `--generators` goes with `--method mixture` only.
+    pub fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
+        match (&self.settings.generators, self.method) {
+            (Some(_), m) if m != Method::Mixture => {
+                bail!("--generators is only used with --method mixture")
+            }
+            (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
+            _ => self.settings.config(scene, max_bounces),
+        }
+    }
+}

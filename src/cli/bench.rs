@@ -1,0 +1,205 @@
+//! `genpath bench`: ray throughput per back-end, test paths and fitness per second, thread scaling.
+
+use super::check_dir;
+use anyhow::{Context, Result};
+use clap::Args;
+use genpath::accel::{self, AccelKind, Coherence};
+use genpath::genetic::GaConfig;
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Integrator, Method, RenderSettings};
+use genpath::path::mixture_file;
+use genpath::path::SceneView;
+use genpath::scene::Scene;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scene whose camera gives the coherent rays and whose bounds the incoherent ones.
+    #[arg(default_value = "scenes/fig5/scene.toml")]
+    pub scene: PathBuf,
+    /// Rays per set: the camera's image is resized to N × N.
+    #[arg(long, value_name = "N", default_value_t = 512, value_parser = clap::value_parser!(u32).range(4..=8192))]
+    pub rays: u32,
+    /// Each figure is the best of this many passes.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub passes: u32,
+    /// Thread counts of the scaling measurement (default: 1, 2, 4, … up to the cores).
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub threads: Vec<u32>,
+    /// Samples per pixel of each scaling render (pt, at the scene's size).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1 << 16))]
+    pub spp: u32,
+    /// Also write the figures as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+pub fn run_bench(args: BenchArgs) -> Result<()> {
+    use genpath::genetic::population::evolve;
+    use genpath::genetic::test_paths::TestPaths;
+    use genpath::report::bench::{
+        accel_label, best, best_interleaved, camera_rays, random_rays, ray_rates,
+    };
+    if let Some(json) = &args.json {
+        check_dir(json)?;
+    }
+    let scene = Scene::load(&args.scene)?;
+    let passes = args.passes as usize;
+    let n = args.rays;
+    let (lo, hi) = scene.mesh.bounds();
+    let sets = [
+        (
+            "coherent",
+            camera_rays(&scene.camera, n, n),
+            Coherence::Coherent,
+        ),
+        (
+            "incoherent",
+            random_rays(lo, hi, (n * n) as usize, 11),
+            Coherence::Incoherent,
+        ),
+    ];
+    println!(
+        "{}: {} triangles, {} rays per set, best of {passes}, one thread",
+        scene.path.display(),
+        scene.mesh.triangles.len(),
+        n * n
+    );
+    println!(
+        "{:<11} {:<11} {:>15} {:>15} {:>16} {:>16} {:>6}",
+        "back/lanes",
+        "rays",
+        "closest Mray/s",
+        "closest pkt16",
+        "occluded Mray/s",
+        "occluded pkt16",
+        "hit %"
+    );
+    let mut rays_json = Vec::new();
+    for kind in [AccelKind::Embree, AccelKind::Bvh] {
+        let accel = match accel::build(kind, &scene.mesh) {
+            Ok(accel) => accel,
+            Err(accel::AccelError::NotBuilt(name, feature)) => {
+                println!("{name:<11} not built (feature `{feature}`)");
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        for (set, rays, coherence) in &sets {
+            let r = ray_rates(accel.as_ref(), rays, *coherence, passes);
+            println!(
+                "{:<11} {set:<11} {:>15.2} {:>15.2} {:>16.2} {:>16.2} {:>6.1}",
+                accel_label(accel.as_ref()),
+                r.closest_single,
+                r.closest_packet,
+                r.occluded_single,
+                r.occluded_packet,
+                100.0 * r.hit_fraction
+            );
+            rays_json
+                .push(serde_json::json!({ "accel": accel.name(), "packet_lanes": accel.packet_lanes(), "rays": set, "mrays_per_s": r }));
+        }
+    }
+
+    // Test paths and fitness evaluations at the image's centre, one thread.
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = GaConfig {
+        generations: 10,
+        ..GaConfig::default()
+    };
+    let max_bounces = scene.render.max_bounces;
+    let q = mixture_file::srt(&scene, max_bounces, ga.srt_absorption);
+    let pixel = (scene.camera.width / 2, scene.camera.height / 2);
+    let m = ga.test_paths;
+    let [(packet_t, _), (single_t, _)] = best_interleaved(
+        passes,
+        [
+            &mut || {
+                TestPaths::sample(&view, &q, pixel, m, max_bounces, 1)
+                    .0
+                    .len()
+            },
+            &mut || {
+                TestPaths::sample_single(&view, &q, pixel, m, max_bounces, 1)
+                    .0
+                    .len()
+            },
+        ],
+    );
+    let paths = TestPaths::sample(&view, &q, pixel, m, max_bounces, 1).0;
+    let start = Instant::now();
+    let mut rng = genpath::sampling::sample_rng(1, 0, 0);
+    let evolution = evolve(&ga, &paths, &view, &mut rng);
+    let evolve_s = start.elapsed().as_secs_f64();
+    let evaluations = evolution.individual_evaluations as f64 / evolve_s;
+    println!(
+        "\ntest paths at pixel {pixel:?} ({}): {:.0} k/s in packets, {:.0} k/s single ({} of {m} carry light)",
+        accel.name(),
+        m as f64 / packet_t.as_secs_f64() / 1e3,
+        m as f64 / single_t.as_secs_f64() / 1e3,
+        paths.len()
+    );
+    println!(
+        "fitness: {evaluations:.0} individual evaluations/s ({} generators evaluated, population {}, M = {m})",
+        evolution.generator_evaluations, ga.population
+    );
+
+    // Thread scaling of a pt render.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u32;
+    let threads = if args.threads.is_empty() {
+        std::iter::successors(Some(1u32), |t| Some(t * 2))
+            .take_while(|&t| t < cores)
+            .chain([cores])
+            .collect()
+    } else {
+        args.threads.clone()
+    };
+    let settings = RenderSettings {
+        method: Method::Pt,
+        spp: args.spp,
+        max_bounces,
+        seed: 1,
+        progress: false,
+    };
+    println!(
+        "\n{:>7} {:>9} {:>8} {:>10}",
+        "threads", "seconds", "speedup", "efficiency"
+    );
+    let mut scaling = Vec::new();
+    let mut base = None;
+    for &t in &threads {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(t as usize)
+            .build()
+            .context("cannot start the worker threads")?;
+        let pt = PathTracing { max_bounces };
+        let (elapsed, _) = best(passes, || {
+            pool.install(|| pt.render(&view, &settings)).rays.total() as usize
+        });
+        let seconds = elapsed.as_secs_f64();
+        let base = *base.get_or_insert(seconds * f64::from(threads[0]));
+        let speedup = base / seconds;
+        println!(
+            "{t:>7} {seconds:>9.3} {speedup:>8.2} {:>10.2}",
+            speedup / f64::from(t)
+        );
+        scaling.push(serde_json::json!({ "threads": t, "seconds": seconds, "speedup": speedup }));
+    }
+    if let Some(json) = &args.json {
+        let value = serde_json::json!({
+            "genpath_version": env!("CARGO_PKG_VERSION"),
+            "scene": scene.path,
+            "rays_per_set": n * n,
+            "passes": passes,
+            "cores": cores,
+            "rays": rays_json,
+            "test_paths_per_s": { "packet": m as f64 / packet_t.as_secs_f64(), "single": m as f64 / single_t.as_secs_f64(), "accel": accel.name() },
+            "fitness_evaluations_per_s": evaluations,
+            "scaling": { "method": "pt", "spp": args.spp, "width": scene.camera.width, "height": scene.camera.height, "runs": scaling },
+        });
+        genpath::image::write_bytes_atomic(json, serde_json::to_string_pretty(&value)?.as_bytes())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,99 @@
+//! `genpath reference`: a long render in two independent halves, with its own noise estimate.
+
+use super::args::SceneArgs;
+use super::check_output;
+use super::session::{rays_json, write_stats, Session};
+use anyhow::{bail, Result};
+use clap::Args;
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Integrator, Method, RenderSettings};
+use genpath::path::SceneView;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct ReferenceArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The reference image (EXR); `<FILE>.json` beside it holds its noise estimate.
+    #[arg(short, long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// Path-tracing samples per pixel, split into two independent halves.
+    #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(2..=1 << 24))]
+    pub spp: u32,
+}
+
+/// Two independent `pt` halves, averaged; their relMSE against each other is about four
+/// times the average's own relMSE (each half has twice its variance, and both count).
+pub fn run_reference(args: ReferenceArgs) -> Result<()> {
+    let is_exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        bail!(
+            "{}: a reference must be an EXR (float) image",
+            args.output.display()
+        );
+    }
+    check_output(&args.output)?;
+    let session = Session::open(&args.scene)?;
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let half = |seed: u64| {
+        let settings = RenderSettings {
+            seed,
+            ..session.settings(&args.scene, Method::Pt, args.spp / 2)
+        };
+        let pt = PathTracing {
+            max_bounces: settings.max_bounces,
+        };
+        session.pool.install(|| pt.render(&view, &settings))
+    };
+    // The halves use seeds derived from the given one, so neither shares random numbers with
+    // a render made with the same `--seed` (that would correlate its error with the
+    // reference's and understate it).
+    let seeds = [0x05ee_d0f5_ec00_da1f, 0x7e5e_ed00_fa11_0b0b]
+        .map(|tag| genpath::sampling::derive_seed(args.scene.seed, tag));
+    let (a, b) = (half(seeds[0]), half(seeds[1]));
+    let Some(between) = genpath::image::metrics::compare(&a.image, &b.image) else {
+        unreachable!("both halves have the scene's size");
+    };
+    let mut image = a.image.clone();
+    for (p, q) in image.pixels.iter_mut().zip(&b.image.pixels) {
+        *p = std::array::from_fn(|c| 0.5 * (p[c] + q[c]));
+    }
+    genpath::image::write(&args.output, &image)?;
+    let settings = session.settings(&args.scene, Method::Pt, args.spp / 2 * 2);
+    let seconds = a.elapsed.as_secs_f64() + b.elapsed.as_secs_f64();
+    let mut stats = session.stats(&settings);
+    stats.insert(
+        "reference".into(),
+        serde_json::json!({
+            "half_seeds": seeds,
+            "spp_per_half": args.spp / 2,
+            "relmse_between_halves": between.relmse,
+            "relmse_estimate": between.relmse / 4.0,
+            "mse_estimate": between.mse / 4.0,
+            "bad_fraction": between.bad_fraction,
+        }),
+    );
+    stats.insert(
+        "times_s".into(),
+        serde_json::json!({ "load": session.load_s, "accel_build": session.accel_s, "render": seconds }),
+    );
+    let mut rays = a.rays;
+    rays.add(b.rays);
+    stats.insert("rays".into(), rays_json(rays));
+    write_stats(
+        std::slice::from_ref(&args.output),
+        &serde_json::Value::Object(stats),
+    )?;
+    if !args.scene.quiet {
+        eprintln!(
+            "genpath: reference {} spp in {seconds:.1} s, estimated relMSE {:.3e} → {}",
+            args.spp / 2 * 2,
+            between.relmse / 4.0,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

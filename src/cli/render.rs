@@ -1,0 +1,220 @@
+//! `genpath render`: one image with any method, and its statistics as JSON.
+
+use super::args::{MethodArgs, SceneArgs};
+use super::check_output;
+use super::session::{rays_json, write_stats, Session};
+use anyhow::{bail, Result};
+use clap::Args;
+use genpath::genetic::plan::{Plan, PlanConfig};
+use genpath::genetic::GaConfig;
+use genpath::integrators::{prepare, Method};
+use genpath::path::SceneView;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output image; repeat for several formats. A `<FILE>.json` with statistics is written beside each.
+    #[arg(short, long = "output", value_name = "FILE", required = true)]
+    pub outputs: Vec<PathBuf>,
+    /// Samples (paths) per pixel.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
+    pub spp: u32,
+    /// With `--method ga`: also write an image of the GA pixels with their evolved anchor
+    /// points and cones drawn over the render.
+    #[arg(long, value_name = "FILE")]
+    pub explain: Option<PathBuf>,
+    #[command(flatten)]
+    pub method: MethodArgs,
+}
+
+pub fn run_render(args: RenderArgs) -> Result<()> {
+    for output in &args.outputs {
+        check_output(output)?;
+    }
+    if let Some(explain) = &args.explain {
+        if !matches!(args.method.method, Method::Ga | Method::GaPt) {
+            bail!("--explain is only used with --method ga or ga-pt");
+        }
+        check_output(explain)?;
+    }
+    // Flag ranges first, before any loading.
+    args.method
+        .settings
+        .ga
+        .configs(args.method.settings.srt_absorption)?;
+    let session = Session::open(&args.scene)?;
+    let settings = session.settings(&args.scene, args.method.method, args.spp);
+    let config = args.method.config(&session.scene, settings.max_bounces)?;
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let prepared = session
+        .pool
+        .install(|| prepare(&view, &config, &settings))?;
+    let plan = prepared.plan();
+    let film = session.pool.install(|| prepared.render(&view, &settings));
+    let render_s = film.elapsed.as_secs_f64();
+    let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
+    let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
+
+    let t_write = Instant::now();
+    for output in &args.outputs {
+        genpath::image::write(output, &film.image)?;
+    }
+    if let (Some(file), Some(plan)) = (&args.explain, plan) {
+        let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
+        genpath::image::write(file, &picture)?;
+    }
+    let write_s = t_write.elapsed().as_secs_f64();
+
+    let mut stats = session.stats(&settings);
+    stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
+    stats.insert(
+        "ga".into(),
+        serde_json::json!(plan.map(|p| ga_stats(p, &config.ga, &config.plan))),
+    );
+    stats.insert(
+        "times_s".into(),
+        serde_json::json!({
+            "load": session.load_s,
+            "accel_build": session.accel_s,
+            "baseline": plan.map(|p| p.stats.baseline_seconds),
+            "ga": plan.map(|p| p.stats.ga_seconds),
+            "spatial": spatial_s,
+            "render": render_s,
+            "write": write_s,
+            "total_render": plan_s + spatial_s + render_s,
+        }),
+    );
+    stats.insert(
+        "spatial".into(),
+        serde_json::json!(prepared.spatial().map(|s| &s.stats)),
+    );
+    stats.insert("rays".into(), rays_json(film.rays));
+    stats.insert(
+        "rays_per_s".into(),
+        serde_json::json!(film.rays.total() as f64 / render_s.max(1e-9)),
+    );
+    write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
+    if !args.scene.quiet {
+        if let Some(plan) = plan {
+            let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
+            eprintln!(
+                "genpath: GA on {} pixels ({improved} improved on srt) in {plan_s:.2} s",
+                plan.pixels.len()
+            );
+        }
+        if let Some(s) = prepared.spatial() {
+            eprintln!(
+                "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
+                s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.spp, s.stats.seconds
+            );
+        }
+        eprintln!(
+            "genpath: {}×{} {} spp in {render_s:.2} s ({:.2} Mrays/s) → {}",
+            session.scene.camera.width,
+            session.scene.camera.height,
+            settings.spp,
+            film.rays.total() as f64 / render_s.max(1e-9) / 1e6,
+            args.outputs
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// What the GA plan and the renderer left out for this scene, and why (design §8).
+fn left_out(
+    plan: &Plan,
+    config: &PlanConfig,
+    analysis: &genpath::scene::SceneAnalysis,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    if analysis.glossy_triangles == 0 {
+        out.push("Phong-lobe evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
+    }
+    if analysis.mirror_triangles == 0 {
+        out.push("delta (mirror) vertices: no mirror material".to_string());
+    }
+    let s = &plan.stats;
+    out.push(format!(
+        "GA at {} pixels that see only background or emitters ({} grid cells without a scattering pixel)",
+        s.skipped_pixels, s.empty_cells
+    ));
+    if !config.prune {
+        out.push("nothing else: pruning is off (--no-prune)".to_string());
+        return out;
+    }
+    if !s.baseline_ran {
+        out.push(format!(
+            "the baseline and the GA at {} grid pixels: the gate's pilot predicted no gain",
+            s.gated_pixels
+        ));
+        return out;
+    }
+    out.push(format!(
+        "GA in {} grid cells whose pooled baseline relative variance is below {} (cells: min {:.3}, median {:.3}, max {:.3})",
+        s.low_variance_cells, config.prune_variance, s.cell_variance[0], s.cell_variance[1], s.cell_variance[2]
+    ));
+    let max_steps = plan.pixels.iter().map(|p| p.steps).max().unwrap_or(0);
+    let cut = plan.pixels.iter().filter(|p| p.steps < max_steps).count();
+    out.push(format!(
+        "generator steps past the depth the test paths need (all but {} of Σ F²/q): {} of {} GA pixels evolve fewer steps than the deepest ({max_steps}); steps per pixel {:?}",
+        genpath::genetic::plan::PRUNE_SHARE,
+        cut,
+        plan.pixels.len(),
+        {
+            let mut h = std::collections::BTreeMap::new();
+            for p in &plan.pixels {
+                *h.entry(p.steps).or_insert(0usize) += 1;
+            }
+            h
+        }
+    ));
+    out
+}
+
+/// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
+/// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list.
+fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Value {
+    const CURVES: usize = 8;
+    let n = plan.pixels.len();
+    let curves: Vec<_> = (0..n.min(CURVES))
+        .map(|i| {
+            let p = &plan.pixels[i * n / n.min(CURVES)];
+            serde_json::json!({ "x": p.x, "y": p.y, "history": p.history })
+        })
+        .collect();
+    let pixels: Vec<_> = plan
+        .pixels
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "x": p.x, "y": p.y, "origin": p.origin,
+                "v_srt": p.v_srt, "v_best": p.v_best, "v_evolved": p.v_evolved, "kept_srt": p.kept_srt,
+                "trial": p.trial, "warm": p.warm,
+                "test_paths": p.test_paths, "light_paths": p.light_paths, "steps": p.steps,
+                "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
+                "mixture": p.mixture,
+            })
+        })
+        .collect();
+    let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
+    let analysis = plan.analysis.clone();
+    serde_json::json!({
+        "config": ga,
+        "plan": config,
+        "left_out": left_out(plan, config, &analysis),
+        "scene_analysis": analysis,
+        "stats": plan.stats,
+        "ga_pixels": n,
+        "improved_pixels": plan.pixels.iter().filter(|p| !p.kept_srt).count(),
+        "individual_evaluations_per_cpu_s": plan.stats.individual_evaluations as f64 / evolve_s,
+        "fitness_curves": curves,
+        "pixels": pixels,
+    })
+}

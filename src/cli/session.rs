@@ -1,0 +1,98 @@
+//! A loaded scene with its accelerator and worker pool, and the JSON every render writes.
+
+use super::args::SceneArgs;
+use anyhow::{Context, Result};
+use genpath::accel::{self, Accel};
+use genpath::integrators::{Method, RenderSettings};
+use genpath::path::RayCounts;
+use genpath::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A loaded scene with its accelerator and worker pool, and how long loading took.
+pub struct Session {
+    pub scene: Scene,
+    pub accel: Box<dyn Accel>,
+    pub pool: rayon::ThreadPool,
+    pub load_s: f64,
+    pub accel_s: f64,
+}
+
+impl Session {
+    pub fn open(args: &SceneArgs) -> Result<Self> {
+        let t_load = Instant::now();
+        let mut scene = Scene::load(&args.scene)?;
+        if args.width.is_some() || args.height.is_some() {
+            scene.resize(
+                args.width.unwrap_or(scene.camera.width),
+                args.height.unwrap_or(scene.camera.height),
+            );
+        }
+        if !args.quiet {
+            for warning in &scene.warnings {
+                eprintln!("genpath: warning: {warning}");
+            }
+        }
+        let load_s = t_load.elapsed().as_secs_f64();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(args.threads.unwrap_or(0) as usize)
+            .build()
+            .context("cannot start the worker threads")?;
+        let t_accel = Instant::now();
+        let accel = accel::build(args.accel, &scene.mesh)?;
+        Ok(Self {
+            scene,
+            accel,
+            pool,
+            load_s,
+            accel_s: t_accel.elapsed().as_secs_f64(),
+        })
+    }
+
+    pub fn settings(&self, args: &SceneArgs, method: Method, spp: u32) -> RenderSettings {
+        RenderSettings {
+            method,
+            spp,
+            max_bounces: args.max_bounces.unwrap_or(self.scene.render.max_bounces),
+            seed: args.seed,
+            progress: !args.quiet,
+        }
+    }
+
+    /// What the JSON of every render records first.
+    pub fn stats(&self, settings: &RenderSettings) -> serde_json::Map<String, serde_json::Value> {
+        let value = serde_json::json!({
+            "genpath_version": env!("CARGO_PKG_VERSION"),
+            "command_line": std::env::args().collect::<Vec<_>>(),
+            "scene": self.scene.path,
+            "settings": settings,
+            "threads": self.pool.current_num_threads(),
+            "accel": self.accel.name(),
+            "width": self.scene.camera.width,
+            "height": self.scene.camera.height,
+            "warnings": self.scene.warnings,
+        });
+        match value {
+            serde_json::Value::Object(map) => map,
+            _ => unreachable!("a JSON object literal"),
+        }
+    }
+}
+
+pub fn rays_json(rays: RayCounts) -> serde_json::Value {
+    serde_json::json!({
+        "closest": rays.closest, "shadow": rays.shadow, "total": rays.total(),
+        "densities": rays.densities, "cost": rays.cost(),
+    })
+}
+
+/// Writes `stats` as `<output>.json` beside each output.
+pub fn write_stats(outputs: &[PathBuf], stats: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(stats)?;
+    for output in outputs {
+        let mut json_path = output.clone().into_os_string();
+        json_path.push(".json");
+        genpath::image::write_bytes_atomic(Path::new(&json_path), text.as_bytes())?;
+    }
+    Ok(())
+}
