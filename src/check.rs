@@ -244,7 +244,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
             .count();
         if bad_pixels > 0 {
             failures.push(format!(
-                "{method:?}: {bad_pixels} NaN, infinite or negative pixels"
+                "{method}: {bad_pixels} NaN, infinite or negative pixels"
             ));
         }
         let (mean, se) = image_mean(film);
@@ -260,7 +260,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
             }
             if z.is_nan() || z > z_critical {
                 failures.push(format!(
-                    "{method:?}: image mean differs from pt's by |z| = {z:.2} > {z_critical:.2}"
+                    "{method}: image mean differs from pt's by |z| = {z:.2} > {z_critical:.2}"
                 ));
             }
         }

@@ -867,7 +867,7 @@ fn check_passes_on_fig5() {
     assert!(stdout.contains("check passed"), "{stdout}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
-    // Every method of the list (pt, srt, ga, ga-pt, pg, and bsdf-only where the test-only
+    // Every method of the list (pt, srt, ga, ga-pt, pg, and nee-only where the test-only
     // method is built), and ga-pt without the spatial guide.
     let names: Vec<&str> = report["methods"]
         .as_array()
@@ -877,7 +877,7 @@ fn check_passes_on_fig5() {
         .collect();
     let mut expected = vec!["pt", "srt", "ga", "ga-pt", "pg"];
     if cfg!(feature = "test-method") {
-        expected.push("bsdf-only");
+        expected.push("nee-only");
     }
     expected.push("ga-pt:spatial=0");
     assert_eq!(names, expected);
@@ -1058,4 +1058,89 @@ fn embree_and_bvh_renders_agree() {
             "{method}: another seed changes nothing"
         );
     }
+}
+
+/// The seam: a method added as one file and one line (`nee-only`, feature `test-method`)
+/// is run by render, reference, sweep, check (which also compares its image mean with
+/// pt's) and bench, and each names it in its output.
+#[cfg(feature = "test-method")]
+#[test]
+fn a_test_only_method_runs_in_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox/scene.toml");
+    let scene = scene.to_str().unwrap();
+    let small = ["--width", "24", "--height", "24", "--quiet"];
+    let run = |args: &[&str]| {
+        let out = genpath(&[args, &small].concat());
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "genpath {args:?}: {text}");
+        text
+    };
+    let image = p("bsdf.exr");
+    let reference = p("ref.exr");
+    run(&[
+        "render", scene, "--method", "nee-only", "--spp", "8", "-o", &image,
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{image}.json")).unwrap()).unwrap();
+    assert_eq!(json["settings"]["method"], "nee-only");
+    run(&[
+        "reference",
+        scene,
+        "--method",
+        "nee-only",
+        "--spp",
+        "8",
+        "-o",
+        &reference,
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{reference}.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["settings"]["method"], "nee-only");
+    assert!(json["reference"]["relmse_estimate"].as_f64().unwrap() > 0.0);
+    let sweep = run(&[
+        "sweep",
+        scene,
+        "--ref",
+        &reference,
+        "--methods",
+        "pt,nee-only",
+        "--budgets",
+        "2",
+        "-o",
+        &p("sweep"),
+    ]);
+    assert!(sweep.contains("| nee-only |"), "{sweep}");
+    let check = run(&["check", scene, "--spp", "8", "--json", &p("check.json")]);
+    assert!(check.contains("| nee-only |"), "{check}");
+    let out = genpath(&[
+        "bench",
+        scene,
+        "--rays",
+        "8",
+        "--passes",
+        "1",
+        "--threads",
+        "1",
+        "--spp",
+        "1",
+        "--method",
+        "nee-only",
+        "--json",
+        &p("bench.json"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("bench.json")).unwrap()).unwrap();
+    assert_eq!(json["scaling"]["method"], "nee-only");
 }

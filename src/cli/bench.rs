@@ -1,14 +1,17 @@
 //! `genpath bench`: ray throughput per back-end, test paths and fitness per second, thread scaling.
 
+use super::args::MethodArgs;
 use super::check_dir;
 use anyhow::{Context, Result};
 use clap::Args;
 use genpath::accel::{self, AccelKind, Coherence};
 use genpath::genetic::GaConfig;
-use genpath::integrators::pt::PathTracing;
-use genpath::integrators::{Integrator, Method, RenderSettings};
+use genpath::integrators::{prepare, RenderSettings};
 use genpath::path::mixture_file;
 use genpath::path::SceneView;
+use genpath::report::bench::{
+    accel_label, best, best_interleaved, camera_rays, random_rays, ray_rates,
+};
 use genpath::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -27,26 +30,57 @@ pub struct BenchArgs {
     /// Thread counts of the scaling measurement (default: 1, 2, 4, … up to the cores).
     #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Vec<u32>,
-    /// Samples per pixel of each scaling render (pt, at the scene's size).
+    /// Samples per pixel of each scaling render (at the scene's size).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1 << 16))]
     pub spp: u32,
+    /// The method of the scaling renders (prepared once, untimed) and its settings.
+    #[command(flatten)]
+    pub method: MethodArgs,
     /// Also write the figures as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
 }
 
 pub fn run_bench(args: BenchArgs) -> Result<()> {
-    use genpath::genetic::population::evolve;
-    use genpath::genetic::test_paths::TestPaths;
-    use genpath::report::bench::{
-        accel_label, best, best_interleaved, camera_rays, random_rays, ray_rates,
-    };
     if let Some(json) = &args.json {
         check_dir(json)?;
     }
+    // Flag ranges first, before any loading.
+    args.method
+        .settings
+        .ga
+        .configs(args.method.settings.srt_absorption)?;
     let scene = Scene::load(&args.scene)?;
     let passes = args.passes as usize;
-    let n = args.rays;
+    let rays = ray_throughput(&scene, args.rays, passes)?;
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = ga_throughput(&view, passes);
+    let scaling = thread_scaling(&view, &args)?;
+    if let Some(json) = &args.json {
+        let value = serde_json::json!({
+            "genpath_version": env!("CARGO_PKG_VERSION"),
+            "scene": scene.path,
+            "rays_per_set": args.rays * args.rays,
+            "passes": passes,
+            "cores": cores(),
+            "rays": rays,
+            "test_paths_per_s": ga["test_paths_per_s"],
+            "fitness_evaluations_per_s": ga["fitness_evaluations_per_s"],
+            "scaling": scaling,
+        });
+        genpath::image::write_bytes_atomic(json, serde_json::to_string_pretty(&value)?.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn cores() -> u32 {
+    std::thread::available_parallelism().map_or(1, |n| n.get()) as u32
+}
+
+/// Mrays/s of every back-end built, single rays and packets, on `n × n` coherent (camera)
+/// and incoherent (random in the scene's box) rays, one thread; printed, and as JSON.
+fn ray_throughput(scene: &Scene, n: u32, passes: usize) -> Result<Vec<serde_json::Value>> {
     let (lo, hi) = scene.mesh.bounds();
     let sets = [
         (
@@ -101,42 +135,47 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
                 .push(serde_json::json!({ "accel": accel.name(), "packet_lanes": accel.packet_lanes(), "rays": set, "mrays_per_s": r }));
         }
     }
+    Ok(rays_json)
+}
 
-    // Test paths and fitness evaluations at the image's centre, one thread.
-    let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;
-    let view = SceneView::new(&scene, accel.as_ref());
+/// Test paths (packets and single rays) and fitness evaluations per second at the image's
+/// centre, one thread; printed, and as JSON.
+fn ga_throughput(view: &SceneView, passes: usize) -> serde_json::Value {
+    use genpath::genetic::population::evolve;
+    use genpath::genetic::test_paths::TestPaths;
+    let scene = view.scene;
     let ga = GaConfig {
         generations: 10,
         ..GaConfig::default()
     };
     let max_bounces = scene.render.max_bounces;
-    let q = mixture_file::srt(&scene, max_bounces, ga.srt_absorption);
+    let q = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
     let pixel = (scene.camera.width / 2, scene.camera.height / 2);
     let m = ga.test_paths;
     let [(packet_t, _), (single_t, _)] = best_interleaved(
         passes,
         [
             &mut || {
-                TestPaths::sample(&view, &q, pixel, m, max_bounces, 1)
+                TestPaths::sample(view, &q, pixel, m, max_bounces, 1)
                     .0
                     .len()
             },
             &mut || {
-                TestPaths::sample_single(&view, &q, pixel, m, max_bounces, 1)
+                TestPaths::sample_single(view, &q, pixel, m, max_bounces, 1)
                     .0
                     .len()
             },
         ],
     );
-    let paths = TestPaths::sample(&view, &q, pixel, m, max_bounces, 1).0;
+    let paths = TestPaths::sample(view, &q, pixel, m, max_bounces, 1).0;
     let start = Instant::now();
     let mut rng = genpath::sampling::sample_rng(1, 0, 0);
-    let evolution = evolve(&ga, &paths, &view, &mut rng);
+    let evolution = evolve(&ga, &paths, view, &mut rng);
     let evolve_s = start.elapsed().as_secs_f64();
     let evaluations = evolution.individual_evaluations as f64 / evolve_s;
     println!(
         "\ntest paths at pixel {pixel:?} ({}): {:.0} k/s in packets, {:.0} k/s single ({} of {m} carry light)",
-        accel.name(),
+        view.accel.name(),
         m as f64 / packet_t.as_secs_f64() / 1e3,
         m as f64 / single_t.as_secs_f64() / 1e3,
         paths.len()
@@ -145,9 +184,18 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         "fitness: {evaluations:.0} individual evaluations/s ({} generators evaluated, population {}, M = {m})",
         evolution.generator_evaluations, ga.population
     );
+    serde_json::json!({
+        "test_paths_per_s": { "packet": m as f64 / packet_t.as_secs_f64(), "single": m as f64 / single_t.as_secs_f64(), "accel": view.accel.name() },
+        "fitness_evaluations_per_s": evaluations,
+    })
+}
 
-    // Thread scaling of a pt render.
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u32;
+/// Render time of `args.method` against the number of threads (prepared once, on every
+/// core, untimed); printed, and as JSON.
+fn thread_scaling(view: &SceneView, args: &BenchArgs) -> Result<serde_json::Value> {
+    let scene = view.scene;
+    let passes = args.passes as usize;
+    let cores = cores();
     let threads = if args.threads.is_empty() {
         std::iter::successors(Some(1u32), |t| Some(t * 2))
             .take_while(|&t| t < cores)
@@ -157,12 +205,14 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         args.threads.clone()
     };
     let settings = RenderSettings {
-        method: Method::Pt,
+        method: args.method.method,
         spp: args.spp,
-        max_bounces,
+        max_bounces: scene.render.max_bounces,
         seed: 1,
         progress: false,
     };
+    let config = args.method.config(scene, settings.max_bounces)?;
+    let integrator = prepare(view, &config, &settings)?;
     println!(
         "\n{:>7} {:>9} {:>8} {:>10}",
         "threads", "seconds", "speedup", "efficiency"
@@ -174,9 +224,10 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
             .num_threads(t as usize)
             .build()
             .context("cannot start the worker threads")?;
-        let pt = PathTracing { max_bounces };
         let (elapsed, _) = best(passes, || {
-            pool.install(|| pt.render(&view, &settings)).rays.total() as usize
+            pool.install(|| integrator.render(view, &settings))
+                .rays
+                .total() as usize
         });
         let seconds = elapsed.as_secs_f64();
         let base = *base.get_or_insert(seconds * f64::from(threads[0]));
@@ -187,19 +238,7 @@ pub fn run_bench(args: BenchArgs) -> Result<()> {
         );
         scaling.push(serde_json::json!({ "threads": t, "seconds": seconds, "speedup": speedup }));
     }
-    if let Some(json) = &args.json {
-        let value = serde_json::json!({
-            "genpath_version": env!("CARGO_PKG_VERSION"),
-            "scene": scene.path,
-            "rays_per_set": n * n,
-            "passes": passes,
-            "cores": cores,
-            "rays": rays_json,
-            "test_paths_per_s": { "packet": m as f64 / packet_t.as_secs_f64(), "single": m as f64 / single_t.as_secs_f64(), "accel": accel.name() },
-            "fitness_evaluations_per_s": evaluations,
-            "scaling": { "method": "pt", "spp": args.spp, "width": scene.camera.width, "height": scene.camera.height, "runs": scaling },
-        });
-        genpath::image::write_bytes_atomic(json, serde_json::to_string_pretty(&value)?.as_bytes())?;
-    }
-    Ok(())
+    Ok(
+        serde_json::json!({ "method": settings.method, "spp": args.spp, "width": scene.camera.width, "height": scene.camera.height, "runs": scaling }),
+    )
 }

@@ -49,7 +49,7 @@ pub fn run_check(mut args: CheckArgs) -> Result<()> {
     println!("|---|---|---|---|---|");
     for m in &report.methods {
         println!(
-            "| {:?} | {} | {:.4e}, {:.4e}, {:.4e} | {:.2} | {:.2} |",
+            "| {} | {} | {:.4e}, {:.4e}, {:.4e} | {:.2} | {:.2} |",
             m.method, m.bad_pixels, m.mean[0], m.mean[1], m.mean[2], m.z_vs_pt, m.seconds
         );
     }

@@ -1,12 +1,11 @@
 //! `genpath reference`: a long render in two independent halves, with its own noise estimate.
 
-use super::args::SceneArgs;
+use super::args::{MethodArgs, SceneArgs};
 use super::check_output;
 use super::session::{rays_json, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::Args;
-use genpath::integrators::pt::PathTracing;
-use genpath::integrators::{Integrator, Method, RenderSettings};
+use genpath::integrators::{prepare, RenderSettings};
 use genpath::path::SceneView;
 use std::path::PathBuf;
 
@@ -17,13 +16,17 @@ pub struct ReferenceArgs {
     /// The reference image (EXR); `<FILE>.json` beside it holds its noise estimate.
     #[arg(short, long = "output", value_name = "FILE")]
     pub output: PathBuf,
-    /// Path-tracing samples per pixel, split into two independent halves.
+    /// Samples per pixel, split into two independent halves.
     #[arg(long, default_value_t = 4096, value_parser = clap::value_parser!(u32).range(2..=1 << 24))]
     pub spp: u32,
+    /// The method (default `pt`) and its settings: each half prepares it anew, from its own
+    /// seed.
+    #[command(flatten)]
+    pub method: MethodArgs,
 }
 
-/// Two independent `pt` halves, averaged; their relMSE against each other is about four
-/// times the average's own relMSE (each half has twice its variance, and both count).
+/// Two independent halves, averaged; their relMSE against each other is about four times
+/// the average's own relMSE (each half has twice its variance, and both count).
 pub fn run_reference(args: ReferenceArgs) -> Result<()> {
     let is_exr = args
         .output
@@ -36,24 +39,32 @@ pub fn run_reference(args: ReferenceArgs) -> Result<()> {
         );
     }
     check_output(&args.output)?;
+    // Flag ranges first, before any loading.
+    args.method
+        .settings
+        .ga
+        .configs(args.method.settings.srt_absorption)?;
     let session = Session::open(&args.scene)?;
+    let method = args.method.method;
+    let max_bounces = session.settings(&args.scene, method, 1).max_bounces;
+    let config = args.method.config(&session.scene, max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
-    let half = |seed: u64| {
+    let half = |seed: u64| -> Result<_> {
         let settings = RenderSettings {
             seed,
-            ..session.settings(&args.scene, Method::Pt, args.spp / 2)
+            ..session.settings(&args.scene, method, args.spp / 2)
         };
-        let pt = PathTracing {
-            max_bounces: settings.max_bounces,
-        };
-        session.pool.install(|| pt.render(&view, &settings))
+        session.pool.install(|| {
+            let integrator = prepare(&view, &config, &settings)?;
+            Ok(integrator.render(&view, &settings))
+        })
     };
     // The halves use seeds derived from the given one, so neither shares random numbers with
     // a render made with the same `--seed` (that would correlate its error with the
     // reference's and understate it).
     let seeds = [0x05ee_d0f5_ec00_da1f, 0x7e5e_ed00_fa11_0b0b]
         .map(|tag| genpath::sampling::derive_seed(args.scene.seed, tag));
-    let (a, b) = (half(seeds[0]), half(seeds[1]));
+    let (a, b) = (half(seeds[0])?, half(seeds[1])?);
     let Some(between) = genpath::image::metrics::compare(&a.image, &b.image) else {
         unreachable!("both halves have the scene's size");
     };
@@ -62,7 +73,7 @@ pub fn run_reference(args: ReferenceArgs) -> Result<()> {
         *p = std::array::from_fn(|c| 0.5 * (p[c] + q[c]));
     }
     genpath::image::write(&args.output, &image)?;
-    let settings = session.settings(&args.scene, Method::Pt, args.spp / 2 * 2);
+    let settings = session.settings(&args.scene, method, args.spp / 2 * 2);
     let seconds = a.elapsed.as_secs_f64() + b.elapsed.as_secs_f64();
     let mut stats = session.stats(&settings);
     stats.insert(

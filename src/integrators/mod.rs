@@ -76,10 +76,10 @@ methods! {
     /// training passes whose samples stay in the image (`path::spatial`), without the GA:
     /// the baseline that shows what the GA adds.
     Pg => pg::prepare,
-    /// Test-only (feature `test-method`): path tracing by BSDF sampling alone, with no
-    /// next-event estimation; shows that a method is one file and one line.
+    /// Test-only (feature `test-method`): path tracing with next-event estimation alone (no
+    /// MIS); shows that a method is one file and one line.
     #[cfg(feature = "test-method")]
-    BsdfOnly => test_method::prepare,
+    NeeOnly => test_method::prepare,
 }
 
 /// What one render needs besides the scene.
