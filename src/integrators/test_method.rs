@@ -53,7 +53,7 @@ fn light_sample(
     let dist2 = d.length_squared();
     let wi = d / dist2.sqrt();
     let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-    if !(cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0) || !view.unoccluded(x, &y, counts) {
+    if !(cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 && view.unoccluded(x, &y, counts)) {
         return Vec3::ZERO;
     }
     let pdf_solid_angle = (ls.pdf_area * dist2 as f64 / cos_light as f64) as f32;
