@@ -14,7 +14,7 @@
 
 use crate::genetic::plan::{Plan, PlanConfig};
 use crate::genetic::GaConfig;
-use crate::integrators::{prepare, Film, Method, MethodConfig, PrepareError, RenderSettings};
+use crate::integrators::{prepare, Film, Method, PrepareError, RenderSettings, Settings};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
@@ -31,7 +31,7 @@ pub struct CheckConfig {
     pub paths_per_generator: usize,
     /// The methods' settings; `mixture` is rendered when it holds one.
     #[serde(skip)]
-    pub methods: MethodConfig,
+    pub methods: Settings,
 }
 
 impl CheckConfig {
@@ -42,9 +42,7 @@ impl CheckConfig {
             max_bounces,
             seed,
             paths_per_generator: 200,
-            methods: MethodConfig {
-                srt_absorption: GaConfig::default().srt_absorption,
-                mixture: None,
+            methods: Settings {
                 ga: GaConfig {
                     population: 12,
                     generations: 6,
@@ -58,6 +56,7 @@ impl CheckConfig {
                     gate: false,
                     ..PlanConfig::default()
                 },
+                ..Settings::default()
             },
         }
     }
@@ -195,11 +194,11 @@ impl PdfSurvey {
 
 /// The methods `check` renders: every [`Method`] with `config`'s settings (`mixture` only
 /// with a mixture), and `ga-pt` without the spatial guide.
-fn variants(config: &MethodConfig) -> Vec<(String, Method, MethodConfig)> {
+fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     use clap::ValueEnum as _;
     let mut out: Vec<_> = Method::value_variants()
         .iter()
-        .filter(|&&m| m != Method::Mixture || config.mixture.is_some())
+        .filter(|&&m| m != Method::Mixture || config.loaded_mixture.is_some())
         .map(|&m| {
             let name = m.to_possible_value().map(|v| v.get_name().to_string());
             (name.unwrap_or_default(), m, config.clone())
@@ -278,7 +277,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
     let srt = mixture_file::srt(
         view.scene,
         config.max_bounces,
-        config.methods.srt_absorption,
+        config.methods.srt.srt_absorption,
     );
     let mut survey = PdfSurvey::default();
     let camera = &view.scene.camera;

@@ -3,7 +3,7 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use cli::{bench, check, compare, reference, render, sweep};
 
 #[derive(Parser)]
@@ -39,13 +39,17 @@ enum Command {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    // The matches tell which settings were given on the command line (the rest come from
+    // --config or the defaults).
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let sub = matches.subcommand().map_or(&matches, |(_, m)| m);
     let result = match cli.command {
-        Command::Render(args) => render::run_render(args),
+        Command::Render(args) => render::run_render(args, sub),
         Command::Compare(args) => compare::run_compare(args),
-        Command::Reference(args) => reference::run_reference(args),
-        Command::Sweep(args) => sweep::run_sweep(args),
-        Command::Bench(args) => bench::run_bench(args),
+        Command::Reference(args) => reference::run_reference(args, sub),
+        Command::Sweep(args) => sweep::run_sweep(args, sub),
+        Command::Bench(args) => bench::run_bench(args, sub),
         Command::Check(args) => check::run_check(args),
     };
     if let Err(error) = result {
@@ -57,7 +61,6 @@ fn main() {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
 
     /// Clap's own consistency checks (duplicate names, defaults that fail their parsers).
     #[test]

@@ -616,7 +616,8 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
         assert!(stats["times_s"][phase].as_f64().unwrap() >= 0.0, "{phase}");
     }
     assert_eq!(ga["config"]["population"], 12);
-    assert_eq!(ga["plan"]["grid"], 16);
+    // Renamed with the settings' one names (was `grid`).
+    assert_eq!(ga["plan"]["ga_grid"], 16);
 }
 
 /// `genpath reference`: an EXR, two halves with different seeds, and a noise estimate that
@@ -749,13 +750,10 @@ fn sweep_writes_csv_and_plot() {
 
     for (extra, needle) in [
         (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
-        (vec!["--methods", "ga:q=3"], "unknown key `q`"),
-        (
-            vec!["--methods", "pt:m=3"],
-            "only ga, ga-pt and pg take settings",
-        ),
+        (vec!["--methods", "ga:q=3"], "unknown setting `q`"),
+        (vec!["--methods", "ga:m=many"], "ga.test_paths=many"),
+        (vec!["--methods", "ga-pt:gate=maybe"], "plan.gate=maybe"),
         (vec!["--methods", "ga:pop=0"], "population"),
-        (vec!["--methods", "pg:m=3"], "pg takes only sp"),
         (vec!["--methods", "pg:sp=0"], "spatial guide passes"),
         (vec!["--budgets", "0"], "--budgets"),
         (vec!["--budgets", "1.5"], "--budgets"),
@@ -1143,4 +1141,114 @@ fn a_test_only_method_runs_in_every_command() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(p("bench.json")).unwrap()).unwrap();
     assert_eq!(json["scaling"]["method"], "nee-only");
+}
+
+/// A setting's one name is refused where no table has it: in `--config`, in `--set` and in a
+/// sweep's method key; nothing is written.
+#[test]
+fn unknown_settings_are_refused_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("settings.toml");
+    std::fs::write(&config, "[ga]\ntest_pathz = 10\n").unwrap();
+    let out = dir.path().join("out.exr");
+    let config = config.to_str().unwrap();
+    assert_fails(
+        &fig5(),
+        &["--config", config],
+        &out,
+        &["settings.toml", "test_pathz"],
+    );
+    assert_fails(
+        &fig5(),
+        &["--set", "test_pathz=10"],
+        &out,
+        &["unknown setting `test_pathz`"],
+    );
+    assert_fails(
+        &fig5(),
+        &["--set", "plan.test_paths=10"],
+        &out,
+        &["plan.test_paths"],
+    );
+    assert_fails(&fig5(), &["--set", "test_paths"], &out, &["not key=value"]);
+    let reference = dir.path().join("ref.exr");
+    let small = ["--width", "8", "--height", "6", "--quiet"];
+    let reference = reference.to_str().unwrap();
+    let made = genpath(
+        &[
+            &[
+                "reference",
+                fig5().to_str().unwrap(),
+                "--spp",
+                "2",
+                "-o",
+                reference,
+            ][..],
+            &small,
+        ]
+        .concat(),
+    );
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let prefix = dir.path().join("s");
+    let sweep = genpath(
+        &[
+            &["sweep", fig5().to_str().unwrap(), "--ref", reference][..],
+            &[
+                "--methods",
+                "ga:test_pathz=10",
+                "-o",
+                prefix.to_str().unwrap(),
+            ],
+            &small,
+        ]
+        .concat(),
+    );
+    let stderr = String::from_utf8_lossy(&sweep.stderr);
+    assert!(
+        !sweep.status.success() && stderr.contains("unknown setting `test_pathz`"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("s.csv").exists());
+}
+
+/// Settings apply in order: defaults, `--config`, the flags given, `--set`; the JSON records
+/// each by its one name.
+#[test]
+fn settings_apply_config_then_flags_then_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("settings.toml");
+    std::fs::write(
+        &config,
+        "[ga]\ntest_paths = 300\npopulation = 5\ngenerations = 2\n[plan]\nga_grid = 8\ngate = false\n",
+    )
+    .unwrap();
+    let out = dir.path().join("ga.exr");
+    render_small_fig5(
+        &out,
+        &[
+            "--method",
+            "ga",
+            "--config",
+            config.to_str().unwrap(),
+            "--population",
+            "4",
+            "--set",
+            "generations=3",
+            "--set",
+            "ga.population=6",
+        ],
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("ga.exr.json")).unwrap())
+            .unwrap();
+    let (ga, plan) = (&json["ga"]["config"], &json["ga"]["plan"]);
+    assert_eq!(ga["test_paths"], 300, "from --config");
+    assert_eq!(ga["generations"], 3, "--set after --config");
+    assert_eq!(ga["population"], 6, "--set after the flag");
+    assert_eq!(plan["ga_grid"], 8);
+    assert_eq!(plan["gate"], false);
 }

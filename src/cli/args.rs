@@ -1,11 +1,13 @@
 //! The arguments every command that renders shares: the scene, the method and its settings.
 
-use anyhow::{bail, Result};
-use clap::Args;
+use anyhow::{bail, Context, Result};
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args};
 use genpath::accel::AccelKind;
 use genpath::genetic::plan::PlanConfig;
 use genpath::genetic::GaConfig;
-use genpath::integrators::{Method, MethodConfig};
+use genpath::integrators::settings::SrtConfig;
+use genpath::integrators::{Method, Settings};
 use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
@@ -49,22 +51,39 @@ pub struct MethodArgs {
     pub settings: SettingsArgs,
 }
 
-/// What the methods other than `pt` are made of.
+/// What the methods other than `pt` are made of: every setting of
+/// [`genpath::integrators::Settings`], each a flag named after its one name (the key with
+/// dashes). Flags are read by their ids from the command line's matches
+/// ([`SettingsArgs::settings`]), so the fields themselves are never read.
 #[derive(Args)]
+#[allow(dead_code)]
 pub struct SettingsArgs {
-    /// Mixture of path generators for `--method mixture` (TOML or JSON; see the README).
-    #[arg(long, value_name = "FILE")]
+    /// Settings from a TOML file, one table per concern (`[ga] test_paths = 4000`; see
+    /// docs/settings.md); flags and --set override it.
+    #[arg(long, value_name = "FILE", help_heading = "Settings")]
+    pub config: Option<PathBuf>,
+    /// A setting by its name, `KEY=VALUE` (`test_paths=4000` or `ga.test_paths=4000`),
+    /// after --config and the flags; repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE", help_heading = "Settings")]
+    pub set: Vec<String>,
+    /// Mixture of path generators for `--method mixture` (TOML or JSON; see docs/scenes.md).
+    #[arg(long, value_name = "FILE", help_heading = "Mixture (--method mixture)")]
     pub generators: Option<PathBuf>,
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
-    #[arg(long, default_value_t = 0.5, value_parser = parse_absorption)]
+    #[arg(long, default_value_t = SrtConfig::default().srt_absorption, value_parser = parse_absorption, help_heading = "srt (--method srt, and the defensive generator of ga)")]
     pub srt_absorption: f64,
     #[command(flatten)]
     pub ga: GaArgs,
+    #[command(flatten)]
+    pub plan: PlanArgs,
+    #[command(flatten)]
+    pub spatial: SpatialArgs,
 }
 
-/// Settings of `--method ga` (paper §4–5, design §6–7); defaults from `GaConfig::default()`.
+/// Settings of the genetic algorithm (paper §4–5, design §6–7), table `[ga]`.
 #[derive(Args)]
-#[command(next_help_heading = "Genetic algorithm (--method ga)")]
+#[command(next_help_heading = "Genetic algorithm (--method ga, ga-pt)")]
+#[allow(dead_code)]
 pub struct GaArgs {
     /// Individuals per generation (the paper: 150).
     #[arg(long, default_value_t = GaConfig::default().population as u32, value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -118,6 +137,13 @@ pub struct GaArgs {
     /// Stop sampling a pixel's test paths once this many carry light.
     #[arg(long, value_name = "L", default_value_t = GaConfig::default().max_light_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     pub max_light_paths: u32,
+}
+
+/// Where the GA runs and whether its result is used, tables `[plan]`.
+#[derive(Args)]
+#[command(next_help_heading = "GA plan and gate (--method ga, ga-pt)")]
+#[allow(dead_code)]
+pub struct PlanArgs {
     /// Distance between GA pixels on the grid, in pixels.
     #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     pub ga_grid: u32,
@@ -130,19 +156,18 @@ pub struct GaArgs {
     /// Nearest GA pixels whose mixtures each pixel combines.
     #[arg(long, default_value_t = PlanConfig::default().neighbours)]
     pub ga_neighbours: usize,
-    /// Run the GA everywhere and with every step: no cells left out for low baseline
-    /// variance, no generator steps cut at the depth the test paths need (ga-pt: still at
-    /// most --guide-steps).
-    #[arg(long)]
-    pub no_prune: bool,
     /// Grid cells whose pooled baseline relative variance (of one srt sample, Var/(mean² +
     /// 0.01)) is below this get no GA pixel.
     #[arg(long, default_value_t = PlanConfig::default().prune_variance)]
     pub prune_variance: f64,
-    /// The paper's method everywhere: no pilot, and every pixel renders with its evolved
-    /// mixture even where pt is predicted to do better (see the README's "gate").
+    /// Leave out of the GA the grid cells of low baseline variance and the generator steps
+    /// past the depth the test paths need; `false` runs it everywhere with every step
+    /// (ga-pt: still at most --guide-steps).
+    #[arg(long, default_value_t = PlanConfig::default().prune, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub prune: bool,
+    /// Alias of `--prune false` (the first line of work's spelling).
     #[arg(long)]
-    pub no_gate: bool,
+    pub no_prune: bool,
     /// Evolve half the GA pixels (a checkerboard of grid cells) first and the others from
     /// their evolved neighbours' best individuals, with half the generations.
     #[arg(long, default_value_t = PlanConfig::default().warm_start, action = clap::ArgAction::Set, value_name = "BOOL")]
@@ -155,6 +180,21 @@ pub struct GaArgs {
     /// at most as many as the test paths need); path tracing's own sampling beyond.
     #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub guide_steps: u32,
+    /// A pilot of the GA predicts whether it pays, and each pixel renders with its evolved
+    /// mixture only where it is predicted to beat pt (see docs/methods.md, "the gate");
+    /// `false` is the paper's method everywhere.
+    #[arg(long, default_value_t = PlanConfig::default().gate, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub gate: bool,
+    /// Alias of `--gate false` (the first line of work's spelling).
+    #[arg(long)]
+    pub no_gate: bool,
+}
+
+/// The spatial guide, in table `[plan]`.
+#[derive(Args)]
+#[command(next_help_heading = "Spatial guide (--method pg, ga-pt)")]
+#[allow(dead_code)]
+pub struct SpatialArgs {
     /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
     /// path-traced training passes (see --spatial-passes), as --method pg does everywhere
     /// (beyond the paper). `false`: path tracing's own sampling there.
@@ -165,50 +205,6 @@ pub struct GaArgs {
     /// the image. Default: as many as fit in half of --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=12))]
     pub spatial_passes: Option<u32>,
-}
-
-impl GaArgs {
-    pub fn configs(&self, srt_absorption: f64) -> Result<(GaConfig, PlanConfig)> {
-        let ga = GaConfig {
-            population: self.population as usize,
-            generations: self.generations as usize,
-            generators: self.ga_generators as usize,
-            test_paths: self.test_paths as usize,
-            elitism: self.elitism,
-            p_cross: self.p_cross,
-            p_sampler_mutate: self.p_mutate,
-            p_switch: self.p_switch,
-            p_weight: self.p_weight,
-            p_absorb: self.p_absorb,
-            defensive_weight: self.defensive_weight,
-            srt_absorption,
-            anchor_shift: self.anchor_shift,
-            max_steps: None,
-            convex_weights: self.convex_weights,
-            max_light_paths: self.max_light_paths as usize,
-            data_anchors: self.data_anchors,
-            patches: self.patches,
-            directions_only: false,
-        };
-        let plan = PlanConfig {
-            grid: self.ga_grid,
-            extra: self.ga_extra,
-            baseline_spp: self.baseline_spp,
-            neighbours: self.ga_neighbours,
-            prune: !self.no_prune,
-            prune_variance: self.prune_variance,
-            gate: !self.no_gate,
-            warm_start: self.warm_start,
-            time_limit: self.ga_time_limit,
-            guide_steps: self.guide_steps as usize,
-            spatial: self.spatial_guide,
-            spatial_passes: self.spatial_passes,
-            spatial_time_limit: None,
-        };
-        ga.validate()?;
-        plan.validate()?;
-        Ok((ga, plan))
-    }
 }
 
 pub fn parse_probability(text: &str) -> Result<f64, String> {
@@ -230,36 +226,65 @@ pub fn parse_absorption(text: &str) -> Result<f64, String> {
 }
 
 impl SettingsArgs {
-    /// `method`'s configuration; loads the mixture file when one is given.
-    pub fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
-        let mixture = match &self.generators {
-            Some(file) => Some(mixture_file::load(
-                file,
-                scene,
-                max_bounces,
-                self.srt_absorption,
-            )?),
-            None => None,
+    /// The settings: the defaults, then `--config FILE`, then the flags given on the
+    /// command line (`matches`: this command's), then each `--set`, in order.
+    pub fn settings(&self, matches: &ArgMatches) -> Result<Settings> {
+        let mut settings = match &self.config {
+            Some(file) => {
+                let text = std::fs::read_to_string(file)
+                    .with_context(|| format!("cannot read {}", file.display()))?;
+                Settings::from_toml(&text, &file.display().to_string())?
+            }
+            None => Settings::default(),
         };
-        let (ga, plan) = self.ga.configs(self.srt_absorption)?;
-        Ok(MethodConfig {
-            srt_absorption: self.srt_absorption,
-            mixture,
-            ga,
-            plan,
-        })
+        let ids = SettingsArgs::augment_args(clap::Command::new("settings"));
+        for arg in ids.get_arguments() {
+            let id = arg.get_id().as_str();
+            if matches.value_source(id) != Some(ValueSource::CommandLine) {
+                continue;
+            }
+            match id {
+                "config" | "set" => {}
+                "no_gate" => settings.plan.gate = false,
+                "no_prune" => settings.plan.prune = false,
+                "generators" => settings.mixture.generators = self.generators.clone(),
+                _ => {
+                    let raw = matches.get_raw(id).and_then(|mut v| v.next());
+                    let value = raw.and_then(|v| v.to_str()).unwrap_or_default();
+                    settings.set(id, value)?;
+                }
+            }
+        }
+        for assignment in &self.set {
+            settings
+                .assign(assignment)
+                .with_context(|| format!("--set {assignment}"))?;
+        }
+        Ok(settings)
     }
 }
 
 impl MethodArgs {
-    /// The method's configuration; `--generators` goes with `--method mixture` only.
-    pub fn config(&self, scene: &Scene, max_bounces: u32) -> Result<MethodConfig> {
-        match (&self.settings.generators, self.method) {
+    /// The settings of the method ([`SettingsArgs::settings`]), checked before anything
+    /// loads; `generators` goes with `--method mixture` only ([`load_mixture`] loads it).
+    pub fn settings(&self, matches: &ArgMatches) -> Result<Settings> {
+        let settings = self.settings.settings(matches)?;
+        match (&settings.mixture.generators, self.method) {
             (Some(_), m) if m != Method::Mixture => {
                 bail!("--generators is only used with --method mixture")
             }
             (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
-            _ => self.settings.config(scene, max_bounces),
+            _ => {}
         }
+        Ok(settings)
     }
+}
+
+/// Loads `settings.mixture.generators`, if set, for `scene`.
+pub fn load_mixture(settings: &mut Settings, scene: &Scene, max_bounces: u32) -> Result<()> {
+    if let Some(file) = &settings.mixture.generators {
+        let absorption = settings.srt.srt_absorption;
+        settings.loaded_mixture = Some(mixture_file::load(file, scene, max_bounces, absorption)?);
+    }
+    Ok(())
 }

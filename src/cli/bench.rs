@@ -1,12 +1,12 @@
 //! `genpath bench`: ray throughput per back-end, test paths and fitness per second, thread scaling.
 
-use super::args::MethodArgs;
+use super::args::{load_mixture, MethodArgs};
 use super::check_dir;
 use anyhow::{Context, Result};
-use clap::Args;
+use clap::{ArgMatches, Args};
 use genpath::accel::{self, AccelKind, Coherence};
 use genpath::genetic::GaConfig;
-use genpath::integrators::{prepare, RenderSettings};
+use genpath::integrators::{prepare, RenderSettings, Settings};
 use genpath::path::mixture_file;
 use genpath::path::SceneView;
 use genpath::report::bench::{
@@ -41,22 +41,20 @@ pub struct BenchArgs {
     pub json: Option<PathBuf>,
 }
 
-pub fn run_bench(args: BenchArgs) -> Result<()> {
+pub fn run_bench(args: BenchArgs, matches: &ArgMatches) -> Result<()> {
     if let Some(json) = &args.json {
         check_dir(json)?;
     }
-    // Flag ranges first, before any loading.
-    args.method
-        .settings
-        .ga
-        .configs(args.method.settings.srt_absorption)?;
+    // Settings first, before any loading.
+    let mut config = args.method.settings(matches)?;
     let scene = Scene::load(&args.scene)?;
     let passes = args.passes as usize;
     let rays = ray_throughput(&scene, args.rays, passes)?;
     let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;
     let view = SceneView::new(&scene, accel.as_ref());
     let ga = ga_throughput(&view, passes);
-    let scaling = thread_scaling(&view, &args)?;
+    load_mixture(&mut config, &scene, scene.render.max_bounces)?;
+    let scaling = thread_scaling(&view, &args, &config)?;
     if let Some(json) = &args.json {
         let value = serde_json::json!({
             "genpath_version": env!("CARGO_PKG_VERSION"),
@@ -192,7 +190,11 @@ fn ga_throughput(view: &SceneView, passes: usize) -> serde_json::Value {
 
 /// Render time of `args.method` against the number of threads (prepared once, on every
 /// core, untimed); printed, and as JSON.
-fn thread_scaling(view: &SceneView, args: &BenchArgs) -> Result<serde_json::Value> {
+fn thread_scaling(
+    view: &SceneView,
+    args: &BenchArgs,
+    config: &Settings,
+) -> Result<serde_json::Value> {
     let scene = view.scene;
     let passes = args.passes as usize;
     let cores = cores();
@@ -211,8 +213,7 @@ fn thread_scaling(view: &SceneView, args: &BenchArgs) -> Result<serde_json::Valu
         seed: 1,
         progress: false,
     };
-    let config = args.method.config(scene, settings.max_bounces)?;
-    let integrator = prepare(view, &config, &settings)?;
+    let integrator = prepare(view, config, &settings)?;
     println!(
         "\n{:>7} {:>9} {:>8} {:>10}",
         "threads", "seconds", "speedup", "efficiency"

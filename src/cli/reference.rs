@@ -1,10 +1,10 @@
 //! `genpath reference`: a long render in two independent halves, with its own noise estimate.
 
-use super::args::{MethodArgs, SceneArgs};
+use super::args::{load_mixture, MethodArgs, SceneArgs};
 use super::check_output;
 use super::session::{rays_json, write_stats, Session};
 use anyhow::{bail, Result};
-use clap::Args;
+use clap::{ArgMatches, Args};
 use genpath::integrators::{prepare, RenderSettings};
 use genpath::path::SceneView;
 use std::path::PathBuf;
@@ -27,7 +27,7 @@ pub struct ReferenceArgs {
 
 /// Two independent halves, averaged; their relMSE against each other is about four times
 /// the average's own relMSE (each half has twice its variance, and both count).
-pub fn run_reference(args: ReferenceArgs) -> Result<()> {
+pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     let is_exr = args
         .output
         .extension()
@@ -39,15 +39,12 @@ pub fn run_reference(args: ReferenceArgs) -> Result<()> {
         );
     }
     check_output(&args.output)?;
-    // Flag ranges first, before any loading.
-    args.method
-        .settings
-        .ga
-        .configs(args.method.settings.srt_absorption)?;
+    // Settings first, before any loading.
+    let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let method = args.method.method;
     let max_bounces = session.settings(&args.scene, method, 1).max_bounces;
-    let config = args.method.config(&session.scene, max_bounces)?;
+    load_mixture(&mut config, &session.scene, max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let half = |seed: u64| -> Result<_> {
         let settings = RenderSettings {

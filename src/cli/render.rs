@@ -1,10 +1,10 @@
 //! `genpath render`: one image with any method, and its statistics as JSON.
 
-use super::args::{MethodArgs, SceneArgs};
+use super::args::{load_mixture, MethodArgs, SceneArgs};
 use super::check_output;
 use super::session::{rays_json, write_stats, Session};
 use anyhow::{bail, Result};
-use clap::Args;
+use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::genetic::GaConfig;
 use genpath::integrators::{prepare, Method};
@@ -30,7 +30,7 @@ pub struct RenderArgs {
     pub method: MethodArgs,
 }
 
-pub fn run_render(args: RenderArgs) -> Result<()> {
+pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     for output in &args.outputs {
         check_output(output)?;
     }
@@ -40,14 +40,11 @@ pub fn run_render(args: RenderArgs) -> Result<()> {
         }
         check_output(explain)?;
     }
-    // Flag ranges first, before any loading.
-    args.method
-        .settings
-        .ga
-        .configs(args.method.settings.srt_absorption)?;
+    // Settings first, before any loading.
+    let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let settings = session.settings(&args.scene, args.method.method, args.spp);
-    let config = args.method.config(&session.scene, settings.max_bounces)?;
+    load_mixture(&mut config, &session.scene, settings.max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let prepared = session
         .pool

@@ -1,10 +1,10 @@
 //! `genpath sweep`: error against samples or time for several methods.
 
-use super::args::{SceneArgs, SettingsArgs};
+use super::args::{load_mixture, SceneArgs, SettingsArgs};
 use super::check_dir;
 use super::session::Session;
 use anyhow::{bail, Result};
-use clap::Args;
+use clap::{ArgMatches, Args};
 use genpath::integrators::Method;
 use genpath::path::SceneView;
 use std::path::PathBuf;
@@ -38,7 +38,7 @@ pub struct SweepArgs {
     pub settings: SettingsArgs,
 }
 
-pub fn run_sweep(args: SweepArgs) -> Result<()> {
+pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
     use genpath::report::{self, Budgets, MethodSpec, Sweep};
     let with_ext = |ext: &str| {
         let mut p = args.output.clone().into_os_string();
@@ -70,17 +70,17 @@ pub fn run_sweep(args: SweepArgs) -> Result<()> {
             .collect::<Result<Vec<_>>>()?;
         Budgets::Spp(spp)
     };
-    args.settings.ga.configs(args.settings.srt_absorption)?;
+    let mut base = args.settings.settings(matches)?;
     let reference = genpath::image::read_exr(&args.reference)?;
     let session = Session::open(&args.scene)?;
     let settings = session.settings(&args.scene, Method::Pt, 1);
-    let base = args.settings.config(&session.scene, settings.max_bounces)?;
+    load_mixture(&mut base, &session.scene, settings.max_bounces)?;
     let methods = args
         .methods
         .iter()
         .map(|m| MethodSpec::parse(m.trim(), &base).map_err(|e| anyhow::anyhow!("--methods: {e}")))
         .collect::<Result<Vec<_>>>()?;
-    if methods.iter().any(|m| m.method == Method::Mixture) && base.mixture.is_none() {
+    if methods.iter().any(|m| m.method == Method::Mixture) && base.loaded_mixture.is_none() {
         bail!("--methods mixture needs --generators FILE");
     }
     let scene_name = args

@@ -31,6 +31,7 @@ pub struct GaConfig {
     /// Generations, the random first one included (the paper used 200).
     pub generations: usize,
     /// Evolved generators per individual (`S`), besides the defensive `srt` component.
+    #[serde(rename = "ga_generators")]
     pub generators: usize,
     /// Test paths per pixel (`M` of eq. 10), zero-contribution paths included.
     pub test_paths: usize,
@@ -39,6 +40,7 @@ pub struct GaConfig {
     /// Probability that two parents exchange their first `R ≥ 1` generators.
     pub p_cross: f64,
     /// Probability, per sampler (directional or light point), of a mutation.
+    #[serde(rename = "p_mutate")]
     pub p_sampler_mutate: f64,
     /// Probability, per individual, that two generators switch positions.
     pub p_switch: f64,
@@ -49,11 +51,13 @@ pub struct GaConfig {
     /// Smallest weight of the defensive `srt` component (at least `mixture_file::W_MIN`).
     pub defensive_weight: f64,
     /// Absorption of the defensive `srt` generator (Russian roulette at every vertex).
+    #[serde(skip)]
     pub srt_absorption: f64,
     /// Standard deviation of an anchor shift along its triangle, relative to the scene size.
     pub anchor_shift: f64,
     /// Steps per evolved generator; `None`: one per vertex that can scatter before
     /// `max_bounces`. The pixel plan sets it to the depth the test paths need (pruning).
+    #[serde(skip)]
     pub max_steps: Option<usize>,
     /// After evolution, replace the best individual's weights by the ones that minimise
     /// eq. 10 for its generators ([`fitness::optimise_weights`], beyond the paper).
@@ -73,6 +77,7 @@ pub struct GaConfig {
     /// Evolve directional samplers only: every generator keeps `srt`'s absorption and light
     /// sampler, so that `V` measures exactly what a guide for path tracing takes from the
     /// mixture (`ga-pt` sets it).
+    #[serde(skip)]
     pub directions_only: bool,
 }
 

@@ -118,12 +118,15 @@ pub const CONVEX_ITERATIONS: usize = 200;
 #[serde(default, deny_unknown_fields)]
 pub struct PlanConfig {
     /// Distance between grid GA pixels, in pixels, along both axes.
+    #[serde(rename = "ga_grid")]
     pub grid: u32,
     /// Extra GA pixels at high baseline variance, as a fraction of the grid pixels.
+    #[serde(rename = "ga_extra")]
     pub extra: f64,
     /// `srt` samples per pixel of the baseline pass.
     pub baseline_spp: u32,
     /// GA pixels whose mixtures each pixel combines.
+    #[serde(rename = "ga_neighbours")]
     pub neighbours: usize,
     /// Leave out what the scene does not need: cells whose baseline relative variance is
     /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
@@ -141,6 +144,7 @@ pub struct PlanConfig {
     /// yet evolved are left out (to `pt` with the gate and the mixture target, to their
     /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on
     /// timing, not only on the seed. `None`: no limit.
+    #[serde(rename = "ga_time_limit")]
     pub time_limit: Option<f64>,
     /// `ga-pt`: vertices the guide steers, i.e. the directional steps the GA evolves (at
     /// most what the test paths need). Path tracing's next-event estimation already finds
@@ -155,6 +159,7 @@ pub struct PlanConfig {
     /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy
     /// 0.33 / 0.33 / 0.43 against 1.04 / 1.03 / 1.02 and cbox 0.92 / 0.92 / 0.82 against
     /// 1.01 / 1.01 / 0.99.
+    #[serde(rename = "spatial_guide")]
     pub spatial: bool,
     /// `pg`, and `ga-pt` with `spatial`: passes of path tracing that train the spatial
     /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
@@ -162,6 +167,7 @@ pub struct PlanConfig {
     /// per pixel.
     pub spatial_passes: Option<u32>,
     /// Seconds the spatial guide's training may take (see `spatial_passes`).
+    #[serde(skip)]
     pub spatial_time_limit: Option<f64>,
 }
 

@@ -20,7 +20,7 @@ pub struct Ga {
 pub fn build_plan(context: &Context, target: Target) -> Result<Plan, PrepareError> {
     let (config, settings) = (context.config, context.settings);
     let ga = GaConfig {
-        srt_absorption: config.srt_absorption,
+        srt_absorption: config.srt.srt_absorption,
         ..config.ga.clone()
     };
     Ok(Plan::build(

@@ -19,7 +19,7 @@ pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareErro
     let mixture = mixture_file::srt(
         context.view.scene,
         max_bounces,
-        context.config.srt_absorption,
+        context.config.srt.srt_absorption,
     );
     Ok(Box::new(MixtureIntegrator {
         mixture,
@@ -31,7 +31,7 @@ pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareErro
 pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let mixture = context
         .config
-        .mixture
+        .loaded_mixture
         .clone()
         .ok_or(PrepareError::NoMixture)?;
     Ok(Box::new(MixtureIntegrator {

@@ -17,18 +17,20 @@ pub mod ga_pt;
 pub mod mixture;
 pub mod pg;
 pub mod pt;
+pub mod settings;
 #[cfg(feature = "test-method")]
 pub mod test_method;
 pub mod tiles;
 
 use crate::accel::Ray;
-use crate::genetic::plan::{Plan, PlanConfig};
-use crate::genetic::{GaConfig, GaConfigError};
+use crate::genetic::plan::Plan;
+use crate::genetic::GaConfigError;
 use crate::path::mixture::Mixture;
 use crate::path::spatial::SpatialGuide;
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
+pub use settings::Settings;
 pub use tiles::{Film, PixelSums};
 
 /// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
@@ -45,7 +47,7 @@ macro_rules! methods {
         /// Prepares `settings.method`: builds and trains what it renders with.
         pub fn prepare(
             view: &SceneView,
-            config: &MethodConfig,
+            config: &Settings,
             settings: &RenderSettings,
         ) -> Result<Box<dyn Integrator>, PrepareError> {
             let context = Context { view, config, settings };
@@ -94,22 +96,13 @@ pub struct RenderSettings {
     pub progress: bool,
 }
 
-/// Everything a method needs besides the render settings.
-#[derive(Clone, Debug)]
-pub struct MethodConfig {
-    /// Absorption of the `srt` generator (`srt`, and the defensive component of `ga`).
-    pub srt_absorption: f64,
-    /// The mixture of `--method mixture`, already loaded.
-    pub mixture: Option<Mixture>,
-    pub ga: GaConfig,
-    pub plan: PlanConfig,
-}
-
 /// Why a method cannot be prepared.
 #[derive(Debug, thiserror::Error)]
 pub enum PrepareError {
     #[error(transparent)]
     Ga(#[from] GaConfigError),
+    #[error(transparent)]
+    Settings(#[from] settings::SettingsError),
     #[error("--method mixture needs --generators FILE")]
     NoMixture,
     #[error(
@@ -122,7 +115,7 @@ pub enum PrepareError {
 /// What a method's `prepare` is given.
 pub struct Context<'a> {
     pub view: &'a SceneView<'a>,
-    pub config: &'a MethodConfig,
+    pub config: &'a Settings,
     pub settings: &'a RenderSettings,
 }
 

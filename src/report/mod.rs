@@ -8,10 +8,8 @@
 pub mod bench;
 pub mod plot;
 
-use crate::genetic::plan::PlanConfig;
-use crate::genetic::GaConfig;
 use crate::image::{metrics, Image};
-use crate::integrators::{prepare, Integrator, Method, MethodConfig, PrepareError, RenderSettings};
+use crate::integrators::{prepare, Integrator, Method, PrepareError, RenderSettings, Settings};
 use crate::path::SceneView;
 use crate::progress::progress_bar;
 use std::fmt::Write as _;
@@ -22,69 +20,53 @@ use std::time::Instant;
 pub struct MethodSpec {
     pub label: String,
     pub method: Method,
-    pub config: MethodConfig,
+    pub config: Settings,
 }
 
-/// Keys of `ga:key=value:…` specs.
-pub const GA_KEYS: &str = "m (test paths), l (max light-carrying test paths), pop (population), \
-    gen (generations), s (generators), grid, extra, e (elitism), neighbours, cw (convex weights: 0 or 1), \
-    gate (0 or 1), warm (warm start: 0 or 1), da (data anchors, share in [0, 1]), \
-    pa (patches, share in [0, 1]), gs (ga-pt: guide steps), spatial (ga-pt: spatial guide past the GA's vertices: 0 or 1), sp (its training passes, and pg's)";
+/// The sweep's short keys of the first line of work, kept as aliases of the settings they
+/// name: `(alias, setting)`.
+pub const KEY_ALIASES: [(&str, &str); 17] = [
+    ("m", "test_paths"),
+    ("l", "max_light_paths"),
+    ("pop", "population"),
+    ("gen", "generations"),
+    ("s", "ga_generators"),
+    ("e", "elitism"),
+    ("grid", "ga_grid"),
+    ("extra", "ga_extra"),
+    ("neighbours", "ga_neighbours"),
+    ("cw", "convex_weights"),
+    ("gate", "gate"),
+    ("warm", "warm_start"),
+    ("da", "data_anchors"),
+    ("pa", "patches"),
+    ("gs", "guide_steps"),
+    ("spatial", "spatial_guide"),
+    ("sp", "spatial_passes"),
+];
 
 impl MethodSpec {
-    /// `pt`, `srt`, `mixture`, `ga`, `ga-pt`, or `ga:key=value:…` (`ga-pt:…`) overriding the
-    /// GA settings of
-    /// `base` (keys in [`GA_KEYS`]); e.g. `ga:m=10000:grid=32`.
-    pub fn parse(text: &str, base: &MethodConfig) -> Result<Self, String> {
+    /// A method name, optionally followed by `:key=value` pairs that override `base`'s
+    /// settings: any setting's one name (`ga:test_paths=10000:ga_grid=32`), or an alias of
+    /// [`KEY_ALIASES`] (`ga:m=10000:grid=32`); booleans are `true`/`false` (or 1/0).
+    pub fn parse(text: &str, base: &Settings) -> Result<Self, String> {
         let mut parts = text.split(':');
         let name = parts.next().unwrap_or_default();
         let method = <Method as clap::ValueEnum>::from_str(name, false)
             .map_err(|_| format!("unknown method `{name}` in `{text}`"))?;
         let mut config = base.clone();
         for part in parts {
-            if !matches!(method, Method::Ga | Method::GaPt | Method::Pg) {
-                return Err(format!("`{text}`: only ga, ga-pt and pg take settings"));
-            }
             let Some((key, value)) = part.split_once('=') else {
                 return Err(format!("`{text}`: `{part}` is not key=value"));
             };
-            if method == Method::Pg && key != "sp" {
-                return Err(format!("`{text}`: pg takes only sp (its training passes)"));
-            }
-            let bad = |e: &dyn std::fmt::Display| format!("`{text}`: {key}={value}: {e}");
-            let int = || value.parse::<usize>().map_err(|e| bad(&e));
-            let flag = || match value {
-                "0" => Ok(false),
-                "1" => Ok(true),
-                _ => Err(bad(&"expected 0 or 1")),
-            };
-            let (ga, plan): (&mut GaConfig, &mut PlanConfig) = (&mut config.ga, &mut config.plan);
-            match key {
-                "m" => ga.test_paths = int()?,
-                "l" => ga.max_light_paths = int()?,
-                "pop" => ga.population = int()?,
-                "gen" => ga.generations = int()?,
-                "s" => ga.generators = int()?,
-                "e" => ga.elitism = int()?,
-                "grid" => plan.grid = u32::try_from(int()?).map_err(|e| bad(&e))?,
-                "extra" => plan.extra = value.parse().map_err(|e| bad(&e))?,
-                "neighbours" => plan.neighbours = int()?,
-                "gs" => plan.guide_steps = int()?,
-                "sp" => plan.spatial_passes = Some(u32::try_from(int()?).map_err(|e| bad(&e))?),
-                "spatial" => plan.spatial = flag()?,
-                "cw" => ga.convex_weights = flag()?,
-                "gate" => plan.gate = flag()?,
-                "warm" => plan.warm_start = flag()?,
-                "da" => ga.data_anchors = value.parse().map_err(|e| bad(&e))?,
-                "pa" => ga.patches = value.parse().map_err(|e| bad(&e))?,
-                _ => return Err(format!("`{text}`: unknown key `{key}` (keys: {GA_KEYS})")),
-            }
+            let key = KEY_ALIASES
+                .iter()
+                .find(|(alias, _)| *alias == key)
+                .map_or(key, |(_, setting)| setting);
+            config
+                .set(key, value)
+                .map_err(|e| format!("`{text}`: {e}"))?;
         }
-        config.ga.validate().map_err(|e| format!("`{text}`: {e}"))?;
-        config
-            .plan
-            .validate()
-            .map_err(|e| format!("`{text}`: {e}"))?;
         Ok(Self {
             label: text.to_string(),
             method,
