@@ -4,7 +4,7 @@
 mod cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use cli::{bench, check, compare, reference, render, sweep};
+use cli::{bench, check, compare, reference, render, settings, sweep};
 
 #[derive(Parser)]
 #[command(
@@ -36,6 +36,9 @@ enum Command {
     /// with any method, finite positive sampled densities, finite fitness values, and image
     /// means that agree with pt's. Exits with status 1 when one fails.
     Check(check::CheckArgs),
+    /// Every method setting with its one name, flag, default and meaning (docs/settings.md
+    /// is this output), or with --toml the defaults as a file for --config.
+    Settings(settings::SettingsCommandArgs),
 }
 
 fn main() {
@@ -51,11 +54,48 @@ fn main() {
         Command::Sweep(args) => sweep::run_sweep(args, sub),
         Command::Bench(args) => bench::run_bench(args, sub),
         Command::Check(args) => check::run_check(args),
+        Command::Settings(args) => settings::run_settings(args),
     };
     if let Err(error) = result {
         eprintln!("genpath: error: {error:#}");
         std::process::exit(1);
     }
+}
+
+/// docs/cli.md: every command's `--help`, as clap renders it from this file's and `cli/`'s
+/// definitions.
+#[cfg(all(
+    test,
+    feature = "embree",
+    feature = "obvhs",
+    feature = "oiio",
+    feature = "test-method"
+))]
+fn cli_markdown() -> String {
+    let mut command = Cli::command().term_width(100);
+    let mut out = String::from(
+        "# Command line\n\nGenerated from the code by `GENPATH_WRITE_DOCS=1 cargo test --bin genpath`; \
+         do not edit. Every command that renders takes the scene options (`--max-bounces`, \
+         `--seed`, `--threads`, `--accel`, `--width`, `--height`, `--quiet`); the method \
+         settings are in [settings.md](settings.md). Errors (a malformed scene, a missing \
+         file, a NaN vertex, a scene without emitters, an unwritable output, an impossible \
+         flag) name the file, line and field, exit with status 1, and leave no output: files \
+         are written under a temporary name and renamed.\n",
+    );
+    let help = command.render_long_help().to_string();
+    out.push_str(&format!(
+        "\n## genpath\n\n```text\n{}\n```\n",
+        help.trim_end()
+    ));
+    for sub in command.get_subcommands_mut() {
+        let name = sub.get_name().to_string();
+        let help = sub.render_long_help().to_string();
+        out.push_str(&format!(
+            "\n## genpath {name}\n\n```text\n{}\n```\n",
+            help.trim_end()
+        ));
+    }
+    out
 }
 
 #[cfg(test)]
@@ -66,5 +106,28 @@ mod tests {
     #[test]
     fn command_line_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    /// docs/cli.md is the help the code renders; `GENPATH_WRITE_DOCS=1` rewrites it. The
+    /// help depends on the features (the default back-end, the test-only method): checked
+    /// in the build with all of them.
+    #[cfg(all(
+        feature = "embree",
+        feature = "obvhs",
+        feature = "oiio",
+        feature = "test-method"
+    ))]
+    #[test]
+    fn cli_documentation_is_generated_from_the_code() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/cli.md");
+        let text = cli_markdown();
+        if std::env::var_os("GENPATH_WRITE_DOCS").is_some() {
+            std::fs::write(&path, &text).unwrap();
+        }
+        let docs = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            docs == text,
+            "docs/cli.md is stale: GENPATH_WRITE_DOCS=1 cargo test --release --all-features --bin genpath"
+        );
     }
 }

@@ -1252,3 +1252,31 @@ fn settings_apply_config_then_flags_then_set() {
     assert_eq!(plan["ga_grid"], 8);
     assert_eq!(plan["gate"], false);
 }
+
+/// docs/settings.md is `genpath settings`'s output (regenerate it with
+/// `genpath settings > docs/settings.md`), and `settings --toml`'s defaults read back as a
+/// `--config` file.
+#[test]
+fn settings_documentation_is_generated_from_the_code() {
+    let out = genpath(&["settings"]);
+    assert!(out.status.success());
+    let docs =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/settings.md"))
+            .unwrap();
+    assert!(
+        String::from_utf8_lossy(&out.stdout) == docs,
+        "docs/settings.md is stale: run `genpath settings > docs/settings.md`"
+    );
+    assert!(
+        docs.contains("| `ga.test_paths` | `--test-paths` | `10000` |"),
+        "{docs}"
+    );
+    let toml = genpath(&["settings", "--toml"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("defaults.toml");
+    std::fs::write(&file, &toml.stdout).unwrap();
+    render_small_fig5(
+        &dir.path().join("a.exr"),
+        &["--config", file.to_str().unwrap()],
+    );
+}

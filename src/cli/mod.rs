@@ -7,6 +7,7 @@ pub mod compare;
 pub mod reference;
 pub mod render;
 pub mod session;
+pub mod settings;
 pub mod sweep;
 
 use anyhow::{bail, Result};
