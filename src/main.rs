@@ -69,7 +69,7 @@ fn main() {
     feature = "embree",
     feature = "obvhs",
     feature = "oiio",
-    feature = "test-method"
+    feature = "testing"
 ))]
 fn cli_markdown() -> String {
     let mut command = Cli::command().term_width(100);
@@ -115,7 +115,7 @@ mod tests {
         feature = "embree",
         feature = "obvhs",
         feature = "oiio",
-        feature = "test-method"
+        feature = "testing"
     ))]
     #[test]
     fn cli_documentation_is_generated_from_the_code() {

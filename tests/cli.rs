@@ -874,7 +874,7 @@ fn check_passes_on_fig5() {
         .map(|m| m["method"].as_str().unwrap())
         .collect();
     let mut expected = vec!["pt", "srt", "ga", "ga-pt", "pg"];
-    if cfg!(feature = "test-method") {
+    if cfg!(feature = "testing") {
         expected.push("nee-only");
     }
     expected.push("ga-pt:spatial=0");
@@ -1058,10 +1058,10 @@ fn embree_and_bvh_renders_agree() {
     }
 }
 
-/// The seam: a method added as one file and one line (`nee-only`, feature `test-method`)
+/// The seam: a method added as one file and one line (`nee-only`, feature `testing`)
 /// is run by render, reference, sweep, check (which also compares its image mean with
 /// pt's) and bench, and each names it in its output.
-#[cfg(feature = "test-method")]
+#[cfg(feature = "testing")]
 #[test]
 fn a_test_only_method_runs_in_every_command() {
     let dir = tempfile::tempdir().unwrap();

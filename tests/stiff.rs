@@ -4,6 +4,9 @@
 //! value is finite, and the image means agree with `pt`'s (`genpath check`). The check must
 //! fail on a biased estimator. Unit cases push generator parameters to their bounds.
 
+// The must-reject twins use the fault injections of feature `testing`.
+#![cfg(feature = "testing")]
+
 use genpath::accel::{self, Accel, AccelKind};
 use genpath::check::{check, CheckConfig};
 use genpath::integrators::mixture::MixtureIntegrator;

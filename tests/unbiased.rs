@@ -5,6 +5,9 @@
 //! the same comparison must reject a mixture whose one component's density is off by 10 %,
 //! and a `ga` render whose interpolation weights were left unnormalised.
 
+// The must-reject twins use the fault injections of feature `testing`.
+#![cfg(feature = "testing")]
+
 use genpath::accel::{self, AccelKind};
 use genpath::genetic::plan::{Plan, PlanConfig, Target};
 use genpath::genetic::GaConfig;

@@ -18,7 +18,7 @@ pub mod mixture;
 pub mod pg;
 pub mod pt;
 pub mod settings;
-#[cfg(feature = "test-method")]
+#[cfg(feature = "testing")]
 pub mod test_method;
 pub mod tiles;
 
@@ -78,9 +78,9 @@ methods! {
     /// training passes whose samples stay in the image (`path::spatial`), without the GA:
     /// the baseline that shows what the GA adds.
     Pg => pg::prepare,
-    /// Test-only (feature `test-method`): path tracing with next-event estimation alone (no
+    /// Test-only (feature `testing`): path tracing with next-event estimation alone (no
     /// MIS); shows that a method is one file and one line.
-    #[cfg(feature = "test-method")]
+    #[cfg(feature = "testing")]
     NeeOnly => test_method::prepare,
 }
 

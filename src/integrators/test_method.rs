@@ -1,4 +1,4 @@
-//! `nee-only` (feature `test-method`, for the test suite): path tracing whose light comes
+//! `nee-only` (feature `testing`, for the test suite): path tracing whose light comes
 //! from next-event estimation alone at every non-delta vertex, with no multiple importance
 //! sampling: emission found by a BSDF-sampled direction counts only when no light sample
 //! could have found it (seen from the camera or through a mirror). No Russian roulette.

@@ -39,6 +39,7 @@ impl Mixture {
 
     /// This mixture with component `index`'s density deliberately scaled by `factor` when
     /// evaluated (not when sampled): a wrong input that unbiasedness tests must reject.
+    #[cfg(any(test, feature = "testing"))]
     pub fn with_pdf_error(mut self, index: usize, factor: f64) -> Self {
         self.pdf_error = Some((index, factor));
         self
