@@ -210,11 +210,14 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     out
 }
 
-/// Runs every check on `view`'s scene at its camera's size.
-pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, PrepareError> {
-    let mut failures = Vec::new();
-    let mut films: Vec<(String, Film)> = Vec::new();
-    let mut plans: Vec<Plan> = Vec::new();
+/// Renders every method of [`variants`] as `genpath render` would; the films, labelled, and
+/// the GA plans they rendered with.
+fn render_every_method(
+    view: &SceneView,
+    config: &CheckConfig,
+) -> Result<(Vec<(String, Film)>, Vec<Plan>), PrepareError> {
+    let mut films = Vec::new();
+    let mut plans = Vec::new();
     for (label, method, methods) in variants(&config.methods) {
         let settings = RenderSettings {
             method,
@@ -227,6 +230,12 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
         films.push((label, integrator.render(view, &settings)));
         plans.extend(integrator.plan().cloned());
     }
+    Ok((films, plans))
+}
+
+/// Each film's bad pixels and its image mean against the first film's (`pt`'s), with the
+/// Šidák-corrected critical |z|; failures are added to `failures`.
+fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<MethodCheck>, f64) {
     let comparisons = 3 * (films.len() - 1);
     let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
     let z_critical = Normal::new(0.0, 1.0)
@@ -234,7 +243,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
         .unwrap_or(4.0);
     let (pt_mean, pt_se) = image_mean(&films[0].1);
     let mut methods = Vec::new();
-    for (method, film) in &films {
+    for (method, film) in films {
         let bad_pixels = film
             .image
             .pixels
@@ -272,8 +281,11 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
             seconds: film.elapsed.as_secs_f64(),
         });
     }
+    (methods, z_critical)
+}
 
-    // Densities: srt and every evolved generator, from their GA pixels.
+/// The densities `srt` and every evolved generator sample with, from their GA pixels.
+fn survey_densities(view: &SceneView, config: &CheckConfig, plans: &[Plan]) -> PdfSurvey {
     let srt = mixture_file::srt(
         view.scene,
         config.max_bounces,
@@ -304,14 +316,21 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
             );
         }
     }
+    survey
+}
+
+/// Runs every check on `view`'s scene at its camera's size.
+pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, PrepareError> {
+    let mut failures = Vec::new();
+    let (films, plans) = render_every_method(view, config)?;
+    let (methods, z_critical) = judge_films(&films, &mut failures);
+    let survey = survey_densities(view, config, &plans);
     if survey.bad > 0 {
         failures.push(format!(
             "{} of {} sampled densities are not finite and positive",
             survey.bad, survey.count
         ));
     }
-
-    // Fitness values.
     let values: Vec<f64> = plans
         .iter()
         .flat_map(|plan| &plan.pixels)

@@ -339,6 +339,41 @@ fn build_camera(path: &Path, c: &CameraFile) -> Result<Camera, SceneError> {
     ))
 }
 
+/// The material of MTL entry `m` (of `obj_path`'s libraries).
+fn material(
+    m: &tobj::Material,
+    obj_path: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let kd = Vec3::from(m.diffuse.unwrap_or([0.0; 3]));
+    let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
+    let mirror = m.illumination_model == Some(3);
+    if mirror && kd.max_element() > 0.0 {
+        warnings.push(format!(
+            "{}: material `{}` is a mirror (`illum 3`): its `Kd` is ignored",
+            obj_path.display(),
+            m.name
+        ));
+    }
+    if !mirror && (kd + ks).max_element() > 1.0 {
+        return Err(SceneError::Mesh {
+            path: obj_path.to_path_buf(),
+            message: format!(
+                "material `{}`: `Kd + Ks` exceeds 1 in some channel, so it would create energy",
+                m.name
+            ),
+        });
+    }
+    Ok(Material {
+        name: m.name.clone(),
+        kd: if mirror { Vec3::ZERO } else { kd },
+        ks,
+        ns: m.shininess.unwrap_or(1.0),
+        mirror,
+        ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+    })
+}
+
 type LoadedMesh = (TriangleMesh, Vec<Material>, Vec<u32>);
 
 fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, SceneError> {
@@ -380,32 +415,7 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
     };
     let materials: Vec<Material> = tobj_materials
         .iter()
-        .map(|m| {
-            let kd = Vec3::from(m.diffuse.unwrap_or([0.0; 3]));
-            let ks = Vec3::from(m.specular.unwrap_or([0.0; 3]));
-            let mirror = m.illumination_model == Some(3);
-            if mirror && kd.max_element() > 0.0 {
-                warnings.push(format!(
-                    "{}: material `{}` is a mirror (`illum 3`): its `Kd` is ignored",
-                    obj_path.display(),
-                    m.name
-                ));
-            }
-            if !mirror && (kd + ks).max_element() > 1.0 {
-                return Err(mesh_error(format!(
-                    "material `{}`: `Kd + Ks` exceeds 1 in some channel, so it would create energy",
-                    m.name
-                )));
-            }
-            Ok(Material {
-                name: m.name.clone(),
-                kd: if mirror { Vec3::ZERO } else { kd },
-                ks,
-                ns: m.shininess.unwrap_or(1.0),
-                mirror,
-                ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
-            })
-        })
+        .map(|m| material(m, obj_path, warnings))
         .collect::<Result<_, SceneError>>()?;
 
     let mut positions = Vec::new();
