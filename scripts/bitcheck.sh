@@ -8,7 +8,10 @@
 # target directory of their own there (kept between runs, so a second run only rebuilds
 # genpath itself). Without NEW the working tree is built as it is, uncommitted changes
 # included. SCENES, SPP (16), SEED (7) and FEATURES (the default features) may be set in
-# the environment, and BASE_BIN, a binary already built from BASE, saves building it. Writes the images to target/bitcheck/out/{base,new}/ and prints one line
+# the environment, and BASE_BIN, a binary already built from BASE, saves building it.
+# With TIMES=N (N odd, e.g. 5) each render is also timed N times per build, the two builds
+# alternating, and the median wall-clock seconds of the whole process are printed with
+# their ratio (new / base). Writes the images to target/bitcheck/out/{base,new}/ and prints one line
 # per render; exits 1 if any image's pixels differ in their bits (with its relMSE against
 # BASE's), 0 otherwise.
 set -euo pipefail
@@ -69,6 +72,24 @@ for scene in $scenes; do
                 -o "$work/out/$side/$tag.exr"
         done
         count=$((count + 1))
+        if ((${TIMES:-0} > 0)); then
+            declare -A t=()
+            for ((i = 0; i < TIMES; i++)); do
+                for side in base new; do
+                    bin=$base_bin
+                    [[ $side == new ]] && bin=$new_bin
+                    s0=$(date +%s.%N)
+                    "$bin" render "$file" --method "${margs[@]}" --spp "$spp" --seed "$seed" \
+                        --quiet -o "$work/out/$side/time.exr"
+                    t[$side]+="$(echo "$(date +%s.%N) - $s0" | bc) "
+                done
+            done
+            median() { tr ' ' '\n' <<<"$1" | grep . | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
+            mb=$(median "${t[base]}") mn=$(median "${t[new]}")
+            printf 'time       %-48s base %6.3f s  new %6.3f s  ratio %.3f\n' "$tag" "$mb" "$mn" \
+                "$(echo "$mn / $mb" | bc -l)"
+            unset t
+        fi
         # Pixels bit for bit (the EXR's header holds the time it was written).
         if result=$("$new_bin" compare --bits "$work/out/new/$tag.exr" "$work/out/base/$tag.exr" 2>&1); then
             echo "identical  $tag"
