@@ -210,12 +210,15 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     out
 }
 
+/// Films with their methods' labels.
+type LabelledFilms = Vec<(String, Film)>;
+
 /// Renders every method of [`variants`] as `genpath render` would; the films, labelled, and
 /// the GA plans they rendered with.
 fn render_every_method(
     view: &SceneView,
     config: &CheckConfig,
-) -> Result<(Vec<(String, Film)>, Vec<Plan>), PrepareError> {
+) -> Result<(LabelledFilms, Vec<Plan>), PrepareError> {
     let mut films = Vec::new();
     let mut plans = Vec::new();
     for (label, method, methods) in variants(&config.methods) {

@@ -1,0 +1,492 @@
+//! `reference`, `sweep`, `bench`, `check` and `settings`, and the test-only method in every
+//! command.
+
+use super::*;
+
+/// `genpath reference`: an EXR, two halves with different seeds, and a noise estimate that
+/// matches an independent check (a second reference with another seed).
+#[test]
+fn reference_has_its_own_noise_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let make = |name: &str, seed: &str| {
+        let out = dir.path().join(name);
+        let output = genpath(&[
+            "reference",
+            fig5().to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            "64",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--seed",
+            seed,
+            "--quiet",
+        ]);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let mut json = out.clone().into_os_string();
+        json.push(".json");
+        let stats: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+        (out, stats["reference"]["relmse_estimate"].as_f64().unwrap())
+    };
+    let (a, estimate_a) = make("a.exr", "1");
+    let (b, estimate_b) = make("b.exr", "2");
+    // Two independent references differ by about the sum of their own errors.
+    let a = genpath::image::read_exr(&a).unwrap();
+    let b = genpath::image::read_exr(&b).unwrap();
+    let between = genpath::image::metrics::compare(&a, &b).unwrap().relmse;
+    let ratio = between / (estimate_a + estimate_b);
+    assert!(
+        (0.6..1.6).contains(&ratio),
+        "between {between:.3e}, estimates {estimate_a:.3e} + {estimate_b:.3e}"
+    );
+    // References are float images.
+    let output = genpath(&[
+        "reference",
+        fig5().to_str().unwrap(),
+        "-o",
+        dir.path().join("r.png").to_str().unwrap(),
+    ]);
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("must be an EXR"));
+}
+
+/// `genpath sweep`: a CSV row per method × budget × repetition and an SVG plot; clear errors
+/// for unknown methods and keys, a reference of the wrong size, and impossible budgets.
+#[test]
+fn sweep_writes_csv_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("ref.exr");
+    let size = ["--width", "16", "--height", "12", "--quiet"];
+    let run = |args: &[&str]| genpath(&[args, &size[..]].concat());
+    let out = run(&[
+        "reference",
+        fig5().to_str().unwrap(),
+        "-o",
+        reference.to_str().unwrap(),
+        "--spp",
+        "64",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let prefix = dir.path().join("sweep");
+    let scene = fig5();
+    let sweep = |extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            scene.to_str().unwrap(),
+            "--ref",
+            reference.to_str().unwrap(),
+            "-o",
+            prefix.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let out = sweep(&[
+        "--methods",
+        "pt,srt,ga:m=500:pop=6:gen=3:grid=8",
+        "--budgets",
+        "1,4",
+        "--reps",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.path().join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget"
+    );
+    assert_eq!(lines.len(), 1 + 3 * 2 * 2, "{csv}");
+    for line in &lines[1..] {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields.len(), 10, "{line}");
+        assert_eq!(fields[0], "fig5");
+        let relmse: f64 = fields[5].parse().unwrap();
+        assert!(relmse.is_finite() && relmse > 0.0, "{line}");
+        let (seconds, ga): (f64, f64) = (fields[3].parse().unwrap(), fields[4].parse().unwrap());
+        assert!(seconds >= ga, "{line}");
+        if fields[1].starts_with("ga") {
+            assert!(ga > 0.0, "GA time left out: {line}");
+        }
+    }
+    let svg = std::fs::read_to_string(dir.path().join("sweep.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("relMSE"),
+        "{svg:.200}"
+    );
+
+    for (extra, needle) in [
+        (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
+        (vec!["--methods", "ga:q=3"], "unknown setting `q`"),
+        (vec!["--methods", "ga:m=many"], "ga.test_paths=many"),
+        (vec!["--methods", "ga-pt:gate=maybe"], "plan.gate=maybe"),
+        (vec!["--methods", "ga:pop=0"], "population"),
+        (vec!["--methods", "pg:sp=0"], "spatial guide passes"),
+        (vec!["--budgets", "0"], "--budgets"),
+        (vec!["--budgets", "1.5"], "--budgets"),
+        (vec!["--budgets=-1", "--time"], "--budgets"),
+        (vec!["--methods", "mixture"], "--generators"),
+    ] {
+        let out = sweep(&extra);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(needle),
+            "{extra:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    // A reference of another size.
+    let out = genpath(&[
+        "sweep",
+        fig5().to_str().unwrap(),
+        "--ref",
+        reference.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("16×12"),
+        "{stderr}"
+    );
+}
+
+/// `genpath bench` prints its tables and writes every figure to JSON.
+#[test]
+fn bench_reports_rates_and_scaling() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let out = genpath(&[
+        "bench",
+        fig5().to_str().unwrap(),
+        "--rays",
+        "32",
+        "--passes",
+        "1",
+        "--threads",
+        "1,2",
+        "--spp",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("individual evaluations/s"), "{stdout}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let rays = v["rays"].as_array().unwrap();
+    // Two ray sets per built back-end.
+    assert!(rays.len() == 2 || rays.len() == 4, "{rays:?}");
+    for r in rays {
+        for q in [
+            "closest_single",
+            "closest_packet",
+            "occluded_single",
+            "occluded_packet",
+        ] {
+            assert!(r["mrays_per_s"][q].as_f64().unwrap() > 0.0, "{r}");
+        }
+    }
+    assert!(v["fitness_evaluations_per_s"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["scaling"]["runs"].as_array().unwrap().len(), 2);
+    let out = genpath(&["bench", "/nonexistent/scene.toml"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
+}
+
+/// `genpath check` passes on a shipped scene and writes its report; a missing scene is an
+/// error.
+#[test]
+fn check_passes_on_fig5() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("check.json");
+    let out = genpath(&[
+        "check",
+        fig5().to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "16",
+        "--json",
+        json.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("check passed"), "{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    // Every method of the list (pt, srt, ga, ga-pt, pg, and nee-only where the test-only
+    // method is built), and ga-pt without the spatial guide.
+    let names: Vec<&str> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["method"].as_str().unwrap())
+        .collect();
+    let mut expected = vec!["pt", "srt", "ga", "ga-pt", "pg"];
+    if cfg!(feature = "testing") {
+        expected.push("nee-only");
+    }
+    expected.push("ga-pt:spatial=0");
+    assert_eq!(names, expected);
+    assert_eq!(report["pdf_bad"], 0);
+    let out = genpath(&["check", "/nonexistent/scene.toml"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
+}
+
+/// The seam: a method added as one file and one line (`nee-only`, feature `testing`)
+/// is run by render, reference, sweep, check (which also compares its image mean with
+/// pt's) and bench, and each names it in its output.
+#[cfg(feature = "testing")]
+#[test]
+fn a_test_only_method_runs_in_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox/scene.toml");
+    let scene = scene.to_str().unwrap();
+    let small = ["--width", "24", "--height", "24", "--quiet"];
+    let run = |args: &[&str]| {
+        let out = genpath(&[args, &small].concat());
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "genpath {args:?}: {text}");
+        text
+    };
+    let image = p("bsdf.exr");
+    let reference = p("ref.exr");
+    run(&[
+        "render", scene, "--method", "nee-only", "--spp", "8", "-o", &image,
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{image}.json")).unwrap()).unwrap();
+    assert_eq!(json["settings"]["method"], "nee-only");
+    run(&[
+        "reference",
+        scene,
+        "--method",
+        "nee-only",
+        "--spp",
+        "8",
+        "-o",
+        &reference,
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{reference}.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["settings"]["method"], "nee-only");
+    assert!(json["reference"]["relmse_estimate"].as_f64().unwrap() > 0.0);
+    let sweep = run(&[
+        "sweep",
+        scene,
+        "--ref",
+        &reference,
+        "--methods",
+        "pt,nee-only",
+        "--budgets",
+        "2",
+        "-o",
+        &p("sweep"),
+    ]);
+    assert!(sweep.contains("| nee-only |"), "{sweep}");
+    let check = run(&["check", scene, "--spp", "8", "--json", &p("check.json")]);
+    assert!(check.contains("| nee-only |"), "{check}");
+    let out = genpath(&[
+        "bench",
+        scene,
+        "--rays",
+        "8",
+        "--passes",
+        "1",
+        "--threads",
+        "1",
+        "--spp",
+        "1",
+        "--method",
+        "nee-only",
+        "--json",
+        &p("bench.json"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("bench.json")).unwrap()).unwrap();
+    assert_eq!(json["scaling"]["method"], "nee-only");
+}
+
+/// A setting's one name is refused where no table has it: in `--config`, in `--set` and in a
+/// sweep's method key; nothing is written.
+#[test]
+fn unknown_settings_are_refused_everywhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("settings.toml");
+    std::fs::write(&config, "[ga]\ntest_pathz = 10\n").unwrap();
+    let out = dir.path().join("out.exr");
+    let config = config.to_str().unwrap();
+    assert_fails(
+        &fig5(),
+        &["--config", config],
+        &out,
+        &["settings.toml", "test_pathz"],
+    );
+    assert_fails(
+        &fig5(),
+        &["--set", "test_pathz=10"],
+        &out,
+        &["unknown setting `test_pathz`"],
+    );
+    assert_fails(
+        &fig5(),
+        &["--set", "plan.test_paths=10"],
+        &out,
+        &["plan.test_paths"],
+    );
+    assert_fails(&fig5(), &["--set", "test_paths"], &out, &["not key=value"]);
+    let reference = dir.path().join("ref.exr");
+    let small = ["--width", "8", "--height", "6", "--quiet"];
+    let reference = reference.to_str().unwrap();
+    let made = genpath(
+        &[
+            &[
+                "reference",
+                fig5().to_str().unwrap(),
+                "--spp",
+                "2",
+                "-o",
+                reference,
+            ][..],
+            &small,
+        ]
+        .concat(),
+    );
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let prefix = dir.path().join("s");
+    let sweep = genpath(
+        &[
+            &["sweep", fig5().to_str().unwrap(), "--ref", reference][..],
+            &[
+                "--methods",
+                "ga:test_pathz=10",
+                "-o",
+                prefix.to_str().unwrap(),
+            ],
+            &small,
+        ]
+        .concat(),
+    );
+    let stderr = String::from_utf8_lossy(&sweep.stderr);
+    assert!(
+        !sweep.status.success() && stderr.contains("unknown setting `test_pathz`"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("s.csv").exists());
+}
+
+/// Settings apply in order: defaults, `--config`, the flags given, `--set`; the JSON records
+/// each by its one name.
+#[test]
+fn settings_apply_config_then_flags_then_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("settings.toml");
+    std::fs::write(
+        &config,
+        "[ga]\ntest_paths = 300\npopulation = 5\ngenerations = 2\n[plan]\nga_grid = 8\ngate = false\n",
+    )
+    .unwrap();
+    let out = dir.path().join("ga.exr");
+    render_small_fig5(
+        &out,
+        &[
+            "--method",
+            "ga",
+            "--config",
+            config.to_str().unwrap(),
+            "--population",
+            "4",
+            "--set",
+            "generations=3",
+            "--set",
+            "ga.population=6",
+        ],
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("ga.exr.json")).unwrap())
+            .unwrap();
+    let (ga, plan) = (&json["ga"]["config"], &json["ga"]["plan"]);
+    assert_eq!(ga["test_paths"], 300, "from --config");
+    assert_eq!(ga["generations"], 3, "--set after --config");
+    assert_eq!(ga["population"], 6, "--set after the flag");
+    assert_eq!(plan["ga_grid"], 8);
+    assert_eq!(plan["gate"], false);
+}
+
+/// docs/settings.md is `genpath settings`'s output (regenerate it with
+/// `genpath settings > docs/settings.md`), and `settings --toml`'s defaults read back as a
+/// `--config` file.
+#[test]
+fn settings_documentation_is_generated_from_the_code() {
+    let out = genpath(&["settings"]);
+    assert!(out.status.success());
+    let docs =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/settings.md"))
+            .unwrap();
+    assert!(
+        String::from_utf8_lossy(&out.stdout) == docs,
+        "docs/settings.md is stale: run `genpath settings > docs/settings.md`"
+    );
+    assert!(
+        docs.contains("| `ga.test_paths` | `--test-paths` | `10000` |"),
+        "{docs}"
+    );
+    let toml = genpath(&["settings", "--toml"]);
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("defaults.toml");
+    std::fs::write(&file, &toml.stdout).unwrap();
+    render_small_fig5(
+        &dir.path().join("a.exr"),
+        &["--config", file.to_str().unwrap()],
+    );
+}
