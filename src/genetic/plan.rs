@@ -55,22 +55,13 @@ use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, emitted, mixture_file, RayCounts, SceneView};
 use crate::progress::progress_bar;
-use crate::sampling::{camera_ray, sample_rng};
+use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
 use crate::scene::SceneAnalysis;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-
-/// Stream tags: the baseline, the test paths and the GA use seeds derived from the user's
-/// seed with these, never the render's own streams.
-const BASELINE_STREAM: u64 = 0x6261_7365_6c69_6e65;
-const TEST_PATH_STREAM: u64 = 0x7465_7374_7061_7468;
-const GA_STREAM: u64 = 0x6765_6e65_7469_6373;
-const GATE_PT_STREAM: u64 = 0x6761_7465_5f70_7400;
-const GATE_STREAM: u64 = 0x6761_7465_0000_0000;
-const CHECK_STREAM: u64 = 0x6368_6563_6b00_0000;
 
 /// Samples of `pt` (and of the guided path tracer) with which the gate measures their
 /// variance at a GA pixel.
@@ -410,12 +401,6 @@ struct Baseline {
     scatters: bool,
 }
 
-fn derived_seed(seed: u64, stream: u64) -> u64 {
-    // One sample_rng draw mixes the two into a fresh 64-bit seed.
-    let mut rng = sample_rng(seed, stream, u64::MAX);
-    rand::Rng::random::<u64>(&mut rng)
-}
-
 /// The cells of a `grid`-pixel grid over a `width × height` image, row by row: `[x0, y0, x1,
 /// y1)` each, clipped to the image.
 fn grid_cells(width: u32, height: u32, grid: u32) -> impl Iterator<Item = [u32; 4]> {
@@ -486,7 +471,7 @@ fn baseline(
 ) -> (Vec<Baseline>, RayCounts) {
     let camera = &view.scene.camera;
     let (width, height) = (camera.width, camera.height);
-    let seed = derived_seed(seed, BASELINE_STREAM);
+    let seed = derived_seed(seed, Stream::Baseline.tag());
     let rows: Vec<(Vec<Baseline>, RayCounts)> = (0..height)
         .into_par_iter()
         .map(|y| {
@@ -641,12 +626,12 @@ fn run_pixel(
         (x, y),
         (ga.test_paths, ga.max_light_paths),
         max_bounces,
-        derived_seed(seed, TEST_PATH_STREAM),
+        derived_seed(seed, Stream::TestPaths.tag()),
     );
     let test_path_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let pixel = y as u64 * view.scene.camera.width as u64 + x as u64;
-    let mut rng = sample_rng(derived_seed(seed, GA_STREAM), pixel, stream);
+    let mut rng = sample_rng(derived_seed(seed, Stream::Ga.tag()), pixel, stream);
     let v_srt = fitness::second_moment(view, &paths, srt);
     // Pruning: no generator step past the depth where the test paths carry light.
     // A guide takes only the directional samplers.
@@ -824,7 +809,7 @@ fn run_trial(
         view,
         (x, y),
         max_bounces,
-        (seed, GATE_PT_STREAM),
+        (seed, Stream::GatePt.tag()),
         (GATE_SAMPLES, weights),
         None,
         None,
@@ -833,7 +818,7 @@ fn run_trial(
     let evolved = match target {
         Target::Guide => {
             let guide = Guide::new(mixture);
-            let stream = (seed, GATE_STREAM);
+            let stream = (seed, Stream::Gate.tag());
             let g = Some(&guide);
             sample_moments(
                 view,
@@ -847,7 +832,7 @@ fn run_trial(
             )
         }
         Target::Mixture => {
-            let stream = (seed, GATE_STREAM);
+            let stream = (seed, Stream::Gate.tag());
             let m = Some(mixture);
             let cost = sample_moments(
                 view,
@@ -865,7 +850,7 @@ fn run_trial(
                 (x, y),
                 (ga.test_paths, ga.max_light_paths),
                 max_bounces,
-                derived_seed(seed, CHECK_STREAM),
+                derived_seed(seed, Stream::Check.tag()),
             );
             counts.add(c);
             check.weigh(weights);
