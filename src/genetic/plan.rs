@@ -79,10 +79,10 @@ pub const COST_SAMPLES: u32 = 256;
 /// (fig5, 9 GA pixels against 200 000-sample variances: within a factor 2 either way), its
 /// variance grows faster away from the GA pixel and can exceed `pt`'s many times: it must
 /// win by 2 everywhere.
-pub fn gate_margins(target: Target) -> (f64, f64) {
-    match target {
-        Target::Guide => (0.8, 1.25),
-        Target::Mixture => (2.0, 2.0),
+pub fn gate_margins(plan_for: PlanFor) -> (f64, f64) {
+    match plan_for {
+        PlanFor::Guide => (0.8, 1.25),
+        PlanFor::Mixture => (2.0, 2.0),
     }
 }
 /// GA pixels evolved before the gate decides whether to evolve the others.
@@ -129,7 +129,7 @@ pub struct PlanConfig {
     /// individuals, with half the generations (beyond the paper).
     pub warm_start: bool,
     /// Wall-clock seconds the plan (baseline included) may take: past them, GA pixels not
-    /// yet evolved are left out (to `pt` with the gate and the mixture target, to their
+    /// yet evolved are left out (to `pt` with the gate in a plan for the mixture, to their
     /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on
     /// timing, not only on the seed. `None`: no limit.
     pub time_limit: Option<f64>,
@@ -227,10 +227,12 @@ impl PlanConfig {
     }
 }
 
-/// The estimator a plan is built for: the gate compares it with `pt`.
+/// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
+/// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
+/// tracer. (`Plan::build(…, (max_bounces, PlanFor::Guide), …)` reads "a plan for a guide".)
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Target {
+pub enum PlanFor {
     /// `ga`: the mixture estimator (eq. 8).
     Mixture,
     /// `ga-pt`: path tracing guided by the mixture.
@@ -311,20 +313,21 @@ pub struct GaPixel {
 }
 
 impl GaPixel {
-    /// Whether the gate's trial predicts the evolved estimator for `target` to beat `pt`
+    /// Whether the gate's trial predicts the evolved estimator for `plan_for` to beat `pt`
     /// here by the winning margin ([`gate_margins`]).
-    pub fn pays(&self, target: Target) -> bool {
-        self.trial.is_some_and(|t| t.gain > gate_margins(target).1)
+    pub fn pays(&self, plan_for: PlanFor) -> bool {
+        self.trial
+            .is_some_and(|t| t.gain > gate_margins(plan_for).1)
     }
 
     /// Whether this pixel's estimator should be `pt`: it kept `srt`, or its trial predicts
     /// a loss below the losing margin ([`gate_margins`]) (a NaN gain counts as a loss). A
     /// pixel without a trial (a guide's pixel outside the pilot) keeps its estimator.
-    pub fn prefers_pt(&self, target: Target) -> bool {
+    pub fn prefers_pt(&self, plan_for: PlanFor) -> bool {
         self.kept_srt
             || self
                 .trial
-                .is_some_and(|t| t.gain.is_nan() || t.gain < gate_margins(target).0)
+                .is_some_and(|t| t.gain.is_nan() || t.gain < gate_margins(plan_for).0)
     }
 }
 
@@ -376,7 +379,7 @@ pub struct Plan {
     /// (or the spatial guide). (A guide's failed pilot without the spatial guide keeps its
     /// guides near pilot pixels that predict no loss.)
     closed: bool,
-    pub target: Target,
+    pub plan_for: PlanFor,
     /// The defensive density alone: the mixture of an image without any GA pixel.
     pub srt: Mixture,
     neighbours: usize,
@@ -616,7 +619,7 @@ fn run_pixel(
     (x, y, origin): (u32, u32, Origin),
     max_bounces: u32,
     seed: u64,
-    (config, target): (&PlanConfig, Target),
+    (config, plan_for): (&PlanConfig, PlanFor),
     (seeds, generations, stream, trial): (&[Individual], usize, u64, bool),
 ) -> (GaPixel, RayCounts) {
     let t0 = Instant::now();
@@ -636,13 +639,13 @@ fn run_pixel(
     // Pruning: no generator step past the depth where the test paths carry light.
     // A guide takes only the directional samplers.
     let ga = &GaConfig {
-        directions_only: ga.directions_only || target == Target::Guide,
+        directions_only: ga.directions_only || plan_for == PlanFor::Guide,
         max_steps: match (
-            target,
+            plan_for,
             config.prune.then(|| paths.steps_needed(PRUNE_SHARE)),
         ) {
-            (Target::Guide, needed) => Some(needed.unwrap_or(usize::MAX).min(config.guide_steps)),
-            (Target::Mixture, needed) => needed,
+            (PlanFor::Guide, needed) => Some(needed.unwrap_or(usize::MAX).min(config.guide_steps)),
+            (PlanFor::Mixture, needed) => needed,
         },
         generations,
         ..ga.clone()
@@ -710,7 +713,7 @@ fn run_pixel(
             view,
             srt,
             evolved,
-            (target, paths.weights()),
+            (plan_for, paths.weights()),
             (x, y),
             max_bounces,
             seed,
@@ -786,7 +789,7 @@ fn sample_moments(
     }
 }
 
-/// The gate's comparison at `(x, y)` of `mixture`'s estimator for `target` with `pt`.
+/// The gate's comparison at `(x, y)` of `mixture`'s estimator for `plan_for` with `pt`.
 ///
 /// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
 /// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
@@ -799,7 +802,7 @@ fn run_trial(
     view: &SceneView,
     srt: &Mixture,
     (ga, mixture): (&GaConfig, &Mixture),
-    (target, weights): (Target, ChannelWeights),
+    (plan_for, weights): (PlanFor, ChannelWeights),
     (x, y): (u32, u32),
     max_bounces: u32,
     seed: u64,
@@ -815,8 +818,8 @@ fn run_trial(
         None,
         counts,
     );
-    let evolved = match target {
-        Target::Guide => {
+    let evolved = match plan_for {
+        PlanFor::Guide => {
             let guide = Guide::new(mixture);
             let stream = (seed, Stream::Gate.tag());
             let g = Some(&guide);
@@ -831,7 +834,7 @@ fn run_trial(
                 counts,
             )
         }
-        Target::Mixture => {
+        PlanFor::Mixture => {
             let stream = (seed, Stream::Gate.tag());
             let m = Some(mixture);
             let cost = sample_moments(
@@ -899,12 +902,12 @@ impl Plan {
     /// Picks the GA pixels (the grid's, then, after the baseline, the extras) and evolves
     /// each of them (in parallel on the current rayon pool), with progress bars on stderr
     /// when `progress`; with the gate, runs the pilot first and compares the evolved
-    /// estimator for `target` with `pt` at each pixel that runs a trial.
+    /// estimator for `plan_for` with `pt` at each pixel that runs a trial.
     pub fn build(
         view: &SceneView,
         ga: &GaConfig,
         config: &PlanConfig,
-        (max_bounces, target): (u32, Target),
+        (max_bounces, plan_for): (u32, PlanFor),
         seed: u64,
         progress: bool,
     ) -> Result<Self, GaConfigError> {
@@ -949,7 +952,7 @@ impl Plan {
         // The last field: whether the pixel runs the gate's trial. For a mixture every GA
         // pixel does; for a guide only the pilot (see `trials_everywhere`).
         type Job = (usize, Vec<Individual>, usize, u64, bool);
-        let trials_everywhere = target == Target::Mixture;
+        let trials_everywhere = plan_for == PlanFor::Mixture;
         let run_job = |at: (u32, u32, Origin), seeds: &[Individual], generations, stream, trial| {
             let r = run_pixel(
                 view,
@@ -958,7 +961,7 @@ impl Plan {
                 at,
                 max_bounces,
                 seed,
-                (config, target),
+                (config, plan_for),
                 (seeds, generations, stream, trial),
             );
             bar.inc(1);
@@ -986,7 +989,7 @@ impl Plan {
         // image to `pt` (see `Plan::closed`), whichever of its pixels ran.
         let losing = AtomicUsize::new(0);
         let settled =
-            || target == Target::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+            || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
         let scouted_pilot: Vec<(usize, (GaPixel, RayCounts))> = (0..pilot)
             .into_par_iter()
             .filter_map(|i| {
@@ -994,7 +997,7 @@ impl Plan {
                     return None;
                 }
                 let r = run_job(chosen[i], &[], scout, 0, true);
-                if !r.0.pays(target) {
+                if !r.0.pays(plan_for) {
                     losing.fetch_add(1, Ordering::Relaxed);
                 }
                 Some((i, r))
@@ -1011,10 +1014,10 @@ impl Plan {
         let paying = done
             .iter()
             .flatten()
-            .filter(|(p, _)| p.pays(target))
+            .filter(|(p, _)| p.pays(plan_for))
             .count();
         let pilot_pays = 2 * paying >= pilot.max(1);
-        let closed = config.gate && !pilot_pays && (target == Target::Mixture || config.spatial);
+        let closed = config.gate && !pilot_pays && (plan_for == PlanFor::Mixture || config.spatial);
         if !config.gate || pilot_pays {
             // The baseline, then the other GA pixels (the pilot's stay, whatever their
             // cells' variance).
@@ -1117,7 +1120,7 @@ impl Plan {
             // its evolved neighbours' guides, as without the gate (fig5, 2 s budgets, where
             // half the GA pixels are late: relMSE 0.83 with those cells on `pt`, 0.56
             // without the gate).
-            if config.gate && target == Target::Mixture {
+            if config.gate && plan_for == PlanFor::Mixture {
                 pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
             }
         } else {
@@ -1146,7 +1149,7 @@ impl Plan {
             stats.generator_evaluations += p.generator_evaluations;
         }
         for (p, _) in results {
-            if config.gate && p.prefers_pt(target) {
+            if config.gate && p.prefers_pt(plan_for) {
                 stats.pt_pixels += 1;
             }
             pixels.push(p);
@@ -1158,7 +1161,7 @@ impl Plan {
             pt_points,
             gate: config.gate,
             closed,
-            target,
+            plan_for,
             srt,
             neighbours: config.neighbours,
             analysis: scene.analysis(),
@@ -1207,7 +1210,9 @@ impl Plan {
     /// Whether interpolation point `i` (see [`Self::interpolation`]) prefers `pt`: a
     /// `pt_points` entry, or a GA pixel that kept `srt` or whose gate trial predicts no gain.
     fn prefers_pt(&self, i: usize) -> bool {
-        self.pixels.get(i).is_none_or(|p| p.prefers_pt(self.target))
+        self.pixels
+            .get(i)
+            .is_none_or(|p| p.prefers_pt(self.plan_for))
     }
 
     /// How pixel `(x, y)` renders: `None` with `pt`, else with this mixture (`ga`) or guided
@@ -1219,7 +1224,7 @@ impl Plan {
     pub fn local(&self, x: u32, y: u32) -> Option<Mixture> {
         let mut weights = Vec::with_capacity(self.neighbours);
         let mut parts = Vec::with_capacity(self.neighbours);
-        self.local_parts(x, y, &mut weights, &mut parts)
+        self.neighbour_mixtures(x, y, &mut weights, &mut parts)
             .then(|| Mixture::union(&parts))
     }
 
@@ -1233,7 +1238,7 @@ impl Plan {
     /// weighted mixtures of the union in `parts` (`srt` alone where there is no point to
     /// interpolate). `weights` is scratch. The renderer passes the same buffers for every
     /// pixel, so that this allocates nothing.
-    pub fn local_parts<'a>(
+    pub fn neighbour_mixtures<'a>(
         &'a self,
         x: u32,
         y: u32,
@@ -1331,7 +1336,7 @@ mod tests {
             pt_points: if gate { vec![(30, 0)] } else { Vec::new() },
             gate,
             closed: false,
-            target: Target::Guide,
+            plan_for: PlanFor::Guide,
             srt: mixture(0.5),
             neighbours: 2,
             analysis: SceneAnalysis {
@@ -1368,9 +1373,9 @@ mod tests {
         for x in [6, 10, 15, 20, 25, 30, 39] {
             assert!(gated.local(x, 0).is_none(), "x = {x}");
         }
-        // A pixel the trial says loses is a loss whatever the target's margin.
-        assert!(!gated.pixels[1].pays(Target::Guide) && !gated.pixels[1].pays(Target::Mixture));
-        assert!(gated.pixels[0].pays(Target::Mixture));
+        // A pixel the trial says loses is a loss whatever the estimator's margin.
+        assert!(!gated.pixels[1].pays(PlanFor::Guide) && !gated.pixels[1].pays(PlanFor::Mixture));
+        assert!(gated.pixels[0].pays(PlanFor::Mixture));
         // Without the gate every pixel renders with the interpolated union (the paper).
         let paper = plan(false);
         for x in 0..40 {
