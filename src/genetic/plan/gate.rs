@@ -1,0 +1,196 @@
+//! The gate: a GA pixel's trial of the evolved estimator against `pt` ([`Trial`], from
+//! [`Moments`] of each), the margins it must win by, and the pilot's size and share.
+
+use super::super::test_paths::TestPaths;
+use super::super::{fitness, ChannelWeights, GaConfig};
+use super::PlanFor;
+use crate::path::guide::Guide;
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{camera_sample, RayCounts, SceneView};
+use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
+use glam::DVec3;
+
+/// Samples of `pt` (and of the guided path tracer) with which the gate measures their
+/// variance at a GA pixel.
+pub const GATE_SAMPLES: u32 = 2048;
+/// Samples of the mixture estimator with which the gate counts its cost.
+pub const COST_SAMPLES: u32 = 256;
+/// The gate's thresholds on a trial's predicted gain: `(lose, win)`. The GA goes on past
+/// the pilot only if at least half the pilot pixels predict a gain above `win`; a GA pixel
+/// prefers `pt` where it predicts one below `lose`.
+///
+/// The guided path tracer keeps `pt`'s next-event estimation and its BRDF sampling (at the
+/// defensive weight), so it rarely loses much, while its 2048-sample trial is noisy (fig5:
+/// sending every pixel below 1.25 to `pt` lost 20 % relMSE against no gate): it must win
+/// by 1.25 and is dropped below 0.8. The mixture estimator's prediction is the less certain
+/// (fig5, 9 GA pixels against 200 000-sample variances: within a factor 2 either way), its
+/// variance grows faster away from the GA pixel and can exceed `pt`'s many times: it must
+/// win by 2 everywhere.
+pub fn gate_margins(plan_for: PlanFor) -> (f64, f64) {
+    match plan_for {
+        PlanFor::Guide => (0.8, 1.25),
+        PlanFor::Mixture => (2.0, 2.0),
+    }
+}
+/// GA pixels evolved before the gate decides whether to evolve the others.
+pub const PILOT_PIXELS: usize = 8;
+/// The pilot evolves for `1 / PILOT_SHARE` of the generations before its trial decides: a
+/// scene where the GA cannot pay costs a quarter of a full pilot (cbox, 2 s budgets: the
+/// full pilot took a third of the time). Where the pilot pays, its pixels go on from their
+/// best individual for the remaining generations.
+pub const PILOT_SHARE: usize = 4;
+
+/// One estimator's samples at a pixel, per sample: mean and variance under the pixel's
+/// [`ChannelWeights`] (`√(Σ_c w_c mean_c²)` and `Σ_c w_c Var_c`), and the cost
+/// ([`RayCounts::cost`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Moments {
+    pub mean: f64,
+    pub variance: f64,
+    pub cost: f64,
+}
+
+impl Moments {
+    /// `1 / (variance × cost)`; infinite without variance.
+    fn efficiency(&self) -> f64 {
+        1.0 / (self.variance * self.cost)
+    }
+}
+
+/// The gate's comparison at a GA pixel.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Trial {
+    pub pt: Moments,
+    pub evolved: Moments,
+    /// `evolved`'s efficiency over `pt`'s; 0 where neither has variance (nothing to gain).
+    pub gain: f64,
+}
+
+/// One estimator's samples at pixel `(x, y)`: `n` samples of `pt`, guided by `guide` when
+/// given, or of `mixture`'s estimator (eq. 8) when given, from `stream`'s random streams.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn sample_moments(
+    view: &SceneView,
+    (x, y): (u32, u32),
+    max_bounces: u32,
+    (seed, stream): (u64, u64),
+    (n, weights): (u32, ChannelWeights),
+    mixture: Option<&Mixture>,
+    guide: Option<&Guide>,
+    counts: &mut RayCounts,
+) -> Moments {
+    let camera = &view.scene.camera;
+    let pixel = y as u64 * camera.width as u64 + x as u64;
+    let seed = derived_seed(seed, stream);
+    let mut scratch = MixtureScratch::default();
+    let mut c = RayCounts::default();
+    let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+    for s in 0..n {
+        let mut rng = sample_rng(seed, pixel, s as u64);
+        let ray = camera_ray(camera, (x, y), &mut rng);
+        let value = camera_sample(
+            view,
+            &ray,
+            max_bounces,
+            (mixture, guide),
+            &mut rng,
+            &mut c,
+            &mut scratch,
+        );
+        sum += value;
+        sum_sq += value * value;
+    }
+    counts.add(c);
+    let n = n as f64;
+    let mean = sum / n;
+    let variance = ((sum_sq - sum * mean) / (n - 1.0)).max(DVec3::ZERO);
+    Moments {
+        mean: weights.weigh(mean * mean).sqrt(),
+        variance: weights.weigh(variance),
+        cost: c.cost() / n,
+    }
+}
+
+/// The gate's comparison at `(x, y)` of `mixture`'s estimator for `plan_for` with `pt`.
+///
+/// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
+/// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
+/// density is far below `srt`'s (down to the defensive weight), which a few hundred of its
+/// own samples mostly miss (fig5: the median 512-sample variance is 2–7× below the true
+/// one). Its second moment is therefore eq. 10 on fresh `srt` test paths, which sample
+/// exactly those paths at `srt`'s rate; its cost comes from `COST_SAMPLES` samples.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run_trial(
+    view: &SceneView,
+    srt: &Mixture,
+    (ga, mixture): (&GaConfig, &Mixture),
+    (plan_for, weights): (PlanFor, ChannelWeights),
+    (x, y): (u32, u32),
+    max_bounces: u32,
+    seed: u64,
+    counts: &mut RayCounts,
+) -> Trial {
+    let pt = sample_moments(
+        view,
+        (x, y),
+        max_bounces,
+        (seed, Stream::GatePt.tag()),
+        (GATE_SAMPLES, weights),
+        None,
+        None,
+        counts,
+    );
+    let evolved = match plan_for {
+        PlanFor::Guide => {
+            let guide = Guide::new(mixture);
+            let stream = (seed, Stream::Gate.tag());
+            let g = Some(&guide);
+            sample_moments(
+                view,
+                (x, y),
+                max_bounces,
+                stream,
+                (GATE_SAMPLES, weights),
+                None,
+                g,
+                counts,
+            )
+        }
+        PlanFor::Mixture => {
+            let stream = (seed, Stream::Gate.tag());
+            let m = Some(mixture);
+            let cost = sample_moments(
+                view,
+                (x, y),
+                max_bounces,
+                stream,
+                (COST_SAMPLES, weights),
+                m,
+                None,
+                counts,
+            );
+            let (mut check, c) = TestPaths::sample_until(
+                view,
+                srt,
+                (x, y),
+                (ga.test_paths, ga.max_light_paths),
+                max_bounces,
+                derived_seed(seed, Stream::Check.tag()),
+            );
+            counts.add(c);
+            check.weigh(weights);
+            let mean = check.mean();
+            Moments {
+                mean,
+                variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
+                cost: cost.cost,
+            }
+        }
+    };
+    let gain = if pt.variance > 0.0 {
+        evolved.efficiency() / pt.efficiency()
+    } else {
+        0.0
+    };
+    Trial { pt, evolved, gain }
+}

@@ -1,0 +1,449 @@
+//! The pixel plan of `--method ga` (design §7): which pixels run the genetic algorithm, and
+//! which mixture every pixel renders with.
+//!
+//! 1. **Grid.** One ray through each pixel's centre tells whether it sees a scattering
+//!    surface at all (pixels that see only background or an emitter need no GA: their value
+//!    is emission seen directly). Each cell of a regular grid (`grid` pixels apart) gets a GA
+//!    pixel at its centre or the scattering pixel closest to it.
+//! 2. **Baseline and extra GA pixels.** A few `srt` samples per pixel estimate its relative
+//!    variance; extra GA pixels go to the cells with the highest baseline relative variance,
+//!    at their noisiest pixel.
+//! 3. **Evolution.** Per GA pixel, `M` test paths from the defensive `srt` density and the
+//!    genetic algorithm on them, in parallel; every pixel has its own random streams, derived
+//!    from the seed and the pixel alone, so the result does not depend on the thread count.
+//!    A pixel keeps `srt` alone when the GA found nothing better on its test paths.
+//! 4. **Interpolation.** Every pixel renders with the union of its nearest GA pixels'
+//!    mixtures, each scaled by a normalised inverse-square distance weight: one mixture whose
+//!    weights sum to 1, containing the defensive `srt` component, so the estimator stays
+//!    unbiased.
+//!
+//! 5. **Gate** (beyond the paper; off with `PlanConfig::gate = false`). The GA pays for
+//!    itself only where its estimator beats path tracing at equal time, so each GA pixel
+//!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of
+//!    `pt` and of the evolved estimator (the mixture for `ga`, the guided path tracer for
+//!    `ga-pt`), and the predicted gain `Var_pt · cost_pt / (Var · cost)` with costs counted
+//!    in rays and densities ([`RayCounts::cost`]), so that the plan stays deterministic.
+//!    Pixels whose nearest GA pixels mostly predict a loss render with `pt`. The GA runs
+//!    first at `PILOT_PIXELS` grid pixels spread over the image, for `1 / PILOT_SHARE` of
+//!    the generations, before the baseline; unless at least half of them predict a gain,
+//!    the other grid pixels are not evolved and become `pt` points, and the baseline is not
+//!    run: the image renders with `pt`, for a guide except near a pilot pixel that does not
+//!    predict a loss; with the spatial guide (`ga-pt`'s default) a failed pilot leaves
+//!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
+//!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`); where it passes, the
+//!    spatial guide's training passes try the guides against that guide alone
+//!    ([`crate::integrators::pg::train_spatial`]). (A mixture's pilot stops
+//!    starting pixels once it cannot pay, so there it is `pt` everywhere. cbox, `ga`, 64
+//!    spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the baseline
+//!    first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they do, the pilot pixels go on from their best individuals
+//!    (with a fresh random stream). For a guide the other GA pixels then run no trial and
+//!    keep their guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so
+//!    it rarely loses much, and on fig5 the trials cost 40 % of the GA phase while the
+//!    pixels they sent to `pt` made the image no better. A mixture's variance can exceed
+//!    `pt`'s many times, so there every GA pixel runs its trial. Low-variance cells
+//!    (pruning) render with `pt` too.
+//!
+//! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
+//! the mixtures and choices do not depend on the samples they are used with.
+
+mod baseline;
+mod config;
+mod gate;
+mod interpolation;
+mod pixel;
+mod waves;
+
+pub use baseline::Origin;
+pub use config::PlanConfig;
+pub use gate::{
+    gate_margins, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
+};
+pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
+
+use super::individual::Individual;
+use super::nearest::PointGrid;
+use super::{GaConfig, GaConfigError};
+use crate::path::mixture::Mixture;
+use crate::path::{mixture_file, RayCounts, SceneView};
+use crate::progress::progress_bar;
+use crate::scene::SceneAnalysis;
+use baseline::{baseline, choose_pixels, grid_pixels};
+use pixel::run_pixel;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+use waves::neighbour_seeds;
+
+/// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
+/// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
+/// tracer. (`Plan::build(…, (max_bounces, PlanFor::Guide), …)` reads "a plan for a guide".)
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlanFor {
+    /// `ga`: the mixture estimator (eq. 8).
+    Mixture,
+    /// `ga-pt`: path tracing guided by the mixture.
+    Guide,
+}
+
+/// Per-phase totals of a plan.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct PlanStats {
+    /// Wall-clock seconds of the grid rays and the baseline pass (none where the gate's
+    /// pilot closes the GA), and of the GA phase (test paths included).
+    pub baseline_seconds: f64,
+    pub ga_seconds: f64,
+    /// Summed over GA pixels (CPU seconds): tracing test paths, and evolving.
+    pub test_path_cpu_seconds: f64,
+    pub evolve_cpu_seconds: f64,
+    /// Pixels whose centre ray sees no scattering surface (background or emitters only).
+    pub skipped_pixels: usize,
+    /// Grid cells without a scattering pixel, hence without a GA pixel.
+    pub empty_cells: usize,
+    /// Grid cells left without a GA pixel because their baseline variance is low (pruning;
+    /// 0 where the pilot closed the GA and no baseline ran).
+    pub low_variance_cells: usize,
+    /// Grid pixels not evolved because fewer than half the pilot pixels predicted a gain
+    /// over `pt` (gate).
+    pub gated_pixels: usize,
+    /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
+    pub pt_pixels: usize,
+    /// GA pixels not evolved because the plan reached `PlanConfig::time_limit`.
+    pub time_limited_pixels: usize,
+    /// Whether the baseline ran: not where the gate's pilot closed the GA.
+    pub baseline_ran: bool,
+    /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
+    /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
+    pub cell_variance: [f64; 3],
+    pub individual_evaluations: u64,
+    pub generator_evaluations: u64,
+    pub rays: RayCounts,
+}
+
+/// GA pixels and their mixtures, and how every other pixel combines them.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    width: u32,
+    height: u32,
+    pub pixels: Vec<GaPixel>,
+    /// With the gate: points where the image renders with `pt` (one pixel of each
+    /// low-variance cell, and the GA pixels the pilot left out), interpolated like GA pixels.
+    pub pt_points: Vec<(u32, u32)>,
+    gate: bool,
+    /// The gate's pilot showed that the mixture does not pay: every pixel renders with `pt`
+    /// (or the spatial guide). (A guide's failed pilot without the spatial guide keeps its
+    /// guides near pilot pixels that predict no loss.)
+    closed: bool,
+    pub plan_for: PlanFor,
+    /// The defensive density alone: the mixture of an image without any GA pixel.
+    pub srt: Mixture,
+    neighbours: usize,
+    /// What the scene contains.
+    pub analysis: SceneAnalysis,
+    /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
+    unnormalised: bool,
+    pub stats: PlanStats,
+    /// `pixels` and then `pt_points`, bucketed for [`Self::interpolation`] on first use.
+    index: OnceLock<PointGrid>,
+}
+
+impl Plan {
+    /// Picks the GA pixels (the grid's, then, after the baseline, the extras) and evolves
+    /// each of them (in parallel on the current rayon pool), with progress bars on stderr
+    /// when `progress`; with the gate, runs the pilot first and compares the evolved
+    /// estimator for `plan_for` with `pt` at each pixel that runs a trial.
+    pub fn build(
+        view: &SceneView,
+        ga: &GaConfig,
+        config: &PlanConfig,
+        (max_bounces, plan_for): (u32, PlanFor),
+        seed: u64,
+        progress: bool,
+    ) -> Result<Self, GaConfigError> {
+        ga.validate()?;
+        config.validate()?;
+        let scene = view.scene;
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
+        let mut stats = PlanStats::default();
+
+        let t0 = Instant::now();
+        let mut counts = RayCounts::default();
+        let (cells, skipped) = grid_pixels(view, config.grid, &mut counts);
+        stats.rays.add(counts);
+        stats.skipped_pixels = skipped;
+        stats.empty_cells = cells.iter().filter(|c| c.is_none()).count();
+        let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
+        let grid_seconds = t0.elapsed().as_secs_f64();
+        // Seconds of the baseline, which runs between GA waves.
+        let mut baseline_part = 0.0;
+
+        let t1 = Instant::now();
+        // With the gate, a pilot of grid pixels spread evenly over the image runs first,
+        // before the baseline: where it predicts no gain, the plan costs no baseline.
+        let mut chosen: Vec<(u32, u32, Origin)> = if config.gate {
+            let k = PILOT_PIXELS.min(grid.len());
+            (0..k)
+                .map(|j| {
+                    let (x, y) = grid[j * grid.len() / k];
+                    (x, y, Origin::Grid)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let pilot = chosen.len();
+        let bar = progress_bar(pilot as u64, "GA", progress);
+        let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; pilot];
+        // A wave: GA pixels (indices into `chosen`), the individuals each starts from, its
+        // generations and its GA random stream (a pilot pixel that goes on takes a fresh
+        // one: its scouting run's would replay the same random individuals and breeding).
+        // The last field: whether the pixel runs the gate's trial. For a mixture every GA
+        // pixel does; for a guide only the pilot (see `trials_everywhere`).
+        type Job = (usize, Vec<Individual>, usize, u64, bool);
+        let trials_everywhere = plan_for == PlanFor::Mixture;
+        let run_job = |at: (u32, u32, Origin), seeds: &[Individual], generations, stream, trial| {
+            let r = run_pixel(
+                view,
+                &srt,
+                ga,
+                at,
+                max_bounces,
+                seed,
+                (config, plan_for),
+                (seeds, generations, stream, trial),
+            );
+            bar.inc(1);
+            r
+        };
+        let evolve_wave =
+            |wave: &[Job], chosen: &[(u32, u32, Origin)], done: &mut Vec<Option<_>>| {
+                let results: Vec<(usize, (GaPixel, RayCounts))> = wave
+                    .par_iter()
+                    .map(|(i, seeds, generations, stream, trial)| {
+                        (
+                            *i,
+                            run_job(chosen[*i], seeds, *generations, *stream, *trial),
+                        )
+                    })
+                    .collect();
+                for (i, r) in results {
+                    done[i] = Some(r);
+                }
+            };
+        let scout = ga.generations.div_ceil(PILOT_SHARE);
+        // For a mixture, a pilot pixel is not started once so many others failed to pay
+        // that the pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips
+        // depends on the threads' timing, so a mixture's pilot that fails leaves the whole
+        // image to `pt` (see `Plan::closed`), whichever of its pixels ran.
+        let losing = AtomicUsize::new(0);
+        let settled =
+            || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+        let scouted_pilot: Vec<(usize, (GaPixel, RayCounts))> = (0..pilot)
+            .into_par_iter()
+            .filter_map(|i| {
+                if settled() {
+                    return None;
+                }
+                let r = run_job(chosen[i], &[], scout, 0, true);
+                if !r.0.pays(plan_for) {
+                    losing.fetch_add(1, Ordering::Relaxed);
+                }
+                Some((i, r))
+            })
+            .collect();
+        for (i, r) in scouted_pilot {
+            done[i] = Some(r);
+        }
+        let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
+        let mut pt_points = Vec::new();
+        // The GA goes on where at least half the pilot pixels predict a gain above the
+        // winning margin: one pixel alone (an outlier, or a small region) does not pay for
+        // evolving the whole image.
+        let paying = done
+            .iter()
+            .flatten()
+            .filter(|(p, _)| p.pays(plan_for))
+            .count();
+        let pilot_pays = 2 * paying >= pilot.max(1);
+        let closed = config.gate && !pilot_pays && (plan_for == PlanFor::Mixture || config.spatial);
+        if !config.gate || pilot_pays {
+            // The baseline, then the other GA pixels (the pilot's stay, whatever their
+            // cells' variance).
+            let t2 = Instant::now();
+            let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
+            stats.rays.add(counts);
+            stats.baseline_ran = true;
+            let keep: Vec<(u32, u32)> = chosen.iter().map(|&(x, y, _)| (x, y)).collect();
+            let choice = choose_pixels(&base, &cells, (width, height), config, &keep);
+            stats.low_variance_cells = choice.low.len();
+            let mut v = choice.cell_variance;
+            v.sort_by(f64::total_cmp);
+            if !v.is_empty() {
+                stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
+            }
+            if config.gate {
+                pt_points.extend(&choice.low);
+            }
+            chosen.extend((choice.pixels.iter()).filter(|&&(x, y, _)| !keep.contains(&(x, y))));
+            let n = chosen.len();
+            done.resize(n, None);
+            bar.inc_length((n - pilot) as u64);
+            baseline_part = t2.elapsed().as_secs_f64();
+
+            // With warm starts, the grid pixels of "white" cells (in a checkerboard of
+            // cells) first, then the rest, seeded from their evolved neighbours.
+            let g = config.grid;
+            let white = |i: usize| {
+                let (x, y, origin) = chosen[i];
+                origin == Origin::Grid && (x / g + y / g) % 2 == 0
+            };
+            let (first, second): (Vec<usize>, Vec<usize>) =
+                (pilot..n).partition(|&i| !config.warm_start || white(i));
+            // With a time limit, the waves run in chunks, each only if time is left.
+            let chunk = match config.time_limit {
+                Some(_) => 4 * rayon::current_num_threads(),
+                None => usize::MAX,
+            };
+            let mut late = Vec::new();
+            let mut run_chunks = |jobs: &[Job], done: &mut Vec<_>| {
+                for c in jobs.chunks(chunk) {
+                    if config
+                        .time_limit
+                        .is_some_and(|limit| t0.elapsed().as_secs_f64() >= limit)
+                    {
+                        late.extend(c.iter().map(|j| j.0));
+                    } else {
+                        evolve_wave(c, &chosen, done);
+                    }
+                }
+            };
+            // The pilot goes on from each pixel's best individual for the remaining
+            // generations, whatever the time limit (the pilot showed the GA pays); its
+            // scouting still counts in the stats. A scout without a best individual (no
+            // light-carrying test path) or without generations left stands as it is.
+            let rest = ga.generations.saturating_sub(scout);
+            let go_on: Vec<Job> = (0..pilot)
+                .filter_map(|i| {
+                    let (p, counts) = done[i].take()?;
+                    match p.best.clone() {
+                        Some(best) if rest > 0 => {
+                            scouted.push((p, counts));
+                            Some((i, vec![best], rest, 1, true))
+                        }
+                        _ => {
+                            done[i] = Some((p, counts));
+                            None
+                        }
+                    }
+                })
+                .collect();
+            bar.inc_length(go_on.len() as u64);
+            evolve_wave(&go_on, &chosen, &mut done);
+            let cold: Vec<Job> = first
+                .iter()
+                .map(|&i| (i, Vec::new(), ga.generations, 0, trials_everywhere))
+                .collect();
+            run_chunks(&cold, &mut done);
+            // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
+            // needs half the generations.
+            let warm = ga.generations.div_ceil(2);
+            let second: Vec<Job> = second
+                .iter()
+                .map(|&i| match config.warm_start {
+                    true => (
+                        i,
+                        neighbour_seeds(&done, chosen[i], config),
+                        warm,
+                        0,
+                        trials_everywhere,
+                    ),
+                    false => (i, Vec::new(), ga.generations, 0, trials_everywhere),
+                })
+                .collect();
+            run_chunks(&second, &mut done);
+            stats.time_limited_pixels = late.len();
+            // A mixture's variance can grow fast away from its GA pixel, so with the gate a
+            // cell the GA did not reach renders with `pt`. A guide keeps `pt`'s next-event
+            // estimation and BRDF sampling: once the pilot showed it pays, such a cell takes
+            // its evolved neighbours' guides, as without the gate (fig5, 2 s budgets, where
+            // half the GA pixels are late: relMSE 0.83 with those cells on `pt`, 0.56
+            // without the gate).
+            if config.gate && plan_for == PlanFor::Mixture {
+                pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
+            }
+        } else {
+            // No baseline: every other cell renders with `pt`.
+            stats.gated_pixels = grid.len() - done.iter().flatten().count();
+            let pilot_at = &chosen;
+            pt_points.extend(
+                (grid.iter()).filter(|&&(x, y)| !pilot_at.iter().any(|p| (p.0, p.1) == (x, y))),
+            );
+        }
+        let results: Vec<(GaPixel, RayCounts)> = done.into_iter().flatten().collect();
+        bar.finish_and_clear();
+        stats.baseline_seconds = grid_seconds + baseline_part;
+        stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;
+        let mut pixels = Vec::with_capacity(results.len());
+        // The work of the pilot pixels' scouting runs, which the pixels that went on replaced.
+        for (p, counts) in scouted
+            .iter()
+            .map(|(p, c)| (p, *c))
+            .chain(results.iter().map(|(p, c)| (p, *c)))
+        {
+            stats.rays.add(counts);
+            stats.test_path_cpu_seconds += p.test_path_seconds;
+            stats.evolve_cpu_seconds += p.ga_seconds;
+            stats.individual_evaluations += p.individual_evaluations;
+            stats.generator_evaluations += p.generator_evaluations;
+        }
+        for (p, _) in results {
+            if config.gate && p.prefers_pt(plan_for) {
+                stats.pt_pixels += 1;
+            }
+            pixels.push(p);
+        }
+        Ok(Self {
+            width,
+            height,
+            pixels,
+            pt_points,
+            gate: config.gate,
+            closed,
+            plan_for,
+            srt,
+            neighbours: config.neighbours,
+            analysis: scene.analysis(),
+            unnormalised: false,
+            stats,
+            index: OnceLock::new(),
+        })
+    }
+
+    /// This plan with its interpolation weights deliberately left unnormalised: a wrong input
+    /// that the unbiasedness test must reject.
+    pub fn with_unnormalised_interpolation(mut self) -> Self {
+        self.unnormalised = true;
+        self
+    }
+
+    /// Whether no pixel renders with the plan's mixtures or guides (the gate's pilot
+    /// closed the GA).
+    pub fn is_closed(&self) -> bool {
+        self.closed
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Wall-clock time of the whole plan (baseline and GA).
+    pub fn elapsed(&self) -> Duration {
+        Duration::from_secs_f64(self.stats.baseline_seconds + self.stats.ga_seconds)
+    }
+}
