@@ -2,7 +2,8 @@
 //! [`Moments`] of each), the margins it must win by, and the pilot's size and share.
 
 use super::super::test_paths::TestPaths;
-use super::super::{fitness, ChannelWeights, GaConfig};
+use super::super::{fitness, ChannelWeights};
+use super::pixel::PixelContext;
 use super::PlanFor;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
@@ -66,22 +67,35 @@ pub struct Trial {
     pub gain: f64,
 }
 
-/// One estimator's samples at pixel `(x, y)`: `n` samples of `pt`, guided by `guide` when
-/// given, or of `mixture`'s estimator (eq. 8) when given, from `stream`'s random streams.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn sample_moments(
-    view: &SceneView,
-    (x, y): (u32, u32),
+/// Where a trial samples: the scene, the pixel, its [`ChannelWeights`], the bounce limit and
+/// the user's seed (from which each estimator's stream is derived).
+struct TrialAt<'a> {
+    view: &'a SceneView<'a>,
+    at: (u32, u32),
+    weights: ChannelWeights,
     max_bounces: u32,
-    (seed, stream): (u64, u64),
-    (n, weights): (u32, ChannelWeights),
-    mixture: Option<&Mixture>,
-    guide: Option<&Guide>,
+    seed: u64,
+}
+
+/// One estimator's samples at the trial's pixel: `n` samples of `pt`, guided by the guide
+/// when given, or of the mixture's estimator (eq. 8) when given, from `stream`'s random
+/// streams.
+fn sample_moments(
+    trial: &TrialAt,
+    (stream, n): (Stream, u32),
+    (mixture, guide): (Option<&Mixture>, Option<&Guide>),
     counts: &mut RayCounts,
 ) -> Moments {
+    let &TrialAt {
+        view,
+        at: (x, y),
+        weights,
+        max_bounces,
+        seed,
+    } = trial;
     let camera = &view.scene.camera;
     let pixel = y as u64 * camera.width as u64 + x as u64;
-    let seed = derived_seed(seed, stream);
+    let seed = derived_seed(seed, stream.tag());
     let mut scratch = MixtureScratch::default();
     let mut c = RayCounts::default();
     let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
@@ -111,7 +125,8 @@ pub(super) fn sample_moments(
     }
 }
 
-/// The gate's comparison at `(x, y)` of `mixture`'s estimator for `plan_for` with `pt`.
+/// The gate's comparison at `(x, y)`, under the pixel's channel `weights`, of `mixture`'s
+/// estimator for the plan's [`PlanFor`] with `pt`.
 ///
 /// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
 /// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
@@ -119,73 +134,27 @@ pub(super) fn sample_moments(
 /// own samples mostly miss (fig5: the median 512-sample variance is 2–7× below the true
 /// one). Its second moment is therefore eq. 10 on fresh `srt` test paths, which sample
 /// exactly those paths at `srt`'s rate; its cost comes from `COST_SAMPLES` samples.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn run_trial(
-    view: &SceneView,
-    srt: &Mixture,
-    (ga, mixture): (&GaConfig, &Mixture),
-    (plan_for, weights): (PlanFor, ChannelWeights),
-    (x, y): (u32, u32),
-    max_bounces: u32,
-    seed: u64,
+    context: &PixelContext,
+    ((x, y), weights): ((u32, u32), ChannelWeights),
+    mixture: &Mixture,
     counts: &mut RayCounts,
 ) -> Trial {
-    let pt = sample_moments(
-        view,
-        (x, y),
-        max_bounces,
-        (seed, Stream::GatePt.tag()),
-        (GATE_SAMPLES, weights),
-        None,
-        None,
-        counts,
-    );
-    let evolved = match plan_for {
+    let trial = TrialAt {
+        view: context.view,
+        at: (x, y),
+        weights,
+        max_bounces: context.max_bounces,
+        seed: context.seed,
+    };
+    let pt = sample_moments(&trial, (Stream::GatePt, GATE_SAMPLES), (None, None), counts);
+    let evolved = match context.plan_for {
         PlanFor::Guide => {
             let guide = Guide::new(mixture);
-            let stream = (seed, Stream::Gate.tag());
             let g = Some(&guide);
-            sample_moments(
-                view,
-                (x, y),
-                max_bounces,
-                stream,
-                (GATE_SAMPLES, weights),
-                None,
-                g,
-                counts,
-            )
+            sample_moments(&trial, (Stream::Gate, GATE_SAMPLES), (None, g), counts)
         }
-        PlanFor::Mixture => {
-            let stream = (seed, Stream::Gate.tag());
-            let m = Some(mixture);
-            let cost = sample_moments(
-                view,
-                (x, y),
-                max_bounces,
-                stream,
-                (COST_SAMPLES, weights),
-                m,
-                None,
-                counts,
-            );
-            let (mut check, c) = TestPaths::sample_until(
-                view,
-                srt,
-                (x, y),
-                (ga.test_paths, ga.max_light_paths),
-                max_bounces,
-                derived_seed(seed, Stream::Check.tag()),
-            );
-            counts.add(c);
-            check.weigh(weights);
-            let mean = check.mean();
-            Moments {
-                mean,
-                variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
-                cost: cost.cost,
-            }
-        }
+        PlanFor::Mixture => mixture_moments(context, &trial, mixture, counts),
     };
     let gain = if pt.variance > 0.0 {
         evolved.efficiency() / pt.efficiency()
@@ -193,4 +162,33 @@ pub(super) fn run_trial(
         0.0
     };
     Trial { pt, evolved, gain }
+}
+
+/// The mixture estimator's moments in a trial: its cost from `COST_SAMPLES` of its samples,
+/// its variance from eq. 10 on fresh `srt` test paths (see [`run_trial`]).
+fn mixture_moments(
+    context: &PixelContext,
+    trial: &TrialAt,
+    mixture: &Mixture,
+    counts: &mut RayCounts,
+) -> Moments {
+    let m = Some(mixture);
+    let cost = sample_moments(trial, (Stream::Gate, COST_SAMPLES), (m, None), counts);
+    let (view, ga) = (context.view, context.ga);
+    let (mut check, c) = TestPaths::sample_until(
+        view,
+        context.srt,
+        trial.at,
+        (ga.test_paths, ga.max_light_paths),
+        trial.max_bounces,
+        derived_seed(trial.seed, Stream::Check.tag()),
+    );
+    counts.add(c);
+    check.weigh(trial.weights);
+    let mean = check.mean();
+    Moments {
+        mean,
+        variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
+        cost: cost.cost,
+    }
 }

@@ -60,7 +60,6 @@ pub use gate::{
 };
 pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
 
-use super::individual::Individual;
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
 use crate::path::mixture::Mixture;
@@ -68,7 +67,7 @@ use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::progress::progress_bar;
 use crate::scene::SceneAnalysis;
 use baseline::{baseline, choose_pixels, grid_pixels};
-use pixel::run_pixel;
+use pixel::{run_pixel, GaRun, PixelContext};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::OnceLock;
@@ -201,19 +200,19 @@ impl Plan {
         // one: its scouting run's would replay the same random individuals and breeding).
         // The last field: whether the pixel runs the gate's trial. For a mixture every GA
         // pixel does; for a guide only the pilot (see `trials_everywhere`).
-        type Job = (usize, Vec<Individual>, usize, u64, bool);
+        type Job = (usize, GaRun);
         let trials_everywhere = plan_for == PlanFor::Mixture;
-        let run_job = |at: (u32, u32, Origin), seeds: &[Individual], generations, stream, trial| {
-            let r = run_pixel(
-                view,
-                &srt,
-                ga,
-                at,
-                max_bounces,
-                seed,
-                (config, plan_for),
-                (seeds, generations, stream, trial),
-            );
+        let context = PixelContext {
+            view,
+            srt: &srt,
+            ga,
+            config,
+            max_bounces,
+            plan_for,
+            seed,
+        };
+        let run_job = |at: (u32, u32, Origin), run: &GaRun| {
+            let r = run_pixel(&context, at, run);
             bar.inc(1);
             r
         };
@@ -221,12 +220,7 @@ impl Plan {
             |wave: &[Job], chosen: &[(u32, u32, Origin)], done: &mut Vec<Option<_>>| {
                 let results: Vec<(usize, (GaPixel, RayCounts))> = wave
                     .par_iter()
-                    .map(|(i, seeds, generations, stream, trial)| {
-                        (
-                            *i,
-                            run_job(chosen[*i], seeds, *generations, *stream, *trial),
-                        )
-                    })
+                    .map(|(i, run)| (*i, run_job(chosen[*i], run)))
                     .collect();
                 for (i, r) in results {
                     done[i] = Some(r);
@@ -246,7 +240,13 @@ impl Plan {
                 if settled() {
                     return None;
                 }
-                let r = run_job(chosen[i], &[], scout, 0, true);
+                let run = GaRun {
+                    seeds: Vec::new(),
+                    generations: scout,
+                    stream: 0,
+                    trial: true,
+                };
+                let r = run_job(chosen[i], &run);
                 if !r.0.pays(plan_for) {
                     losing.fetch_add(1, Ordering::Relaxed);
                 }
@@ -330,7 +330,13 @@ impl Plan {
                     match p.best.clone() {
                         Some(best) if rest > 0 => {
                             scouted.push((p, counts));
-                            Some((i, vec![best], rest, 1, true))
+                            let run = GaRun {
+                                seeds: vec![best],
+                                generations: rest,
+                                stream: 1,
+                                trial: true,
+                            };
+                            Some((i, run))
                         }
                         _ => {
                             done[i] = Some((p, counts));
@@ -343,7 +349,15 @@ impl Plan {
             evolve_wave(&go_on, &chosen, &mut done);
             let cold: Vec<Job> = first
                 .iter()
-                .map(|&i| (i, Vec::new(), ga.generations, 0, trials_everywhere))
+                .map(|&i| {
+                    let run = GaRun {
+                        seeds: Vec::new(),
+                        generations: ga.generations,
+                        stream: 0,
+                        trial: trials_everywhere,
+                    };
+                    (i, run)
+                })
                 .collect();
             run_chunks(&cold, &mut done);
             // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
@@ -352,14 +366,24 @@ impl Plan {
             let second: Vec<Job> = second
                 .iter()
                 .map(|&i| match config.warm_start {
-                    true => (
-                        i,
-                        neighbour_seeds(&done, chosen[i], config),
-                        warm,
-                        0,
-                        trials_everywhere,
-                    ),
-                    false => (i, Vec::new(), ga.generations, 0, trials_everywhere),
+                    true => {
+                        let run = GaRun {
+                            seeds: neighbour_seeds(&done, chosen[i], config),
+                            generations: warm,
+                            stream: 0,
+                            trial: trials_everywhere,
+                        };
+                        (i, run)
+                    }
+                    false => {
+                        let run = GaRun {
+                            seeds: Vec::new(),
+                            generations: ga.generations,
+                            stream: 0,
+                            trial: trials_everywhere,
+                        };
+                        (i, run)
+                    }
                 })
                 .collect();
             run_chunks(&second, &mut done);

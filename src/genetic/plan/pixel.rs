@@ -2,7 +2,7 @@
 //! individual and `srt`, and the gate's trial ([`GaPixel`]).
 
 use super::super::individual::Individual;
-use super::super::population::{evolve_from, GenerationStats};
+use super::super::population::{evolve_from, Evolution, GenerationStats};
 use super::super::test_paths::TestPaths;
 use super::super::{fitness, GaConfig};
 use super::baseline::Origin;
@@ -82,18 +82,63 @@ impl GaPixel {
     }
 }
 
+/// What every GA pixel of a plan shares: the scene, the defensive `srt` mixture, the
+/// settings, the estimator the plan is for and the user's seed, from which each pixel's
+/// random streams are derived.
+pub(super) struct PixelContext<'a> {
+    pub(super) view: &'a SceneView<'a>,
+    pub(super) srt: &'a Mixture,
+    pub(super) ga: &'a GaConfig,
+    pub(super) config: &'a PlanConfig,
+    pub(super) max_bounces: u32,
+    pub(super) plan_for: PlanFor,
+    pub(super) seed: u64,
+}
+
+/// How the GA starts at a pixel, and whether the pixel then runs the gate's trial.
+#[derive(Debug)]
+pub(super) struct GaRun {
+    /// The first generation's evolved individuals (none: a cold start).
+    pub(super) seeds: Vec<Individual>,
+    pub(super) generations: usize,
+    /// The pixel's GA random stream (a pilot pixel that goes on takes a fresh one: its
+    /// scouting run's would replay the same random individuals and breeding).
+    pub(super) stream: u64,
+    /// Whether the pixel runs the gate's trial (with the gate, where the GA did not keep
+    /// `srt`).
+    pub(super) trial: bool,
+}
+
+/// What a pixel keeps of its GA: its best individual's mixture, or `srt` where that was
+/// no better on the test paths.
+struct Outcome {
+    mixture: Mixture,
+    /// Eq. 10 of the chosen mixture, and of the best individual with its evolved weights.
+    v_best: f64,
+    v_evolved: f64,
+    kept_srt: bool,
+    history: Vec<GenerationStats>,
+    /// Individuals and generators evaluated.
+    evaluations: (u64, u64),
+    /// The best individual (none without light-carrying test paths).
+    best: Option<Individual>,
+}
+
 /// Test paths and evolution at one pixel.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn run_pixel(
-    view: &SceneView,
-    srt: &Mixture,
-    ga: &GaConfig,
+    context: &PixelContext,
     (x, y, origin): (u32, u32, Origin),
-    max_bounces: u32,
-    seed: u64,
-    (config, plan_for): (&PlanConfig, PlanFor),
-    (seeds, generations, stream, trial): (&[Individual], usize, u64, bool),
+    run: &GaRun,
 ) -> (GaPixel, RayCounts) {
+    let &PixelContext {
+        view,
+        srt,
+        ga,
+        config,
+        max_bounces,
+        seed,
+        ..
+    } = context;
     let t0 = Instant::now();
     let (paths, mut counts) = TestPaths::sample_until(
         view,
@@ -106,11 +151,61 @@ pub(super) fn run_pixel(
     let test_path_seconds = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let pixel = y as u64 * view.scene.camera.width as u64 + x as u64;
-    let mut rng = sample_rng(derived_seed(seed, Stream::Ga.tag()), pixel, stream);
+    let mut rng = sample_rng(derived_seed(seed, Stream::Ga.tag()), pixel, run.stream);
     let v_srt = fitness::second_moment(view, &paths, srt);
-    // Pruning: no generator step past the depth where the test paths carry light.
-    // A guide takes only the directional samplers.
-    let ga = &GaConfig {
+    let ga = &pixel_ga_config(context, &paths, run.generations);
+    let steps = ga
+        .max_steps
+        .unwrap_or(usize::MAX)
+        .min(max_bounces.saturating_sub(1).max(1) as usize);
+    let outcome = if paths.is_empty() {
+        Outcome {
+            mixture: srt.clone(),
+            v_best: v_srt,
+            v_evolved: v_srt,
+            kept_srt: true,
+            history: Vec::new(),
+            evaluations: (0, 0),
+            best: None,
+        }
+    } else {
+        let evolution = evolve_from(ga, &paths, view, &mut rng, &run.seeds);
+        best_or_srt(view, ga, &paths, evolution, (srt, v_srt))
+    };
+    let trial = (config.gate && run.trial && !outcome.kept_srt).then(|| {
+        let at = ((x, y), paths.weights());
+        run_trial(context, at, &outcome.mixture, &mut counts)
+    });
+    let pixel = GaPixel {
+        x,
+        y,
+        origin,
+        best: outcome.best,
+        warm: !run.seeds.is_empty(),
+        trial,
+        steps,
+        mixture: outcome.mixture,
+        v_srt,
+        v_best: outcome.v_best,
+        v_evolved: outcome.v_evolved,
+        kept_srt: outcome.kept_srt,
+        test_paths: paths.sampled,
+        light_paths: paths.len(),
+        history: outcome.history,
+        individual_evaluations: outcome.evaluations.0,
+        generator_evaluations: outcome.evaluations.1,
+        test_path_seconds,
+        ga_seconds: t1.elapsed().as_secs_f64(),
+    };
+    (pixel, counts)
+}
+
+/// The GA's settings at a pixel: `generations` of them, and with pruning no generator step
+/// past the depth where the test paths carry light. A guide takes only the directional
+/// samplers, and at most `guide_steps` steps.
+fn pixel_ga_config(context: &PixelContext, paths: &TestPaths, generations: usize) -> GaConfig {
+    let (ga, config, plan_for) = (context.ga, context.config, context.plan_for);
+    GaConfig {
         directions_only: ga.directions_only || plan_for == PlanFor::Guide,
         max_steps: match (
             plan_for,
@@ -121,97 +216,69 @@ pub(super) fn run_pixel(
         },
         generations,
         ..ga.clone()
-    };
-    let steps = ga
-        .max_steps
-        .unwrap_or(usize::MAX)
-        .min(max_bounces.saturating_sub(1).max(1) as usize);
-    let mut best = None;
-    let (mixture, v_best, v_evolved, kept_srt, history, evals) = if paths.is_empty() {
-        (srt.clone(), v_srt, v_srt, true, Vec::new(), (0, 0))
+    }
+}
+
+/// The evolved individual's mixture where its `V` (after [`convex_weights`] with
+/// `GaConfig::convex_weights`) is below `srt`'s `v_srt`, else `srt`.
+fn best_or_srt(
+    view: &SceneView,
+    ga: &GaConfig,
+    paths: &TestPaths,
+    mut evolution: Evolution,
+    (srt, v_srt): (&Mixture, f64),
+) -> Outcome {
+    let v_evolved = evolution.best_v;
+    let mut evaluations = (
+        evolution.individual_evaluations,
+        evolution.generator_evaluations,
+    );
+    if ga.convex_weights && v_evolved.is_finite() {
+        evaluations.1 += convex_weights(view, ga, paths, &mut evolution);
+    }
+    let best = Some(evolution.best.clone());
+    let (mixture, v_best, kept_srt) = if evolution.best_v < v_srt {
+        (evolution.best.to_mixture(), evolution.best_v, false)
     } else {
-        let mut evolution = evolve_from(ga, &paths, view, &mut rng, seeds);
-        let v_evolved = evolution.best_v;
-        let mut evals = (
-            evolution.individual_evaluations,
-            evolution.generator_evaluations,
-        );
-        if ga.convex_weights && v_evolved.is_finite() {
-            let best = &mut evolution.best;
-            let densities: Vec<Vec<f64>> = best
-                .genes
-                .iter()
-                .map(|gene| {
-                    let mut d = vec![0.0; paths.len()];
-                    paths.generator_pdfs(view, &gene.generator, &mut d);
-                    d
-                })
-                .collect();
-            evals.1 += densities.len() as u64;
-            let refs: Vec<&[f64]> = densities.iter().map(|d| d.as_slice()).collect();
-            let v = fitness::optimise_weights(
-                (&paths.f2_over_q, paths.sampled),
-                &refs,
-                &mut best.weights,
-                ga.defensive_weight,
-                CONVEX_ITERATIONS,
-            );
-            evolution.best_v = v;
-        }
-        best = Some(evolution.best.clone());
-        if evolution.best_v < v_srt {
-            (
-                evolution.best.to_mixture(),
-                evolution.best_v,
-                v_evolved,
-                false,
-                evolution.history,
-                evals,
-            )
-        } else {
-            (
-                srt.clone(),
-                v_srt,
-                v_evolved,
-                true,
-                evolution.history,
-                evals,
-            )
-        }
+        (srt.clone(), v_srt, true)
     };
-    let trial = (config.gate && trial && !kept_srt).then(|| {
-        let evolved = (ga, &mixture);
-        run_trial(
-            view,
-            srt,
-            evolved,
-            (plan_for, paths.weights()),
-            (x, y),
-            max_bounces,
-            seed,
-            &mut counts,
-        )
-    });
-    let pixel = GaPixel {
-        x,
-        y,
-        origin,
-        best,
-        warm: !seeds.is_empty(),
-        trial,
-        steps,
+    Outcome {
         mixture,
-        v_srt,
         v_best,
         v_evolved,
         kept_srt,
-        test_paths: paths.sampled,
-        light_paths: paths.len(),
-        history,
-        individual_evaluations: evals.0,
-        generator_evaluations: evals.1,
-        test_path_seconds,
-        ga_seconds: t1.elapsed().as_secs_f64(),
-    };
-    (pixel, counts)
+        history: evolution.history,
+        evaluations,
+        best,
+    }
+}
+
+/// Replaces the best individual's weights with those that minimise its `V` on the test paths
+/// ([`fitness::optimise_weights`]), and its `V` with theirs; returns the generators evaluated.
+fn convex_weights(
+    view: &SceneView,
+    ga: &GaConfig,
+    paths: &TestPaths,
+    evolution: &mut Evolution,
+) -> u64 {
+    let best = &mut evolution.best;
+    let densities: Vec<Vec<f64>> = best
+        .genes
+        .iter()
+        .map(|gene| {
+            let mut d = vec![0.0; paths.len()];
+            paths.generator_pdfs(view, &gene.generator, &mut d);
+            d
+        })
+        .collect();
+    let refs: Vec<&[f64]> = densities.iter().map(|d| d.as_slice()).collect();
+    let v = fitness::optimise_weights(
+        (&paths.f2_over_q, paths.sampled),
+        &refs,
+        &mut best.weights,
+        ga.defensive_weight,
+        CONVEX_ITERATIONS,
+    );
+    evolution.best_v = v;
+    densities.len() as u64
 }
