@@ -3,6 +3,8 @@
 
 use super::super::luminance;
 use super::config::PlanConfig;
+use super::pixel::PixelContext;
+use super::PlanStats;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
@@ -19,7 +21,7 @@ pub enum Origin {
 
 /// Per-pixel baseline estimate.
 #[derive(Clone, Copy, Default)]
-pub(super) struct Baseline {
+struct Baseline {
     /// Relative variance of one `srt` sample: `Var[L] / (E[L]² + 0.01)` (luminance).
     rel_variance: f64,
     /// Sum and sum of squares of the samples' luminance.
@@ -31,7 +33,7 @@ pub(super) struct Baseline {
 
 /// The cells of a `grid`-pixel grid over a `width × height` image, row by row: `[x0, y0, x1,
 /// y1)` each, clipped to the image.
-pub(super) fn grid_cells(width: u32, height: u32, grid: u32) -> impl Iterator<Item = [u32; 4]> {
+fn grid_cells(width: u32, height: u32, grid: u32) -> impl Iterator<Item = [u32; 4]> {
     (0..height).step_by(grid as usize).flat_map(move |y0| {
         (0..width)
             .step_by(grid as usize)
@@ -43,7 +45,7 @@ pub(super) fn grid_cells(width: u32, height: u32, grid: u32) -> impl Iterator<It
 /// scattering surface (`None`: the cell has none), in row-major cell order; and the pixels
 /// whose centre ray sees none. One ray per pixel, no random numbers: the pilot can run
 /// before (and without) the baseline.
-pub(super) fn grid_pixels(
+fn grid_pixels(
     view: &SceneView,
     grid: u32,
     counts: &mut RayCounts,
@@ -90,7 +92,54 @@ pub(super) fn grid_pixels(
     (cells, scatters.iter().filter(|s| !**s).count())
 }
 
-pub(super) fn baseline(
+/// [`grid_pixels`], with its rays, its pixels without a scattering surface and its empty
+/// cells counted in `stats`.
+pub(super) fn scattering_cells(
+    view: &SceneView,
+    grid: u32,
+    stats: &mut PlanStats,
+) -> Vec<Option<(u32, u32)>> {
+    let mut counts = RayCounts::default();
+    let (cells, skipped) = grid_pixels(view, grid, &mut counts);
+    stats.rays.add(counts);
+    stats.skipped_pixels = skipped;
+    stats.empty_cells = cells.iter().filter(|c| c.is_none()).count();
+    cells
+}
+
+/// The baseline pass and the GA pixels [`choose_pixels`] chooses from it in `cells` (those
+/// at `keep`, the pilot's, stay whatever their cells' variance), with the baseline's rays,
+/// low-variance cells and variance quartiles in `stats`.
+pub(super) fn baseline_choice(
+    context: &PixelContext,
+    cells: &[Option<(u32, u32)>],
+    keep: &[(u32, u32)],
+    stats: &mut PlanStats,
+) -> Choice {
+    let &PixelContext {
+        view,
+        srt,
+        config,
+        max_bounces,
+        seed,
+        ..
+    } = context;
+    let camera = &view.scene.camera;
+    let (base, counts) = baseline(view, srt, config, max_bounces, seed);
+    stats.rays.add(counts);
+    stats.baseline_ran = true;
+    let size = (camera.width, camera.height);
+    let choice = choose_pixels(&base, cells, size, config, keep);
+    stats.low_variance_cells = choice.low.len();
+    let mut v = choice.cell_variance.clone();
+    v.sort_by(f64::total_cmp);
+    if !v.is_empty() {
+        stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
+    }
+    choice
+}
+
+fn baseline(
     view: &SceneView,
     srt: &Mixture,
     config: &PlanConfig,
@@ -164,13 +213,13 @@ pub(super) struct Choice {
     /// The GA pixel of each low-variance cell (pruning).
     pub(super) low: Vec<(u32, u32)>,
     /// Pooled baseline relative variance of every cell with a GA pixel.
-    pub(super) cell_variance: Vec<f64>,
+    cell_variance: Vec<f64>,
 }
 
 /// The GA pixels: each cell's grid pixel ([`grid_pixels`]), then extras in the noisiest
 /// cells; with pruning, none in cells whose pooled baseline relative variance is below
 /// `config.prune_variance`, except at `keep` (the pilot, already evolved).
-pub(super) fn choose_pixels(
+fn choose_pixels(
     base: &[Baseline],
     cells: &[Option<(u32, u32)>],
     (width, height): (u32, u32),

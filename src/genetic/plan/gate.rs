@@ -1,15 +1,19 @@
-//! The gate: a GA pixel's trial of the evolved estimator against `pt` ([`Trial`], from
-//! [`Moments`] of each), the margins it must win by, and the pilot's size and share.
+//! The gate: the pilot that decides whether the GA goes on, a GA pixel's trial of the
+//! evolved estimator against `pt` ([`Trial`], from [`Moments`] of each), and its margins.
 
 use super::super::test_paths::TestPaths;
 use super::super::{fitness, ChannelWeights};
-use super::pixel::PixelContext;
+use super::baseline::Origin;
+use super::pixel::{Evolved, GaRun, PixelContext};
+use super::waves::Waves;
 use super::PlanFor;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
 use glam::DVec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Samples of `pt` (and of the guided path tracer) with which the gate measures their
 /// variance at a GA pixel.
@@ -40,6 +44,71 @@ pub const PILOT_PIXELS: usize = 8;
 /// full pilot took a third of the time). Where the pilot pays, its pixels go on from their
 /// best individual for the remaining generations.
 pub const PILOT_SHARE: usize = 4;
+
+/// The pilot: with the gate, up to `PILOT_PIXELS` grid pixels spread evenly over the image
+/// (`grid`, in row-major cell order), evolved first, before the baseline: where it predicts
+/// no gain, the plan costs no baseline. Without the gate, none.
+pub(super) fn pilot_pixels(grid: &[(u32, u32)], gate: bool) -> Vec<(u32, u32, Origin)> {
+    if !gate {
+        return Vec::new();
+    }
+    let k = PILOT_PIXELS.min(grid.len());
+    (0..k)
+        .map(|j| {
+            let (x, y) = grid[j * grid.len() / k];
+            (x, y, Origin::Grid)
+        })
+        .collect()
+}
+
+/// Evolves the pilot's pixels for `scout` generations, in parallel, each with its trial.
+///
+/// For a mixture, a pilot pixel is not started once so many others failed to pay that the
+/// pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips depends on the
+/// threads' timing, so a mixture's pilot that fails leaves the whole image to `pt` (see
+/// `Plan::closed`), whichever of its pixels ran.
+pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) {
+    let plan_for = waves.context.plan_for;
+    let pilot = waves.pilot;
+    let losing = AtomicUsize::new(0);
+    let settled =
+        || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+    let this = &*waves;
+    let scouted_pilot: Vec<(usize, Evolved)> = (0..pilot)
+        .into_par_iter()
+        .filter_map(|i| {
+            if settled() {
+                return None;
+            }
+            let run = GaRun {
+                seeds: Vec::new(),
+                generations: scout,
+                stream: 0,
+                trial: true,
+            };
+            let r = this.evolve_one(i, &run);
+            if !r.0.pays(plan_for) {
+                losing.fetch_add(1, Ordering::Relaxed);
+            }
+            Some((i, r))
+        })
+        .collect();
+    for (i, r) in scouted_pilot {
+        waves.done[i] = Some(r);
+    }
+}
+
+/// Whether the GA goes on past the scouted pilot: where at least half the pilot pixels
+/// predict a gain above the winning margin. One pixel alone (an outlier, or a small region)
+/// does not pay for evolving the whole image. (Without the gate there is no pilot, and it
+/// does not pay.)
+pub(super) fn pilot_pays(waves: &Waves) -> bool {
+    let plan_for = waves.context.plan_for;
+    let paying = (waves.done.iter().flatten())
+        .filter(|(p, _)| p.pays(plan_for))
+        .count();
+    2 * paying >= waves.pilot.max(1)
+}
 
 /// One estimator's samples at a pixel, per sample: mean and variance under the pixel's
 /// [`ChannelWeights`] (`√(Σ_c w_c mean_c²)` and `Σ_c w_c Var_c`), and the cost

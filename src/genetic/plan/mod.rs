@@ -64,15 +64,13 @@ use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
-use crate::progress::progress_bar;
 use crate::scene::SceneAnalysis;
-use baseline::{baseline, choose_pixels, grid_pixels};
-use pixel::{run_pixel, GaRun, PixelContext};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use baseline::scattering_cells;
+use gate::{pilot_pays, pilot_pixels, scout_pilot};
+use pixel::{Evolved, PixelContext};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-use waves::neighbour_seeds;
+use waves::Waves;
 
 /// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
 /// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
@@ -118,6 +116,39 @@ pub struct PlanStats {
     pub individual_evaluations: u64,
     pub generator_evaluations: u64,
     pub rays: RayCounts,
+}
+
+impl PlanStats {
+    /// Adds the GA pixels' work to the totals, that of the pilot's `scouted` runs (which the
+    /// pixels that went on replaced) included, and counts the pixels that prefer `pt` with
+    /// the gate; returns the pixels.
+    fn count_pixels(
+        &mut self,
+        scouted: &[Evolved],
+        results: Vec<Evolved>,
+        gate: bool,
+        plan_for: PlanFor,
+    ) -> Vec<GaPixel> {
+        for (p, counts) in scouted
+            .iter()
+            .map(|(p, c)| (p, *c))
+            .chain(results.iter().map(|(p, c)| (p, *c)))
+        {
+            self.rays.add(counts);
+            self.test_path_cpu_seconds += p.test_path_seconds;
+            self.evolve_cpu_seconds += p.ga_seconds;
+            self.individual_evaluations += p.individual_evaluations;
+            self.generator_evaluations += p.generator_evaluations;
+        }
+        let mut pixels = Vec::with_capacity(results.len());
+        for (p, _) in results {
+            if gate && p.prefers_pt(plan_for) {
+                self.pt_pixels += 1;
+            }
+            pixels.push(p);
+        }
+        pixels
+    }
 }
 
 /// GA pixels and their mixtures, and how every other pixel combines them.
@@ -168,40 +199,11 @@ impl Plan {
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();
-        let mut counts = RayCounts::default();
-        let (cells, skipped) = grid_pixels(view, config.grid, &mut counts);
-        stats.rays.add(counts);
-        stats.skipped_pixels = skipped;
-        stats.empty_cells = cells.iter().filter(|c| c.is_none()).count();
+        let cells = scattering_cells(view, config.grid, &mut stats);
         let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
         let grid_seconds = t0.elapsed().as_secs_f64();
-        // Seconds of the baseline, which runs between GA waves.
-        let mut baseline_part = 0.0;
 
         let t1 = Instant::now();
-        // With the gate, a pilot of grid pixels spread evenly over the image runs first,
-        // before the baseline: where it predicts no gain, the plan costs no baseline.
-        let mut chosen: Vec<(u32, u32, Origin)> = if config.gate {
-            let k = PILOT_PIXELS.min(grid.len());
-            (0..k)
-                .map(|j| {
-                    let (x, y) = grid[j * grid.len() / k];
-                    (x, y, Origin::Grid)
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let pilot = chosen.len();
-        let bar = progress_bar(pilot as u64, "GA", progress);
-        let mut done: Vec<Option<(GaPixel, RayCounts)>> = vec![None; pilot];
-        // A wave: GA pixels (indices into `chosen`), the individuals each starts from, its
-        // generations and its GA random stream (a pilot pixel that goes on takes a fresh
-        // one: its scouting run's would replay the same random individuals and breeding).
-        // The last field: whether the pixel runs the gate's trial. For a mixture every GA
-        // pixel does; for a guide only the pilot (see `trials_everywhere`).
-        type Job = (usize, GaRun);
-        let trials_everywhere = plan_for == PlanFor::Mixture;
         let context = PixelContext {
             view,
             srt: &srt,
@@ -211,223 +213,23 @@ impl Plan {
             plan_for,
             seed,
         };
-        let run_job = |at: (u32, u32, Origin), run: &GaRun| {
-            let r = run_pixel(&context, at, run);
-            bar.inc(1);
-            r
-        };
-        let evolve_wave =
-            |wave: &[Job], chosen: &[(u32, u32, Origin)], done: &mut Vec<Option<_>>| {
-                let results: Vec<(usize, (GaPixel, RayCounts))> = wave
-                    .par_iter()
-                    .map(|(i, run)| (*i, run_job(chosen[*i], run)))
-                    .collect();
-                for (i, r) in results {
-                    done[i] = Some(r);
-                }
-            };
+        let mut waves = Waves::new(&context, pilot_pixels(&grid, config.gate), progress, t0);
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        // For a mixture, a pilot pixel is not started once so many others failed to pay
-        // that the pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips
-        // depends on the threads' timing, so a mixture's pilot that fails leaves the whole
-        // image to `pt` (see `Plan::closed`), whichever of its pixels ran.
-        let losing = AtomicUsize::new(0);
-        let settled =
-            || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
-        let scouted_pilot: Vec<(usize, (GaPixel, RayCounts))> = (0..pilot)
-            .into_par_iter()
-            .filter_map(|i| {
-                if settled() {
-                    return None;
-                }
-                let run = GaRun {
-                    seeds: Vec::new(),
-                    generations: scout,
-                    stream: 0,
-                    trial: true,
-                };
-                let r = run_job(chosen[i], &run);
-                if !r.0.pays(plan_for) {
-                    losing.fetch_add(1, Ordering::Relaxed);
-                }
-                Some((i, r))
-            })
-            .collect();
-        for (i, r) in scouted_pilot {
-            done[i] = Some(r);
-        }
-        let mut scouted: Vec<(GaPixel, RayCounts)> = Vec::new();
-        let mut pt_points = Vec::new();
-        // The GA goes on where at least half the pilot pixels predict a gain above the
-        // winning margin: one pixel alone (an outlier, or a small region) does not pay for
-        // evolving the whole image.
-        let paying = done
-            .iter()
-            .flatten()
-            .filter(|(p, _)| p.pays(plan_for))
-            .count();
-        let pilot_pays = 2 * paying >= pilot.max(1);
+        scout_pilot(&mut waves, scout);
+        let pilot_pays = pilot_pays(&waves);
         let closed = config.gate && !pilot_pays && (plan_for == PlanFor::Mixture || config.spatial);
-        if !config.gate || pilot_pays {
-            // The baseline, then the other GA pixels (the pilot's stay, whatever their
-            // cells' variance).
-            let t2 = Instant::now();
-            let (base, counts) = baseline(view, &srt, config, max_bounces, seed);
-            stats.rays.add(counts);
-            stats.baseline_ran = true;
-            let keep: Vec<(u32, u32)> = chosen.iter().map(|&(x, y, _)| (x, y)).collect();
-            let choice = choose_pixels(&base, &cells, (width, height), config, &keep);
-            stats.low_variance_cells = choice.low.len();
-            let mut v = choice.cell_variance;
-            v.sort_by(f64::total_cmp);
-            if !v.is_empty() {
-                stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
-            }
-            if config.gate {
-                pt_points.extend(&choice.low);
-            }
-            chosen.extend((choice.pixels.iter()).filter(|&&(x, y, _)| !keep.contains(&(x, y))));
-            let n = chosen.len();
-            done.resize(n, None);
-            bar.inc_length((n - pilot) as u64);
-            baseline_part = t2.elapsed().as_secs_f64();
-
-            // With warm starts, the grid pixels of "white" cells (in a checkerboard of
-            // cells) first, then the rest, seeded from their evolved neighbours.
-            let g = config.grid;
-            let white = |i: usize| {
-                let (x, y, origin) = chosen[i];
-                origin == Origin::Grid && (x / g + y / g) % 2 == 0
-            };
-            let (first, second): (Vec<usize>, Vec<usize>) =
-                (pilot..n).partition(|&i| !config.warm_start || white(i));
-            // With a time limit, the waves run in chunks, each only if time is left.
-            let chunk = match config.time_limit {
-                Some(_) => 4 * rayon::current_num_threads(),
-                None => usize::MAX,
-            };
-            let mut late = Vec::new();
-            let mut run_chunks = |jobs: &[Job], done: &mut Vec<_>| {
-                for c in jobs.chunks(chunk) {
-                    if config
-                        .time_limit
-                        .is_some_and(|limit| t0.elapsed().as_secs_f64() >= limit)
-                    {
-                        late.extend(c.iter().map(|j| j.0));
-                    } else {
-                        evolve_wave(c, &chosen, done);
-                    }
-                }
-            };
-            // The pilot goes on from each pixel's best individual for the remaining
-            // generations, whatever the time limit (the pilot showed the GA pays); its
-            // scouting still counts in the stats. A scout without a best individual (no
-            // light-carrying test path) or without generations left stands as it is.
-            let rest = ga.generations.saturating_sub(scout);
-            let go_on: Vec<Job> = (0..pilot)
-                .filter_map(|i| {
-                    let (p, counts) = done[i].take()?;
-                    match p.best.clone() {
-                        Some(best) if rest > 0 => {
-                            scouted.push((p, counts));
-                            let run = GaRun {
-                                seeds: vec![best],
-                                generations: rest,
-                                stream: 1,
-                                trial: true,
-                            };
-                            Some((i, run))
-                        }
-                        _ => {
-                            done[i] = Some((p, counts));
-                            None
-                        }
-                    }
-                })
-                .collect();
-            bar.inc_length(go_on.len() as u64);
-            evolve_wave(&go_on, &chosen, &mut done);
-            let cold: Vec<Job> = first
-                .iter()
-                .map(|&i| {
-                    let run = GaRun {
-                        seeds: Vec::new(),
-                        generations: ga.generations,
-                        stream: 0,
-                        trial: trials_everywhere,
-                    };
-                    (i, run)
-                })
-                .collect();
-            run_chunks(&cold, &mut done);
-            // Seeds from the pilot and the first wave only, whatever the chunks. A warm start
-            // needs half the generations.
-            let warm = ga.generations.div_ceil(2);
-            let second: Vec<Job> = second
-                .iter()
-                .map(|&i| match config.warm_start {
-                    true => {
-                        let run = GaRun {
-                            seeds: neighbour_seeds(&done, chosen[i], config),
-                            generations: warm,
-                            stream: 0,
-                            trial: trials_everywhere,
-                        };
-                        (i, run)
-                    }
-                    false => {
-                        let run = GaRun {
-                            seeds: Vec::new(),
-                            generations: ga.generations,
-                            stream: 0,
-                            trial: trials_everywhere,
-                        };
-                        (i, run)
-                    }
-                })
-                .collect();
-            run_chunks(&second, &mut done);
-            stats.time_limited_pixels = late.len();
-            // A mixture's variance can grow fast away from its GA pixel, so with the gate a
-            // cell the GA did not reach renders with `pt`. A guide keeps `pt`'s next-event
-            // estimation and BRDF sampling: once the pilot showed it pays, such a cell takes
-            // its evolved neighbours' guides, as without the gate (fig5, 2 s budgets, where
-            // half the GA pixels are late: relMSE 0.83 with those cells on `pt`, 0.56
-            // without the gate).
-            if config.gate && plan_for == PlanFor::Mixture {
-                pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
-            }
+        let mut pt_points = Vec::new();
+        // Seconds of the baseline, which runs between GA waves.
+        let baseline_part = if !config.gate || pilot_pays {
+            waves.past_pilot(&cells, scout, &mut stats, &mut pt_points)
         } else {
-            // No baseline: every other cell renders with `pt`.
-            stats.gated_pixels = grid.len() - done.iter().flatten().count();
-            let pilot_at = &chosen;
-            pt_points.extend(
-                (grid.iter()).filter(|&&(x, y)| !pilot_at.iter().any(|p| (p.0, p.1) == (x, y))),
-            );
-        }
-        let results: Vec<(GaPixel, RayCounts)> = done.into_iter().flatten().collect();
-        bar.finish_and_clear();
+            waves.leave_to_pt(&grid, &mut stats, &mut pt_points);
+            0.0
+        };
+        let (results, scouted) = waves.finish();
         stats.baseline_seconds = grid_seconds + baseline_part;
         stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;
-        let mut pixels = Vec::with_capacity(results.len());
-        // The work of the pilot pixels' scouting runs, which the pixels that went on replaced.
-        for (p, counts) in scouted
-            .iter()
-            .map(|(p, c)| (p, *c))
-            .chain(results.iter().map(|(p, c)| (p, *c)))
-        {
-            stats.rays.add(counts);
-            stats.test_path_cpu_seconds += p.test_path_seconds;
-            stats.evolve_cpu_seconds += p.ga_seconds;
-            stats.individual_evaluations += p.individual_evaluations;
-            stats.generator_evaluations += p.generator_evaluations;
-        }
-        for (p, _) in results {
-            if config.gate && p.prefers_pt(plan_for) {
-                stats.pt_pixels += 1;
-            }
-            pixels.push(p);
-        }
+        let pixels = stats.count_pixels(&scouted, results, config.gate, plan_for);
         Ok(Self {
             width,
             height,

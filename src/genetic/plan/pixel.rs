@@ -82,6 +82,9 @@ impl GaPixel {
     }
 }
 
+/// An evolved GA pixel and the rays its test paths, GA and trial traced.
+pub(super) type Evolved = (GaPixel, RayCounts);
+
 /// What every GA pixel of a plan shares: the scene, the defensive `srt` mixture, the
 /// settings, the estimator the plan is for and the user's seed, from which each pixel's
 /// random streams are derived.
@@ -129,7 +132,7 @@ pub(super) fn run_pixel(
     context: &PixelContext,
     (x, y, origin): (u32, u32, Origin),
     run: &GaRun,
-) -> (GaPixel, RayCounts) {
+) -> Evolved {
     let &PixelContext {
         view,
         srt,
