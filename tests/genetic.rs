@@ -6,7 +6,7 @@ use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
 use genpath::genetic::individual::{GenePool, Individual, PATCH_HALF_RANGE};
 use genpath::genetic::operators::{crossover, mutate};
-use genpath::genetic::plan::{Plan, PlanConfig, Target, PILOT_PIXELS};
+use genpath::genetic::plan::{Plan, PlanConfig, PlanFor, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
@@ -890,7 +890,7 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
         ..PlanConfig::default()
     };
     let plan =
-        Plan::build(&view, &ga, &config, (MAX_BOUNCES, Target::Guide), 5, false).expect("plan");
+        Plan::build(&view, &ga, &config, (MAX_BOUNCES, PlanFor::Guide), 5, false).expect("plan");
     let stats = &plan.stats;
     eprintln!(
         "{} GA pixels, {} late, {} pt points, {} low-variance cells",
@@ -948,7 +948,7 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
             Plan::build(&view, &ga, config, (MAX_BOUNCES, target), 3, false).expect("plan")
         })
     };
-    let mixture = build(&config, Target::Mixture);
+    let mixture = build(&config, PlanFor::Mixture);
     let gains: Vec<f64> = mixture
         .pixels
         .iter()
@@ -977,7 +977,7 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     }
     assert!((0..48).all(|y| (0..48).all(|x| mixture.local(x, y).is_none())));
 
-    let guide = build(&config, Target::Guide);
+    let guide = build(&config, PlanFor::Guide);
     assert!(
         guide.pixels.len() >= PILOT_PIXELS,
         "a guide's pilot does not stop early"
@@ -988,7 +988,7 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
             gate: false,
             ..config.clone()
         },
-        Target::Mixture,
+        PlanFor::Mixture,
     );
     assert!(ungated.pixels.len() > PILOT_PIXELS);
     assert!(ungated.stats.baseline_ran);
@@ -1011,7 +1011,7 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         ..PlanConfig::default()
     };
     let plan =
-        Plan::build(&view, &ga, &config, (MAX_BOUNCES, Target::Guide), 5, false).expect("plan");
+        Plan::build(&view, &ga, &config, (MAX_BOUNCES, PlanFor::Guide), 5, false).expect("plan");
     assert!(
         !plan.is_closed(),
         "the pilot must pay on fig5 for this test"

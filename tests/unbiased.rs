@@ -9,7 +9,7 @@
 #![cfg(feature = "testing")]
 
 use genpath::accel::{self, AccelKind};
-use genpath::genetic::plan::{Plan, PlanConfig, Target};
+use genpath::genetic::plan::{Plan, PlanConfig, PlanFor};
 use genpath::genetic::GaConfig;
 use genpath::integrators::ga::Ga;
 use genpath::integrators::ga_pt::GaPt;
@@ -119,7 +119,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         }
         Which::GaPt { spatial: with } => {
             let (ga, config) = small_ga();
-            let target = (max_bounces, Target::Guide);
+            let target = (max_bounces, PlanFor::Guide);
             plan = Some(Plan::build(&view, &ga, &config, target, seed, false).unwrap());
             guided = true;
             if with {
@@ -129,7 +129,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         }
         Which::Ga { unnormalised } => {
             let (ga, config) = small_ga();
-            let target = (max_bounces, Target::Mixture);
+            let target = (max_bounces, PlanFor::Mixture);
             let p = Plan::build(&view, &ga, &config, target, seed, false).unwrap();
             assert!(
                 p.pixels.iter().any(|p| !p.kept_srt),

@@ -3,7 +3,7 @@
 
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
-use crate::genetic::plan::{Plan, Target};
+use crate::genetic::plan::{Plan, PlanFor};
 use crate::genetic::GaConfig;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
@@ -17,7 +17,7 @@ pub struct Ga {
 }
 
 /// Builds the GA plan for `target` with `context`'s settings.
-pub fn build_plan(context: &Context, target: Target) -> Result<Plan, PrepareError> {
+pub fn build_plan(context: &Context, target: PlanFor) -> Result<Plan, PrepareError> {
     let (config, settings) = (context.config, context.settings);
     let ga = GaConfig {
         srt_absorption: config.srt.srt_absorption,
@@ -35,7 +35,7 @@ pub fn build_plan(context: &Context, target: Target) -> Result<Plan, PrepareErro
 
 pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(Ga {
-        plan: build_plan(context, Target::Mixture)?,
+        plan: build_plan(context, PlanFor::Mixture)?,
         max_bounces: context.settings.max_bounces,
     }))
 }

@@ -5,7 +5,7 @@
 use super::ga::build_plan;
 use super::{pg, Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
-use crate::genetic::plan::{Plan, Target};
+use crate::genetic::plan::{Plan, PlanFor};
 use crate::path::guide::Guide;
 use crate::path::mixture::Mixture;
 use crate::path::spatial::PathRecorder;
@@ -24,7 +24,7 @@ pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     if spatial {
         pg::check_schedule(context)?;
     }
-    let plan = build_plan(context, Target::Guide)?;
+    let plan = build_plan(context, PlanFor::Guide)?;
     if spatial {
         return Ok(Box::new(pg::train(context, Some(plan))));
     }
@@ -63,7 +63,8 @@ impl<'a> GuideEstimator<'a> {
         let Some(plan) = self.plan else {
             return false;
         };
-        let guided = !levels_off && plan.local_parts(x, y, &mut self.weights, &mut self.parts);
+        let guided =
+            !levels_off && plan.neighbour_mixtures(x, y, &mut self.weights, &mut self.parts);
         if guided {
             self.guide.rebuild(&self.parts);
         } else if clear {

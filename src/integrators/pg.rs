@@ -355,7 +355,7 @@ pub fn train_spatial(
 
 /// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
 /// over its pixels of a sample's relative variance, and its pixels. `weights` and `parts`
-/// are [`Plan::local_parts`]'s buffers, reused for every pixel.
+/// are [`Plan::neighbour_mixtures`]'s buffers, reused for every pixel.
 struct TrialArms<'a> {
     guided: (f64, usize),
     control: (f64, usize),
@@ -385,7 +385,7 @@ impl<'a> TrialArms<'a> {
         mean: DVec3,
     ) {
         let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
-        if !plan.local_parts(x, y, &mut self.weights, &mut self.parts) {
+        if !plan.neighbour_mixtures(x, y, &mut self.weights, &mut self.parts) {
             return;
         }
         let (sum, sum_sq, n) = (pass.0, pass.1, f64::from(pass.2));

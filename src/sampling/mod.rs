@@ -37,6 +37,60 @@ pub fn derive_seed(seed: u64, tag: u64) -> u64 {
     mix64(mix64(seed ^ 0x6a09_e667_f3bc_c908) ^ tag)
 }
 
+/// A seed for the family `stream` by one draw of [`sample_rng`]`(seed, stream, u64::MAX)`:
+/// the genetic plan's streams (see [`Stream`]). Not [`derive_seed`]'s hash: a different,
+/// equally fixed derivation, so the two never give the same seed by construction, and
+/// neither may change without changing the images.
+pub fn derived_seed(seed: u64, stream: u64) -> u64 {
+    // One sample_rng draw mixes the two into a fresh 64-bit seed.
+    let mut rng = sample_rng(seed, stream, u64::MAX);
+    rng.random::<u64>()
+}
+
+/// The families of random streams besides the render's own, each named by a fixed 64-bit
+/// tag (most of them ASCII) from which its seed is derived. Their tags differ, so no two
+/// families share random numbers, and none shares the render's (which draws from the user's
+/// seed itself).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    /// The genetic plan's baseline pass (`srt` samples per pixel; [`derived_seed`]).
+    Baseline,
+    /// The test paths a GA pixel evolves on ([`derived_seed`]).
+    TestPaths,
+    /// The genetic algorithm's own draws at a GA pixel ([`derived_seed`]).
+    Ga,
+    /// The gate's `pt` samples at a GA pixel ([`derived_seed`]).
+    GatePt,
+    /// The gate's samples of the evolved estimator ([`derived_seed`]).
+    Gate,
+    /// The gate's fresh `srt` test paths that check a mixture's variance ([`derived_seed`]).
+    Check,
+    /// The spatial guide's training passes, one stream per pass: the tag XOR the pass index
+    /// ([`derive_seed`]).
+    Spatial,
+    /// The first of a reference's two independent `pt` halves ([`derive_seed`]).
+    ReferenceFirst,
+    /// The second of a reference's two `pt` halves ([`derive_seed`]).
+    ReferenceSecond,
+}
+
+impl Stream {
+    /// The family's tag, the `tag` or `stream` argument of the seed derivation.
+    pub const fn tag(self) -> u64 {
+        match self {
+            Self::Baseline => 0x6261_7365_6c69_6e65,  // "baseline"
+            Self::TestPaths => 0x7465_7374_7061_7468, // "testpath"
+            Self::Ga => 0x6765_6e65_7469_6373,        // "genetics"
+            Self::GatePt => 0x6761_7465_5f70_7400,    // "gate_pt"
+            Self::Gate => 0x6761_7465_0000_0000,      // "gate"
+            Self::Check => 0x6368_6563_6b00_0000,     // "check"
+            Self::Spatial => 0x7370_6174_6961_6c00,   // "spatial"
+            Self::ReferenceFirst => 0x05ee_d0f5_ec00_da1f,
+            Self::ReferenceSecond => 0x7e5e_ed00_fa11_0b0b,
+        }
+    }
+}
+
 /// A uniform number in [0, 1).
 #[inline]
 pub fn uniform(rng: &mut Rng) -> f32 {
@@ -80,6 +134,27 @@ mod tests {
                 assert!(x.dot(y).abs() < 1e-12, "{n} {t} {b}");
             }
             assert!((t.length() - 1.0).abs() < 1e-12 && (b.length() - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn stream_tags_differ() {
+        use Stream::*;
+        let all = [
+            Baseline,
+            TestPaths,
+            Ga,
+            GatePt,
+            Gate,
+            Check,
+            Spatial,
+            ReferenceFirst,
+            ReferenceSecond,
+        ];
+        for (i, a) in all.iter().enumerate() {
+            for b in &all[i + 1..] {
+                assert_ne!(a.tag(), b.tag(), "{a:?} and {b:?}");
+            }
         }
     }
 

@@ -1,0 +1,133 @@
+//! The plan's settings ([`PlanConfig`]): where the GA runs, how its results spread over the
+//! image, and the gate's, the time limit's and the spatial guide's switches.
+
+use super::super::GaConfigError;
+
+/// Where the genetic algorithm runs and how its results spread over the image.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlanConfig {
+    /// Distance between grid GA pixels, in pixels, along both axes.
+    #[serde(rename = "ga_grid")]
+    pub grid: u32,
+    /// Extra GA pixels at high baseline variance, as a fraction of the grid pixels.
+    #[serde(rename = "ga_extra")]
+    pub extra: f64,
+    /// `srt` samples per pixel of the baseline pass.
+    pub baseline_spp: u32,
+    /// GA pixels whose mixtures each pixel combines.
+    #[serde(rename = "ga_neighbours")]
+    pub neighbours: usize,
+    /// Leave out what the scene does not need: cells whose baseline relative variance is
+    /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
+    /// test paths need (`TestPaths::steps_needed`; for `ga-pt` also at most `guide_steps`,
+    /// pruning or not).
+    pub prune: bool,
+    pub prune_variance: f64,
+    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
+    /// the GA when a pilot predicts no gain anywhere (see the module documentation).
+    pub gate: bool,
+    /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
+    /// individuals, with half the generations (beyond the paper).
+    pub warm_start: bool,
+    /// Wall-clock seconds the plan (baseline included) may take: past them, GA pixels not
+    /// yet evolved are left out (to `pt` with the gate in a plan for the mixture, to their
+    /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on
+    /// timing, not only on the seed. `None`: no limit.
+    #[serde(rename = "ga_time_limit")]
+    pub time_limit: Option<f64>,
+    /// `ga-pt`: vertices the guide steers, i.e. the directional steps the GA evolves (at
+    /// most what the test paths need). Path tracing's next-event estimation already finds
+    /// the light from the vertices after the first, and one step leaves the GA a search
+    /// space it explores in its generations: on fig5 at 64 spp, relMSE 0.391 / 0.376 /
+    /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
+    /// every step the test paths need.
+    pub guide_steps: usize,
+    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`path::spatial`), as
+    /// `pg` guides every vertex. On by default: at equal time (reports at e5f1d58, 2 / 8 /
+    /// 30 s) `ga-pt` had 0.32 / 0.27 / 0.27 of `pt`'s relMSE on fig5 with it and 0.33 /
+    /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy
+    /// 0.33 / 0.33 / 0.43 against 1.04 / 1.03 / 1.02 and cbox 0.92 / 0.92 / 0.82 against
+    /// 1.01 / 1.01 / 0.99.
+    #[serde(rename = "spatial_guide")]
+    pub spatial: bool,
+    /// `pg`, and `ga-pt` with `spatial`: passes of path tracing that train the spatial
+    /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
+    /// many as `spatial_time_limit` allows if set, else as many as fit in half the samples
+    /// per pixel.
+    pub spatial_passes: Option<u32>,
+    /// Seconds the spatial guide's training may take (see `spatial_passes`).
+    #[serde(skip)]
+    pub spatial_time_limit: Option<f64>,
+}
+
+impl Default for PlanConfig {
+    fn default() -> Self {
+        Self {
+            grid: 32,
+            extra: 0.25,
+            baseline_spp: 4,
+            neighbours: 4,
+            prune: true,
+            prune_variance: 0.5,
+            gate: true,
+            warm_start: true,
+            time_limit: None,
+            guide_steps: 1,
+            spatial: true,
+            spatial_passes: None,
+            spatial_time_limit: None,
+        }
+    }
+}
+
+impl PlanConfig {
+    pub fn validate(&self) -> Result<(), GaConfigError> {
+        let fail = |m: String| Err(GaConfigError(m));
+        if self.grid == 0 {
+            return fail("the GA grid spacing must be at least 1 pixel".into());
+        }
+        if !(self.extra.is_finite() && (0.0..=16.0).contains(&self.extra)) {
+            return fail(format!("extra GA pixels {} is not in [0, 16]", self.extra));
+        }
+        if self.baseline_spp == 0 {
+            return fail("the baseline needs at least 1 sample per pixel".into());
+        }
+        if !(self.prune_variance.is_finite() && self.prune_variance >= 0.0) {
+            return fail(format!(
+                "prune variance {} must be finite and ≥ 0",
+                self.prune_variance
+            ));
+        }
+        // A time limit must be a finite, non-negative number of seconds.
+        let bad_seconds = |limit: Option<f64>| limit.is_some_and(|t| !(t.is_finite() && t >= 0.0));
+        if bad_seconds(self.time_limit) {
+            return fail(format!(
+                "GA time limit {:?} must be finite and ≥ 0 seconds",
+                self.time_limit
+            ));
+        }
+        if !(1..=64).contains(&self.guide_steps) {
+            return fail(format!(
+                "guide steps {} is not in [1, 64]",
+                self.guide_steps
+            ));
+        }
+        if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
+            return fail(format!("spatial guide passes {p} is not in [1, 12]"));
+        }
+        if bad_seconds(self.spatial_time_limit) {
+            return fail(format!(
+                "spatial guide time limit {:?} must be finite and ≥ 0 seconds",
+                self.spatial_time_limit
+            ));
+        }
+        if !(1..=64).contains(&self.neighbours) {
+            return fail(format!(
+                "GA neighbours per pixel {} is not in [1, 64]",
+                self.neighbours
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,263 @@
+//! The gate: the pilot that decides whether the GA goes on, a GA pixel's trial of the
+//! evolved estimator against `pt` ([`Trial`], from [`Moments`] of each), and its margins.
+
+use super::super::test_paths::TestPaths;
+use super::super::{fitness, ChannelWeights};
+use super::baseline::Origin;
+use super::pixel::{Evolved, GaRun, PixelContext};
+use super::waves::Waves;
+use super::PlanFor;
+use crate::path::guide::Guide;
+use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::{camera_sample, RayCounts, SceneView};
+use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Samples of `pt` (and of the guided path tracer) with which the gate measures their
+/// variance at a GA pixel.
+pub const GATE_SAMPLES: u32 = 2048;
+/// Samples of the mixture estimator with which the gate counts its cost.
+pub const COST_SAMPLES: u32 = 256;
+/// The gate's thresholds on a trial's predicted gain: `(lose, win)`. The GA goes on past
+/// the pilot only if at least half the pilot pixels predict a gain above `win`; a GA pixel
+/// prefers `pt` where it predicts one below `lose`.
+///
+/// The guided path tracer keeps `pt`'s next-event estimation and its BRDF sampling (at the
+/// defensive weight), so it rarely loses much, while its 2048-sample trial is noisy (fig5:
+/// sending every pixel below 1.25 to `pt` lost 20 % relMSE against no gate): it must win
+/// by 1.25 and is dropped below 0.8. The mixture estimator's prediction is the less certain
+/// (fig5, 9 GA pixels against 200 000-sample variances: within a factor 2 either way), its
+/// variance grows faster away from the GA pixel and can exceed `pt`'s many times: it must
+/// win by 2 everywhere.
+pub fn gate_margins(plan_for: PlanFor) -> (f64, f64) {
+    match plan_for {
+        PlanFor::Guide => (0.8, 1.25),
+        PlanFor::Mixture => (2.0, 2.0),
+    }
+}
+/// GA pixels evolved before the gate decides whether to evolve the others.
+pub const PILOT_PIXELS: usize = 8;
+/// The pilot evolves for `1 / PILOT_SHARE` of the generations before its trial decides: a
+/// scene where the GA cannot pay costs a quarter of a full pilot (cbox, 2 s budgets: the
+/// full pilot took a third of the time). Where the pilot pays, its pixels go on from their
+/// best individual for the remaining generations.
+pub const PILOT_SHARE: usize = 4;
+
+/// The pilot: with the gate, up to `PILOT_PIXELS` grid pixels spread evenly over the image
+/// (`grid`, in row-major cell order), evolved first, before the baseline: where it predicts
+/// no gain, the plan costs no baseline. Without the gate, none.
+pub(super) fn pilot_pixels(grid: &[(u32, u32)], gate: bool) -> Vec<(u32, u32, Origin)> {
+    if !gate {
+        return Vec::new();
+    }
+    let k = PILOT_PIXELS.min(grid.len());
+    (0..k)
+        .map(|j| {
+            let (x, y) = grid[j * grid.len() / k];
+            (x, y, Origin::Grid)
+        })
+        .collect()
+}
+
+/// Evolves the pilot's pixels for `scout` generations, in parallel, each with its trial.
+///
+/// For a mixture, a pilot pixel is not started once so many others failed to pay that the
+/// pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips depends on the
+/// threads' timing, so a mixture's pilot that fails leaves the whole image to `pt` (see
+/// `Plan::closed`), whichever of its pixels ran.
+pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) {
+    let plan_for = waves.context.plan_for;
+    let pilot = waves.pilot;
+    let losing = AtomicUsize::new(0);
+    let settled =
+        || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+    let this = &*waves;
+    let scouted_pilot: Vec<(usize, Evolved)> = (0..pilot)
+        .into_par_iter()
+        .filter_map(|i| {
+            if settled() {
+                return None;
+            }
+            let run = GaRun {
+                seeds: Vec::new(),
+                generations: scout,
+                stream: 0,
+                trial: true,
+            };
+            let r = this.evolve_one(i, &run);
+            if !r.0.pays(plan_for) {
+                losing.fetch_add(1, Ordering::Relaxed);
+            }
+            Some((i, r))
+        })
+        .collect();
+    for (i, r) in scouted_pilot {
+        waves.done[i] = Some(r);
+    }
+}
+
+/// Whether the GA goes on past the scouted pilot: where at least half the pilot pixels
+/// predict a gain above the winning margin. One pixel alone (an outlier, or a small region)
+/// does not pay for evolving the whole image. (Without the gate there is no pilot, and it
+/// does not pay.)
+pub(super) fn pilot_pays(waves: &Waves) -> bool {
+    let plan_for = waves.context.plan_for;
+    let paying = (waves.done.iter().flatten())
+        .filter(|(p, _)| p.pays(plan_for))
+        .count();
+    2 * paying >= waves.pilot.max(1)
+}
+
+/// One estimator's samples at a pixel, per sample: mean and variance under the pixel's
+/// [`ChannelWeights`] (`√(Σ_c w_c mean_c²)` and `Σ_c w_c Var_c`), and the cost
+/// ([`RayCounts::cost`]).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Moments {
+    pub mean: f64,
+    pub variance: f64,
+    pub cost: f64,
+}
+
+impl Moments {
+    /// `1 / (variance × cost)`; infinite without variance.
+    fn efficiency(&self) -> f64 {
+        1.0 / (self.variance * self.cost)
+    }
+}
+
+/// The gate's comparison at a GA pixel.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Trial {
+    pub pt: Moments,
+    pub evolved: Moments,
+    /// `evolved`'s efficiency over `pt`'s; 0 where neither has variance (nothing to gain).
+    pub gain: f64,
+}
+
+/// Where a trial samples: the scene, the pixel, its [`ChannelWeights`], the bounce limit and
+/// the user's seed (from which each estimator's stream is derived).
+struct TrialAt<'a> {
+    view: &'a SceneView<'a>,
+    at: (u32, u32),
+    weights: ChannelWeights,
+    max_bounces: u32,
+    seed: u64,
+}
+
+/// One estimator's samples at the trial's pixel: `n` samples of `pt`, guided by the guide
+/// when given, or of the mixture's estimator (eq. 8) when given, from `stream`'s random
+/// streams.
+fn sample_moments(
+    trial: &TrialAt,
+    (stream, n): (Stream, u32),
+    (mixture, guide): (Option<&Mixture>, Option<&Guide>),
+    counts: &mut RayCounts,
+) -> Moments {
+    let &TrialAt {
+        view,
+        at: (x, y),
+        weights,
+        max_bounces,
+        seed,
+    } = trial;
+    let camera = &view.scene.camera;
+    let pixel = y as u64 * camera.width as u64 + x as u64;
+    let seed = derived_seed(seed, stream.tag());
+    let mut scratch = MixtureScratch::default();
+    let mut c = RayCounts::default();
+    let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
+    for s in 0..n {
+        let mut rng = sample_rng(seed, pixel, s as u64);
+        let ray = camera_ray(camera, (x, y), &mut rng);
+        let value = camera_sample(
+            view,
+            &ray,
+            max_bounces,
+            (mixture, guide),
+            &mut rng,
+            &mut c,
+            &mut scratch,
+        );
+        sum += value;
+        sum_sq += value * value;
+    }
+    counts.add(c);
+    let n = n as f64;
+    let mean = sum / n;
+    let variance = ((sum_sq - sum * mean) / (n - 1.0)).max(DVec3::ZERO);
+    Moments {
+        mean: weights.weigh(mean * mean).sqrt(),
+        variance: weights.weigh(variance),
+        cost: c.cost() / n,
+    }
+}
+
+/// The gate's comparison at `(x, y)`, under the pixel's channel `weights`, of `mixture`'s
+/// estimator for the plan's [`PlanFor`] with `pt`.
+///
+/// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
+/// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
+/// density is far below `srt`'s (down to the defensive weight), which a few hundred of its
+/// own samples mostly miss (fig5: the median 512-sample variance is 2–7× below the true
+/// one). Its second moment is therefore eq. 10 on fresh `srt` test paths, which sample
+/// exactly those paths at `srt`'s rate; its cost comes from `COST_SAMPLES` samples.
+pub(super) fn run_trial(
+    context: &PixelContext,
+    ((x, y), weights): ((u32, u32), ChannelWeights),
+    mixture: &Mixture,
+    counts: &mut RayCounts,
+) -> Trial {
+    let trial = TrialAt {
+        view: context.view,
+        at: (x, y),
+        weights,
+        max_bounces: context.max_bounces,
+        seed: context.seed,
+    };
+    let pt = sample_moments(&trial, (Stream::GatePt, GATE_SAMPLES), (None, None), counts);
+    let evolved = match context.plan_for {
+        PlanFor::Guide => {
+            let guide = Guide::new(mixture);
+            let g = Some(&guide);
+            sample_moments(&trial, (Stream::Gate, GATE_SAMPLES), (None, g), counts)
+        }
+        PlanFor::Mixture => mixture_moments(context, &trial, mixture, counts),
+    };
+    let gain = if pt.variance > 0.0 {
+        evolved.efficiency() / pt.efficiency()
+    } else {
+        0.0
+    };
+    Trial { pt, evolved, gain }
+}
+
+/// The mixture estimator's moments in a trial: its cost from `COST_SAMPLES` of its samples,
+/// its variance from eq. 10 on fresh `srt` test paths (see [`run_trial`]).
+fn mixture_moments(
+    context: &PixelContext,
+    trial: &TrialAt,
+    mixture: &Mixture,
+    counts: &mut RayCounts,
+) -> Moments {
+    let m = Some(mixture);
+    let cost = sample_moments(trial, (Stream::Gate, COST_SAMPLES), (m, None), counts);
+    let (view, ga) = (context.view, context.ga);
+    let (mut check, c) = TestPaths::sample_until(
+        view,
+        context.srt,
+        trial.at,
+        (ga.test_paths, ga.max_light_paths),
+        trial.max_bounces,
+        derived_seed(trial.seed, Stream::Check.tag()),
+    );
+    counts.add(c);
+    check.weigh(trial.weights);
+    let mean = check.mean();
+    Moments {
+        mean,
+        variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
+        cost: cost.cost,
+    }
+}

@@ -1,0 +1,284 @@
+//! Scheduling the GA pixels: the [`Waves`] they evolve in past the pilot (the baseline, the
+//! pilot going on, then cold and warm-started waves, in chunks under a time limit).
+
+use super::super::individual::Individual;
+use super::baseline::{baseline_choice, Origin};
+use super::config::PlanConfig;
+use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
+use super::{PlanFor, PlanStats};
+use crate::progress::progress_bar;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// A GA pixel to evolve (an index into [`Waves::chosen`]) and how.
+pub(super) struct Job {
+    pub(super) pixel: usize,
+    pub(super) run: GaRun,
+}
+
+impl Job {
+    /// From random individuals, for `generations`, on the pixel's first GA stream.
+    fn cold(pixel: usize, generations: usize, trial: bool) -> Self {
+        let run = GaRun {
+            seeds: Vec::new(),
+            generations,
+            stream: 0,
+            trial,
+        };
+        Self { pixel, run }
+    }
+}
+
+/// A plan's GA pixels as they are chosen and evolved, wave by wave (each wave in parallel
+/// on the current rayon pool), with the progress bar.
+pub(super) struct Waves<'a> {
+    pub(super) context: &'a PixelContext<'a>,
+    bar: ProgressBar,
+    /// The GA pixels in the order chosen: the pilot's, then the baseline's others.
+    pub(super) chosen: Vec<(u32, u32, Origin)>,
+    /// Each chosen pixel's result, once evolved.
+    pub(super) done: Vec<Option<Evolved>>,
+    /// The first `pilot` of `chosen`, evolved before the gate decides on the others.
+    pub(super) pilot: usize,
+    /// The pilot pixels' scouting runs that the pixels going on from them replaced (their
+    /// work still counts in the stats).
+    scouted: Vec<Evolved>,
+    /// GA pixels the time limit left out (indices into `chosen`).
+    late: Vec<usize>,
+    /// When the plan began: `PlanConfig::time_limit` counts from here.
+    start: Instant,
+}
+
+impl<'a> Waves<'a> {
+    /// The waves of a plan begun at `start`, with `pilot` (none without the gate) chosen
+    /// first; a progress bar on stderr when `progress`.
+    pub(super) fn new(
+        context: &'a PixelContext<'a>,
+        pilot: Vec<(u32, u32, Origin)>,
+        progress: bool,
+        start: Instant,
+    ) -> Self {
+        let n = pilot.len();
+        Self {
+            context,
+            bar: progress_bar(n as u64, "GA", progress),
+            chosen: pilot,
+            done: vec![None; n],
+            pilot: n,
+            scouted: Vec::new(),
+            late: Vec::new(),
+            start,
+        }
+    }
+
+    /// The chosen pixels' positions.
+    fn positions(&self) -> Vec<(u32, u32)> {
+        self.chosen.iter().map(|&(x, y, _)| (x, y)).collect()
+    }
+
+    /// Chooses `pixels` too, except those at `keep` (already chosen).
+    fn add(&mut self, pixels: &[(u32, u32, Origin)], keep: &[(u32, u32)]) {
+        self.chosen
+            .extend((pixels.iter()).filter(|&&(x, y, _)| !keep.contains(&(x, y))));
+        let n = self.chosen.len();
+        self.done.resize(n, None);
+        self.bar.inc_length((n - self.pilot) as u64);
+    }
+
+    /// Evolves chosen pixel `i` as `run` says.
+    pub(super) fn evolve_one(&self, i: usize, run: &GaRun) -> Evolved {
+        let r = run_pixel(self.context, self.chosen[i], run);
+        self.bar.inc(1);
+        r
+    }
+
+    /// Evolves a wave's pixels in parallel.
+    fn evolve(&mut self, wave: &[Job]) {
+        let this = &*self;
+        let results: Vec<(usize, Evolved)> = wave
+            .par_iter()
+            .map(|job| (job.pixel, this.evolve_one(job.pixel, &job.run)))
+            .collect();
+        for (i, r) in results {
+            self.done[i] = Some(r);
+        }
+    }
+
+    /// Evolves `jobs` as a wave; with a time limit in chunks, each only if time is left
+    /// (the others are late).
+    fn evolve_in_chunks(&mut self, jobs: &[Job]) {
+        let limit = self.context.config.time_limit;
+        let chunk = match limit {
+            Some(_) => 4 * rayon::current_num_threads(),
+            None => usize::MAX,
+        };
+        for c in jobs.chunks(chunk) {
+            if limit.is_some_and(|limit| self.start.elapsed().as_secs_f64() >= limit) {
+                self.late.extend(c.iter().map(|j| j.pixel));
+            } else {
+                self.evolve(c);
+            }
+        }
+    }
+
+    /// Past a pilot that pays, or without the gate: the baseline, which chooses the other GA
+    /// pixels (the pilot's stay, whatever their cells' variance), then [`Self::evolve_rest`].
+    /// With the gate, the low-variance cells' pixels go to `pt_points`, and for a mixture
+    /// the late ones too. Returns the baseline's seconds.
+    pub(super) fn past_pilot(
+        &mut self,
+        cells: &[Option<(u32, u32)>],
+        scout: usize,
+        stats: &mut PlanStats,
+        pt_points: &mut Vec<(u32, u32)>,
+    ) -> f64 {
+        let t2 = Instant::now();
+        let keep = self.positions();
+        let choice = baseline_choice(self.context, cells, &keep, stats);
+        let gate = self.context.config.gate;
+        if gate {
+            pt_points.extend(&choice.low);
+        }
+        self.add(&choice.pixels, &keep);
+        let baseline_part = t2.elapsed().as_secs_f64();
+        let late = self.evolve_rest(scout);
+        stats.time_limited_pixels = late.len();
+        // A mixture's variance can grow fast away from its GA pixel, so with the gate a
+        // cell the GA did not reach renders with `pt`. A guide keeps `pt`'s next-event
+        // estimation and BRDF sampling: once the pilot showed it pays, such a cell takes
+        // its evolved neighbours' guides, as without the gate (fig5, 2 s budgets, where
+        // half the GA pixels are late: relMSE 0.83 with those cells on `pt`, 0.56
+        // without the gate).
+        if gate && self.context.plan_for == PlanFor::Mixture {
+            let chosen = &self.chosen;
+            pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
+        }
+        baseline_part
+    }
+
+    /// Past a pilot that does not pay: no baseline, and every other cell's pixel in `grid`
+    /// goes to `pt_points`.
+    pub(super) fn leave_to_pt(
+        &self,
+        grid: &[(u32, u32)],
+        stats: &mut PlanStats,
+        pt_points: &mut Vec<(u32, u32)>,
+    ) {
+        stats.gated_pixels = grid.len() - self.done.iter().flatten().count();
+        let pilot_at = self.positions();
+        pt_points.extend((grid.iter()).filter(|at| !pilot_at.contains(at)));
+    }
+
+    /// Once the pilot (scouted for `scout` generations) pays, or without the gate: the pilot
+    /// goes on, then the other chosen pixels evolve. With warm starts, the grid pixels of
+    /// "white" cells (in a checkerboard of cells) first, then the rest, seeded from their
+    /// evolved neighbours. Returns the pixels the time limit left out.
+    fn evolve_rest(&mut self, scout: usize) -> Vec<usize> {
+        let config = self.context.config;
+        let g = config.grid;
+        let white = |i: usize| {
+            let (x, y, origin) = self.chosen[i];
+            origin == Origin::Grid && (x / g + y / g) % 2 == 0
+        };
+        let (first, second): (Vec<usize>, Vec<usize>) =
+            (self.pilot..self.chosen.len()).partition(|&i| !config.warm_start || white(i));
+        self.go_on(scout);
+        // For a mixture every GA pixel runs the gate's trial; for a guide only the pilot
+        // (see the module documentation).
+        let trial = self.context.plan_for == PlanFor::Mixture;
+        let generations = self.context.ga.generations;
+        let cold: Vec<Job> = first
+            .iter()
+            .map(|&i| Job::cold(i, generations, trial))
+            .collect();
+        self.evolve_in_chunks(&cold);
+        let second = self.warm_wave(&second, trial);
+        self.evolve_in_chunks(&second);
+        std::mem::take(&mut self.late)
+    }
+
+    /// The pilot goes on from each pixel's best individual for the generations its
+    /// `scout`ing left, whatever the time limit (the pilot showed the GA pays); its scouting
+    /// still counts in the stats. A scout without a best individual (no light-carrying test
+    /// path) or without generations left stands as it is.
+    fn go_on(&mut self, scout: usize) {
+        let rest = self.context.ga.generations.saturating_sub(scout);
+        let mut go_on = Vec::new();
+        for i in 0..self.pilot {
+            let Some((p, counts)) = self.done[i].take() else {
+                continue;
+            };
+            match p.best.clone() {
+                Some(best) if rest > 0 => {
+                    self.scouted.push((p, counts));
+                    let run = GaRun {
+                        seeds: vec![best],
+                        generations: rest,
+                        stream: 1,
+                        trial: true,
+                    };
+                    go_on.push(Job { pixel: i, run });
+                }
+                _ => self.done[i] = Some((p, counts)),
+            }
+        }
+        self.bar.inc_length(go_on.len() as u64);
+        self.evolve(&go_on);
+    }
+
+    /// The second wave's jobs: with warm starts, seeds from the pilot and the first wave
+    /// only, whatever the chunks, and half the generations.
+    fn warm_wave(&self, second: &[usize], trial: bool) -> Vec<Job> {
+        let config = self.context.config;
+        let generations = self.context.ga.generations;
+        let warm = generations.div_ceil(2);
+        second
+            .iter()
+            .map(|&i| match config.warm_start {
+                true => {
+                    let run = GaRun {
+                        seeds: neighbour_seeds(&self.done, self.chosen[i], config),
+                        generations: warm,
+                        stream: 0,
+                        trial,
+                    };
+                    Job { pixel: i, run }
+                }
+                false => Job::cold(i, generations, trial),
+            })
+            .collect()
+    }
+
+    /// The evolved pixels, in the order chosen, and the pilot's replaced scouting runs.
+    pub(super) fn finish(self) -> (Vec<Evolved>, Vec<Evolved>) {
+        let results = self.done.into_iter().flatten().collect();
+        self.bar.finish_and_clear();
+        (results, self.scouted)
+    }
+}
+
+/// Best individuals of up to `config.neighbours` evolved GA pixels nearest to `at`, within
+/// two grid spacings: the first generation of a warm-started GA.
+pub(super) fn neighbour_seeds(
+    done: &[Option<Evolved>],
+    (x, y, _): (u32, u32, Origin),
+    config: &PlanConfig,
+) -> Vec<Individual> {
+    let reach = 2.0 * config.grid as f64;
+    let mut near: Vec<(f64, usize, &Individual)> = done
+        .iter()
+        .enumerate()
+        .filter_map(|(i, d)| {
+            let (p, _) = d.as_ref()?;
+            let best = p.best.as_ref()?;
+            let d = (p.x as f64 - x as f64).hypot(p.y as f64 - y as f64);
+            (d <= reach).then_some((d, i, best))
+        })
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.iter()
+        .take(config.neighbours)
+        .map(|n| n.2.clone())
+        .collect()
+}
