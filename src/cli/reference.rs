@@ -7,6 +7,7 @@ use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::integrators::{prepare, RenderSettings};
 use genpath::path::SceneView;
+use genpath::sampling::{derive_seed, Stream};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -59,8 +60,8 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     // The halves use seeds derived from the given one, so neither shares random numbers with
     // a render made with the same `--seed` (that would correlate its error with the
     // reference's and understate it).
-    let seeds = [0x05ee_d0f5_ec00_da1f, 0x7e5e_ed00_fa11_0b0b]
-        .map(|tag| genpath::sampling::derive_seed(args.scene.seed, tag));
+    let seeds = [Stream::ReferenceFirst, Stream::ReferenceSecond]
+        .map(|stream| derive_seed(args.scene.seed, stream.tag()));
     let (a, b) = (half(seeds[0])?, half(seeds[1])?);
     let Some(between) = genpath::image::metrics::compare(&a.image, &b.image) else {
         unreachable!("both halves have the scene's size");

@@ -16,7 +16,7 @@ use crate::path::mixture::Mixture;
 use crate::path::spatial::{LevelsTrial, PathRecorder, Records, SpatialGuide};
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
-use crate::sampling::{derive_seed, Rng};
+use crate::sampling::{derive_seed, Rng, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -124,9 +124,6 @@ impl PixelEstimator for SpatialEstimator<'_> {
             .radiance((view, ray), true, rng, counts, recorder)
     }
 }
-
-/// Stream tag of the spatial guide's training passes: disjoint from the render's streams.
-const SPATIAL_STREAM: u64 = 0x7370_6174_6961_6c00;
 
 /// Most training passes (the last one of 2048 samples per pixel).
 pub const MAX_SPATIAL_PASSES: u32 = 12;
@@ -272,7 +269,7 @@ pub fn train_spatial(
         }
         let pass_settings = RenderSettings {
             spp: 1 << pass,
-            seed: derive_seed(settings.seed, SPATIAL_STREAM ^ u64::from(pass)),
+            seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
             ..settings.clone()
         };
         bar.set_length(u64::from(training.samples.spp + pass_settings.spp));

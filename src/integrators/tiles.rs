@@ -6,7 +6,7 @@ use super::{PixelEstimator, PixelIntegrator, RenderSettings};
 use crate::image::Image;
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
-use crate::sampling::{camera_ray, sample_rng};
+use crate::sampling::{camera_ray, sample_rng, sample_variance};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -120,7 +120,7 @@ pub fn render<I: PixelIntegrator + ?Sized>(
             let m = sum / n;
             // Unbiased sample variance, divided by spp for the variance of the mean.
             let var = if result.spp > 1 {
-                (sum_sq - sum * m) / (n - 1.0) / n
+                sample_variance(sum, sum_sq, n) / n
             } else {
                 DVec3::ZERO
             };

@@ -68,9 +68,9 @@ pub enum Stream {
     /// The spatial guide's training passes, one stream per pass: the tag XOR the pass index
     /// ([`derive_seed`]).
     Spatial,
-    /// The first of a reference's two independent `pt` halves ([`derive_seed`]).
+    /// The first of a reference's two independent halves ([`derive_seed`]).
     ReferenceFirst,
-    /// The second of a reference's two `pt` halves ([`derive_seed`]).
+    /// The second of a reference's two halves ([`derive_seed`]).
     ReferenceSecond,
 }
 
@@ -89,6 +89,18 @@ impl Stream {
             Self::ReferenceSecond => 0x7e5e_ed00_fa11_0b0b,
         }
     }
+}
+
+/// The unbiased sample variance of `n` samples from their sum and sum of squares,
+/// `(Σx² − Σx · mean) / (n − 1)` (per channel for a colour); may round below zero.
+pub fn sample_variance<T>(sum: T, sum_sq: T, n: f64) -> T
+where
+    T: Copy
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<Output = T>
+        + std::ops::Div<f64, Output = T>,
+{
+    (sum_sq - sum * (sum / n)) / (n - 1.0)
 }
 
 /// A uniform number in [0, 1).

@@ -7,7 +7,7 @@ use super::pixel::PixelContext;
 use super::PlanStats;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{emitted, RayCounts, SceneView};
-use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
+use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
 use rayon::prelude::*;
 
 /// Why a GA pixel was chosen.
@@ -183,7 +183,7 @@ fn baseline(
                     let n = config.baseline_spp as f64;
                     let mean = sum / n;
                     let var = if n > 1.0 {
-                        ((sum_sq - sum * mean) / (n - 1.0)).max(0.0)
+                        sample_variance(sum, sum_sq, n).max(0.0)
                     } else {
                         0.0
                     };
@@ -254,7 +254,7 @@ fn choose_pixels(
         // mostly miss, still show up in the cell's variance.
         let mean_noise = if n > 1 {
             let mean = sum / n as f64;
-            let var = ((sum_sq - sum * mean) / (n - 1) as f64).max(0.0);
+            let var = sample_variance(sum, sum_sq, n as f64).max(0.0);
             var / (mean * mean + 0.01)
         } else {
             0.0

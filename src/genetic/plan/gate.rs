@@ -10,7 +10,7 @@ use super::PlanFor;
 use crate::path::guide::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
-use crate::sampling::{camera_ray, derived_seed, sample_rng, Stream};
+use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -186,7 +186,7 @@ fn sample_moments(
     counts.add(c);
     let n = n as f64;
     let mean = sum / n;
-    let variance = ((sum_sq - sum * mean) / (n - 1.0)).max(DVec3::ZERO);
+    let variance = sample_variance(sum, sum_sq, n).max(DVec3::ZERO);
     Moments {
         mean: weights.weigh(mean * mean).sqrt(),
         variance: weights.weigh(variance),
