@@ -51,7 +51,7 @@ use super::nearest::PointGrid;
 use super::population::{evolve_from, GenerationStats};
 use super::test_paths::TestPaths;
 use super::{fitness, luminance, ChannelWeights, GaConfig, GaConfigError};
-use crate::path::guide::Guide;
+use crate::guiding::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, emitted, mixture_file, RayCounts, SceneView};
 use crate::progress::progress_bar;

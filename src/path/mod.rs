@@ -1,18 +1,16 @@
 //! Light transport: the scene as the estimators see it, and the rendering methods.
 
 pub mod generator;
-pub mod guide;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
-pub mod spatial;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
+use crate::guiding::Guide;
 use crate::sampling::Rng;
 use crate::scene::{Material, Scene};
 use glam::DVec3;
 use glam::Vec3;
-use guide::Guide;
 use mixture::{Mixture, MixtureScratch};
 
 /// A surface point reached by a ray.

@@ -6,10 +6,9 @@
 //! guide's per-vertex mixture of BRDF and anchor samplers instead of the BSDF alone, and the
 //! power heuristic weighs light sampling against that mixture's density.
 
-use super::guide::Guide;
-use super::spatial::PathRecorder;
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
+use crate::guiding::{Guide, PathSegmentStorage};
 use crate::sampling::{brdf, uniform, Rng};
 use glam::Vec3;
 
@@ -55,7 +54,7 @@ pub fn radiance_guided(
     rng: &mut Rng,
     counts: &mut RayCounts,
     guide: Option<&Guide>,
-    mut recorder: Option<&mut PathRecorder>,
+    mut recorder: Option<&mut PathSegmentStorage>,
 ) -> Vec3 {
     let scene = view.scene;
     let Some(mut x) = view.trace(ray, counts) else {
@@ -74,7 +73,7 @@ pub fn radiance_guided(
         let n = brdf::facing_normal(x.ng, wo);
         let last = bounce == max_bounces;
         // At a diffuse vertex the spatial guide's records leave out the direct light, which
-        // next-event estimation samples well there (see `path::spatial`).
+        // next-event estimation samples well there (see `guiding::field`).
         let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
         let vertex = guide
             .filter(|g| !material.mirror && g.guides(k))
