@@ -23,7 +23,7 @@
 //! area.
 
 use super::field::SpatialField;
-use super::vertex::{By, GuideSample, Vertex};
+use super::vertex::{GuideSample, Vertex, VertexSampler};
 use crate::path::generator::DirectionSampler;
 use crate::path::mixture::Mixture;
 use crate::sampling::anchor::{AnchorSampler, ConeTest};
@@ -265,13 +265,13 @@ impl Guide {
             }
             None => (None, 1.0),
         };
-        let by = match (self.level(k), spatial) {
-            (Some(level), spatial) => By::Level(level, spatial),
-            (None, Some((s, cell))) => By::Spatial(s, cell),
-            (None, None) => By::Brdf,
+        let sampler = match (self.level(k), spatial) {
+            (Some(level), spatial) => VertexSampler::Level(level, spatial),
+            (None, Some((s, cell))) => VertexSampler::Spatial(s, cell),
+            (None, None) => VertexSampler::Brdf,
         };
         Vertex {
-            by,
+            sampler,
             light_share,
             scale: self.pdf_error.unwrap_or(1.0),
             x: x.as_dvec3(),

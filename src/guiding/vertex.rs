@@ -20,12 +20,16 @@ pub struct GuideSample {
     pub weight: Vec3,
 }
 
-/// What guides one vertex (see [`Guide::at`]): a level samples its BRDF share from the
-/// spatial guide's region where there is one.
+/// What samples directions at one vertex (see [`Guide::at`]): a level samples its BRDF
+/// share from the spatial guide's region where there is one.
 #[derive(Clone, Copy)]
-pub(super) enum By<'a> {
+pub(super) enum VertexSampler<'a> {
+    /// The guide's level for this vertex index: its cones and patches, and its BRDF share
+    /// (mixed with the spatial field's region, if any).
     Level(&'a Level, Option<(&'a SpatialField, usize)>),
+    /// Past the levels: the spatial field's region, mixed with the BRDF.
     Spatial(&'a SpatialField, usize),
+    /// The BRDF alone.
     Brdf,
 }
 
@@ -33,7 +37,7 @@ pub(super) enum By<'a> {
 /// what samples directions there.
 #[derive(Clone, Copy)]
 pub struct Vertex<'a> {
-    pub(super) by: By<'a>,
+    pub(super) sampler: VertexSampler<'a>,
     /// The probability of next-event estimation here.
     pub(super) light_share: f64,
     /// The guide's fault injection (1 without).
@@ -52,15 +56,15 @@ impl Vertex<'_> {
 
     /// Whether this vertex samples anything but the BRDF.
     pub fn guides(&self) -> bool {
-        !matches!(self.by, By::Brdf)
+        !matches!(self.sampler, VertexSampler::Brdf)
     }
 
     /// Cones, patches or spatial regions: the densities one evaluation of `pdf` costs.
     pub fn samplers(&self) -> usize {
-        match self.by {
-            By::Level(l, spatial) => l.samplers() + usize::from(spatial.is_some()),
-            By::Spatial(..) => 1,
-            By::Brdf => 0,
+        match self.sampler {
+            VertexSampler::Level(l, spatial) => l.samplers() + usize::from(spatial.is_some()),
+            VertexSampler::Spatial(..) => 1,
+            VertexSampler::Brdf => 0,
         }
     }
 
@@ -71,10 +75,12 @@ impl Vertex<'_> {
 
     /// `p(wi)` for the material's BRDF pdf `brdf_pdf` here.
     pub(super) fn pdf_with(&self, wi: DVec3, brdf_pdf: f64) -> f64 {
-        match self.by {
-            By::Brdf => brdf_pdf,
-            By::Spatial(s, cell) => self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf),
-            By::Level(level, spatial) => {
+        match self.sampler {
+            VertexSampler::Brdf => brdf_pdf,
+            VertexSampler::Spatial(s, cell) => {
+                self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf)
+            }
+            VertexSampler::Level(level, spatial) => {
                 let brdf_pdf = match spatial {
                     Some((s, cell)) => self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf),
                     None => brdf_pdf,
@@ -96,8 +102,8 @@ impl Vertex<'_> {
     pub fn sample(&self, material: &Material, wo: Vec3, u: [f64; 4]) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
         let n = self.n;
-        let wi = match self.by {
-            By::Brdf => {
+        let wi = match self.sampler {
+            VertexSampler::Brdf => {
                 let s = brdf::sample(material, n, wo, rest)?;
                 return Some(GuideSample {
                     wi: s.wi,
@@ -105,7 +111,7 @@ impl Vertex<'_> {
                     weight: s.weight,
                 });
             }
-            By::Spatial(s, cell) => {
+            VertexSampler::Spatial(s, cell) => {
                 // The guide's own sample brings its density from the descent that drew it.
                 let (wi, guided) = if u[0] < GUIDE_SHARE {
                     let (wi, pdf) = s.sample(cell, rest);
@@ -117,7 +123,7 @@ impl Vertex<'_> {
                     self.spatial_mix(guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
                 });
             }
-            By::Level(level, spatial) => {
+            VertexSampler::Level(level, spatial) => {
                 let target = u[0] - level.brdf;
                 match spatial {
                     _ if target >= 0.0 => level.sample(self.x, target, rest),
