@@ -12,6 +12,7 @@
 //! * [`SampleStorage`] (`storage.rs`): the training records a field is built from, which a
 //!   [`PathSegmentStorage`] (`recorder.rs`) fills along each training path.
 
+pub mod bsdf;
 pub mod field;
 pub mod field_build;
 pub mod guide;
@@ -22,6 +23,7 @@ pub mod stats;
 pub mod storage;
 pub mod vertex;
 
+pub use bsdf::GuidedBsdf;
 pub use field::SpatialField;
 pub use guide::Guide;
 pub use recorder::PathSegmentStorage;

@@ -1,5 +1,6 @@
 //! The path recorder (Open PGL's `PathSegmentStorage`): what a training pass's path tracer
-//! records along each path for the [`SampleStorage`] a [`SpatialField`] is trained on.
+//! records along each path for the [`SampleStorage`] a [`SpatialField`] is trained on, as
+//! the path tracer's [`PathRecorder`].
 //!
 //! [`SampleStorage`]: super::SampleStorage
 //! [`SpatialField`]: super::SpatialField
@@ -7,6 +8,7 @@
 use super::lattice::{facing, Lattice};
 use super::square::to_square;
 use super::storage::{Record, SampleStorage};
+use crate::path::pt::PathRecorder;
 use glam::Vec3;
 
 /// Records collected along paths: the sampled directions' records wait for the radiance
@@ -50,17 +52,19 @@ impl PathSegmentStorage {
             light_tries: Vec::new(),
         }
     }
+}
 
+impl PathRecorder for PathSegmentStorage {
     /// A light sample taken at `x` (normal `n`), and whether it reached a light (an
     /// unoccluded emitter that the BSDF reflects).
-    pub fn light_try(&mut self, x: Vec3, n: Vec3, reached: bool) {
+    fn light_try(&mut self, x: Vec3, n: Vec3, reached: bool) {
         let i = self.lattice.index_facing(x, n) as u32;
         self.light_tries.push(i | if reached { REACHED } else { 0 });
     }
 
     /// A light sample's record at `x` (normal `n`): `value` is its MIS-weighted `L_e |cos| /
     /// pdf` (throughput excluded).
-    pub fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3) {
+    fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3) {
         let value = luminance(value);
         if value > 0.0 && value.is_finite() {
             self.records.push(Record {
@@ -74,16 +78,7 @@ impl PathSegmentStorage {
 
     /// The direction sampled at vertex `x` (normal `n`), with `|cos| / pdf`, the throughput
     /// after the sample and the radiance collected so far.
-    #[allow(clippy::too_many_arguments)]
-    pub fn sampled(
-        &mut self,
-        x: Vec3,
-        n: Vec3,
-        wi: Vec3,
-        cos_over_pdf: f32,
-        beta: Vec3,
-        before: Vec3,
-    ) {
+    fn sampled(&mut self, x: Vec3, n: Vec3, wi: Vec3, cos_over_pdf: f32, beta: Vec3, before: Vec3) {
         self.pending.push(Pending {
             record: Record {
                 p: x,
@@ -98,9 +93,9 @@ impl PathSegmentStorage {
     }
 
     /// Leaves the emission that the last sampled direction found at once (now added, the
-    /// estimate being `radiance`) out of that direction's record: see the module
-    /// documentation on direct light.
-    pub fn emission_seen(&mut self, radiance: Vec3) {
+    /// estimate being `radiance`) out of that direction's record: see [`super::field`] on
+    /// direct light.
+    fn emission_seen(&mut self, radiance: Vec3) {
         if let Some(p) = self.pending.last_mut() {
             p.before = radiance;
         }
@@ -108,7 +103,7 @@ impl PathSegmentStorage {
 
     /// Ends the path whose estimate is `radiance`: each sampled direction's record gets the
     /// radiance collected after it, divided by the throughput that carried it.
-    pub fn finish(&mut self, radiance: Vec3) {
+    fn finish(&mut self, radiance: Vec3) {
         for p in self.pending.drain(..) {
             let after = radiance - p.before;
             let li = Vec3::select(p.beta.cmpgt(Vec3::ZERO), after / p.beta, Vec3::ZERO);

@@ -127,6 +127,7 @@ impl SampleStorage {
 mod tests {
     use super::*;
     use crate::guiding::field::DARK_LIGHT_SHARE;
+    use crate::path::pt::PathRecorder;
 
     /// A cell turns dark after enough light tries of which none reached a light, stays
     /// dark while no try reaches one, and turns lit when one does; a cell with too few tries

@@ -8,6 +8,7 @@ use crate::accel::Ray;
 use crate::genetic::plan::{Plan, Target};
 use crate::guiding::{Guide, PathSegmentStorage};
 use crate::path::mixture::Mixture;
+use crate::path::pt::Unguided;
 use crate::path::{pt, RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -81,8 +82,12 @@ impl<'a> GuideEstimator<'a> {
         counts: &mut RayCounts,
         recorder: Option<&mut PathSegmentStorage>,
     ) -> DVec3 {
-        let guide = guided.then_some(&self.guide);
-        pt::radiance_guided(view, ray, self.max_bounces, rng, counts, guide, recorder).as_dvec3()
+        let max_bounces = self.max_bounces;
+        let radiance = match guided {
+            true => pt::radiance_guided(view, ray, max_bounces, rng, counts, &self.guide, recorder),
+            false => pt::radiance_guided(view, ray, max_bounces, rng, counts, &Unguided, recorder),
+        };
+        radiance.as_dvec3()
     }
 }
 
