@@ -103,3 +103,162 @@ impl PathGuide for Guide {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::guiding::guide::tests::mixture;
+    use crate::guiding::square::to_square;
+    use crate::guiding::{Record, SpatialField};
+    use crate::path::pt::Unguided;
+    use crate::sampling::{brdf, sample_rng};
+    use crate::scene::Material;
+    use std::sync::Arc;
+
+    fn material(ks: f32, mirror: bool) -> Material {
+        Material {
+            name: "test".into(),
+            kd: Vec3::new(0.5, 0.4, 0.3),
+            ks: Vec3::splat(ks),
+            ns: 20.0,
+            mirror,
+            ke: Vec3::ZERO,
+        }
+    }
+
+    /// A field trained at the origin, on a floor (facing +y), on records around one
+    /// direction.
+    fn field() -> Arc<SpatialField> {
+        let [tu, tv] = to_square(Vec3::new(0.6, 0.7, -0.3).normalize());
+        let mut rng = sample_rng(8, 0, 0);
+        let records: Vec<Record> = (0..4100)
+            .map(|i| Record {
+                p: Vec3::ZERO,
+                facing: 2,
+                dir: [tu + uniform(&mut rng) / 16.0, tv + uniform(&mut rng) / 16.0],
+                value: 1.0 + (i % 3) as f32,
+            })
+            .collect();
+        Arc::new(SpatialField::train(Vec3::splat(-1.0), Vec3::ONE, records))
+    }
+
+    /// The bits of a sample, to compare two for identity.
+    fn bits(s: Option<BrdfSample>) -> Option<([u32; 3], u64, [u32; 3], bool)> {
+        s.map(|s| {
+            let v = |v: Vec3| v.to_array().map(f32::to_bits);
+            (v(s.wi), s.pdf.to_bits(), v(s.weight), s.delta)
+        })
+    }
+
+    const N: Vec3 = Vec3::Y;
+
+    fn wo() -> Vec3 {
+        Vec3::new(0.3, 1.0, 0.1).normalize()
+    }
+
+    /// `guided`'s draws against `expected`'s from the same stream, over many streams: the
+    /// same samples bit for bit, the same densities and values for them, and the streams
+    /// left at the same place.
+    fn assert_draws_as(
+        guided: &GuidedBsdf,
+        expected: impl Fn(&mut Rng) -> Option<BrdfSample>,
+        expected_pdf: impl Fn(Vec3) -> f64,
+    ) {
+        let mut sampled = 0;
+        for stream in 0..2000 {
+            let (mut a, mut b) = (sample_rng(3, stream, 0), sample_rng(3, stream, 0));
+            let s = guided.sample(&mut a);
+            assert_eq!(bits(s), bits(expected(&mut b)), "stream {stream}");
+            assert_eq!(uniform(&mut a).to_bits(), uniform(&mut b).to_bits());
+            if let Some(s) = s {
+                assert_eq!(guided.pdf(s.wi).to_bits(), expected_pdf(s.wi).to_bits());
+                let f = brdf::eval(guided.bsdf.material, N, wo(), s.wi);
+                assert_eq!(guided.eval(s.wi), f);
+                sampled += 1;
+            }
+        }
+        assert!(sampled > 1000, "{sampled} samples");
+    }
+
+    /// With no guide, where the guide has nothing (a guide without levels or field, the
+    /// path's last vertex past the levels), and at a mirror under a guide that guides: the
+    /// BSDF's own sampling from three uniform numbers, density and value.
+    #[test]
+    fn unguided_is_exactly_bsdf_sampling() {
+        let guiding = Guide::new(&mixture()).with_spatial(Some(field()));
+        let nothing = Guide::default();
+        for m in [
+            material(0.0, false),
+            material(0.3, false),
+            material(0.9, true),
+        ] {
+            let bsdf = Bsdf {
+                material: &m,
+                n: N,
+                wo: wo(),
+            };
+            let mut cases = vec![
+                (GuidedBsdf::new(bsdf, None), 1.0),
+                {
+                    let v = nothing.vertex(0, Vec3::ZERO, bsdf, false);
+                    (v.bsdf, v.light_share)
+                },
+                {
+                    let v = guiding.vertex(2, Vec3::ZERO, bsdf, true);
+                    (v.bsdf, v.light_share)
+                },
+            ];
+            if m.mirror {
+                let v = guiding.vertex(0, Vec3::ZERO, bsdf, false);
+                cases.push((v.bsdf, v.light_share));
+            }
+            assert_eq!(Unguided.vertex(0, Vec3::ZERO, bsdf, false).light_share, 1.0);
+            for (guided, light_share) in cases {
+                assert!(!guided.guided() && light_share == 1.0);
+                assert_eq!(guided.samplers(), 0);
+                // As `pt` drew them before the guided BSDF.
+                let bsdf_sampled = |rng: &mut Rng| {
+                    let u = [
+                        uniform(rng) as f64,
+                        uniform(rng) as f64,
+                        uniform(rng) as f64,
+                    ];
+                    brdf::sample(&m, N, wo(), u)
+                };
+                assert_draws_as(&guided, bsdf_sampled, |wi| brdf::pdf(&m, N, wo(), wi));
+            }
+        }
+    }
+
+    /// At a vertex the guide guides (its two levels, each with the field's region, and past
+    /// them the field alone): the vertex's mixture, sampled from four uniform numbers, and
+    /// its density.
+    #[test]
+    fn guided_sampling_is_the_vertex_mixture_from_four_numbers() {
+        let guide = Guide::new(&mixture()).with_spatial(Some(field()));
+        for m in [material(0.0, false), material(0.3, false)] {
+            let bsdf = Bsdf {
+                material: &m,
+                n: N,
+                wo: wo(),
+            };
+            for k in 0..3 {
+                let v = guide.vertex(k, Vec3::ZERO, bsdf, false);
+                let vertex = guide.at(k, Vec3::ZERO, N, false);
+                assert!(v.bsdf.guided() && v.bsdf.samplers() == vertex.samplers());
+                assert_eq!(v.light_share, 1.0);
+                let mixture_sampled = |rng: &mut Rng| {
+                    let u = std::array::from_fn(|_| uniform(rng) as f64);
+                    let s = vertex.sample(&m, wo(), u)?;
+                    Some(BrdfSample {
+                        wi: s.wi,
+                        pdf: s.pdf,
+                        weight: s.weight,
+                        delta: false,
+                    })
+                };
+                assert_draws_as(&v.bsdf, mixture_sampled, |wi| vertex.pdf(&m, wo(), wi));
+            }
+        }
+    }
+}
