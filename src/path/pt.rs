@@ -2,7 +2,7 @@
 //! sampling, combined by the power heuristic (Veach & Guibas 1995), Russian roulette from
 //! depth 5. The baseline users compare genpath against.
 //!
-//! With a guide (`--method ga-pt`, `pg`: [`crate::guiding::Guide`]), directions out of
+//! With a guide (`--method ga-pt`, `pg`: `guiding::Guide`), directions out of
 //! non-delta vertices come from the guide's per-vertex mixture of BRDF and anchor samplers
 //! instead of the BSDF alone, and the power heuristic weighs light sampling against that
 //! mixture's density.
@@ -10,11 +10,11 @@
 //! # Guides as transport sees them
 //!
 //! Guiding builds on transport (a guide is made of a mixture's generators), so this module
-//! knows guides only by two traits and imports nothing of [`crate::guiding`]:
+//! knows guides only by two traits and imports nothing of `guiding`:
 //!
 //! * a [`PathGuide`] is asked at each scattering vertex for a [`GuidedVertex`]: the
 //!   probability of next-event estimation there, and the BSDF that the loop evaluates,
-//!   weighs and samples there (a [`VertexBsdf`]: for [`crate::guiding::Guide`], its
+//!   weighs and samples there (a [`VertexBsdf`]: for `guiding::Guide`, its
 //!   `GuidedBsdf`, whose contract is written there);
 //! * a [`PathRecorder`] is told what a training path found at its vertices.
 //!
