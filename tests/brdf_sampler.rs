@@ -1,7 +1,8 @@
 //! Statistical tests of the BRDF sampler, of a mixture of samplers at one vertex (design §4,
-//! §5, §10) and of the renderer's guided BSDF (`genpath::guiding::GuidedBsdf`): χ² of sample histograms against the densities the renderer evaluates, each
-//! paired with deliberately wrong densities that the same histogram must reject; and `∫ pdf`
-//! by quadrature that does not use the samplers. Run with
+//! §5, §10) and of the renderer's guided BSDF (`genpath::guiding::GuidedBsdf`): χ² of sample
+//! histograms against the densities the renderer evaluates, each paired with deliberately
+//! wrong densities that the same histogram must reject; and `∫ pdf` by quadrature that does
+//! not use the samplers. Run with
 //! `cargo test --release --test brdf_sampler` (`-- --nocapture` prints every statistic).
 //!
 //! The outcome of a draw: `brdf::pdf` is the density, over the full sphere, of the direction

@@ -50,7 +50,7 @@
 //!
 //! In Open PGL's terms this is the `Field`; the records it is trained on are the
 //! [`SampleStorage`], filled by a [`PathSegmentStorage`] along each training path, and
-//! [`SpatialField::build`] (in `field_build.rs`) is its update.
+//! `SpatialField::build` (in `field_build.rs`) is its update.
 //!
 //! [`facing`]: super::lattice::facing
 //! [`LATTICE_LONGEST`]: super::lattice::LATTICE_LONGEST
@@ -72,7 +72,7 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF.
 pub const GUIDE_SHARE: f64 = 0.5;
 /// Probability of next-event estimation in a dark lattice cell: one where the training's
-/// light samples never reached a light (see [`SpatialField::build`]).
+/// light samples never reached a light (see `SpatialField::build`).
 pub const DARK_LIGHT_SHARE: f64 = 0.1;
 /// The bit of a [`SpatialField`]'s region that says its cell is dark.
 pub(super) const DARK: u32 = 1 << 31;

@@ -1,5 +1,5 @@
 //! Where a spatial lookup lands: which way the surface faces ([`facing`]) and the cell of a
-//! regular lattice over the scene's box ([`Lattice`]). The kd-trees of a [`SpatialField`]
+//! regular lattice over the scene's box (`Lattice`). The kd-trees of a [`SpatialField`]
 //! cut down to a lattice cell at the finest, so that every cell lies in one leaf and a
 //! lookup is one read of a per-facing, per-cell table; the training's light tries and dark
 //! cells are kept per facing and cell too.
@@ -9,7 +9,7 @@
 use glam::Vec3;
 
 /// Lattice cells along the scene box's longest side: the finest spatial regions (see
-/// [`Lattice`]).
+/// `Lattice`).
 pub const LATTICE_LONGEST: u32 = 16;
 
 /// Which way a surface normal `n` faces: its largest component's axis and sign, `0 … 5`.

@@ -18,8 +18,9 @@ pub struct PathSegmentStorage {
     pending: Vec<Pending>,
     pub records: Vec<Record>,
     lattice: Lattice,
-    /// Per light sample, its facing and lattice cell's index (as [`SpatialField`]'s tables
-    /// index them), with the bit `REACHED` set where it reached a light.
+    /// Per light sample, its facing and lattice cell's index (as the tables of a
+    /// [`SpatialField`](super::SpatialField) index them), with the bit `REACHED` set where
+    /// it reached a light.
     pub light_tries: Vec<u32>,
 }
 
