@@ -6,6 +6,7 @@
 pub mod accel;
 pub mod check;
 pub mod genetic;
+pub mod guiding;
 pub mod image;
 pub mod integrators;
 pub mod path;

@@ -6,6 +6,7 @@ use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanFor};
 use crate::genetic::GaConfig;
 use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::pt::Unguided;
 use crate::path::{camera_sample, RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -74,7 +75,7 @@ impl PixelEstimator for GaEstimator<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> DVec3 {
-        let mixture = (self.local.as_ref(), None);
+        let mixture = (self.local.as_ref(), None::<&Unguided>);
         camera_sample(
             view,
             ray,

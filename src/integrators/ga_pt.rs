@@ -6,9 +6,9 @@ use super::ga::build_plan;
 use super::{pg, Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanFor};
-use crate::path::guide::Guide;
+use crate::guiding::{Guide, PathSegmentStorage};
 use crate::path::mixture::Mixture;
-use crate::path::spatial::PathRecorder;
+use crate::path::pt::Unguided;
 use crate::path::{pt, RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -81,10 +81,14 @@ impl<'a> GuideEstimator<'a> {
         guided: bool,
         rng: &mut Rng,
         counts: &mut RayCounts,
-        recorder: Option<&mut PathRecorder>,
+        recorder: Option<&mut PathSegmentStorage>,
     ) -> DVec3 {
-        let guide = guided.then_some(&self.guide);
-        pt::radiance_guided(view, ray, self.max_bounces, rng, counts, guide, recorder).as_dvec3()
+        let max_bounces = self.max_bounces;
+        let radiance = match guided {
+            true => pt::radiance_guided(view, ray, max_bounces, rng, counts, &self.guide, recorder),
+            false => pt::radiance_guided(view, ray, max_bounces, rng, counts, &Unguided, recorder),
+        };
+        radiance.as_dvec3()
     }
 }
 

@@ -3,6 +3,7 @@
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::path::mixture::{Mixture, MixtureScratch};
+use crate::path::pt::Unguided;
 use crate::path::{camera_sample, mixture_file, RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -70,7 +71,7 @@ impl PixelEstimator for MixtureEstimator<'_> {
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> DVec3 {
-        let mixture = (Some(self.mixture), None);
+        let mixture = (Some(self.mixture), None::<&Unguided>);
         camera_sample(
             view,
             ray,

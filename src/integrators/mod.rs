@@ -25,8 +25,8 @@ pub mod tiles;
 use crate::accel::Ray;
 use crate::genetic::plan::Plan;
 use crate::genetic::GaConfigError;
+use crate::guiding::SpatialField;
 use crate::path::mixture::Mixture;
-use crate::path::spatial::SpatialGuide;
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -75,7 +75,7 @@ methods! {
     /// with next-event estimation at every vertex.
     GaPt => ga_pt::prepare,
     /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
-    /// training passes whose samples stay in the image (`path::spatial`), without the GA:
+    /// training passes whose samples stay in the image (`guiding::field`), without the GA:
     /// the baseline that shows what the GA adds.
     Pg => pg::prepare,
     /// Test-only (feature `testing`): path tracing with next-event estimation alone (no
@@ -151,7 +151,7 @@ pub trait PixelIntegrator: Send + Sync {
         None
     }
     /// The spatial guide it renders with.
-    fn spatial(&self) -> Option<&SpatialGuide> {
+    fn spatial(&self) -> Option<&SpatialField> {
         None
     }
     /// The one mixture it renders every pixel with.
@@ -173,7 +173,7 @@ pub trait Integrator: Send + Sync {
     /// Samples per pixel preparing took, which are in every image it renders.
     fn samples_taken(&self) -> u32;
     fn plan(&self) -> Option<&Plan>;
-    fn spatial(&self) -> Option<&SpatialGuide>;
+    fn spatial(&self) -> Option<&SpatialField>;
     fn mixture(&self) -> Option<&Mixture>;
 }
 
@@ -191,7 +191,7 @@ impl<I: PixelIntegrator> Integrator for I {
     fn plan(&self) -> Option<&Plan> {
         PixelIntegrator::plan(self)
     }
-    fn spatial(&self) -> Option<&SpatialGuide> {
+    fn spatial(&self) -> Option<&SpatialField> {
         PixelIntegrator::spatial(self)
     }
     fn mixture(&self) -> Option<&Mixture> {

@@ -1,4 +1,4 @@
-//! `pg`: path tracing guided by a spatial guide ([`crate::path::spatial`]) learned from
+//! `pg`: path tracing guided by a spatial guide ([`crate::guiding::field`]) learned from
 //! path-traced training passes whose samples stay in the image; also `ga-pt` with the
 //! spatial guide, whose training passes render with the GA plan's per-pixel guides.
 //!
@@ -11,9 +11,8 @@ use super::tiles::{self, render_tile, PixelSums};
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings};
 use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanConfig};
-use crate::path::guide::Guide;
+use crate::guiding::{Guide, LevelsTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::path::mixture::Mixture;
-use crate::path::spatial::{LevelsTrial, PathRecorder, Records, SpatialGuide};
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
 use crate::sampling::{derive_seed, Rng, Stream};
@@ -69,7 +68,7 @@ impl PixelIntegrator for SpatialIntegrator {
     fn plan(&self) -> Option<&Plan> {
         self.plan.as_ref()
     }
-    fn spatial(&self) -> Option<&SpatialGuide> {
+    fn spatial(&self) -> Option<&SpatialField> {
         Some(&self.training.guide)
     }
 }
@@ -79,7 +78,7 @@ impl PixelIntegrator for SpatialIntegrator {
 pub struct SpatialEstimator<'a> {
     guide: GuideEstimator<'a>,
     levels: Levels,
-    recorder: Option<(PathRecorder, u32)>,
+    recorder: Option<(PathSegmentStorage, u32)>,
     /// Samples of the pixel so far.
     taken: u32,
 }
@@ -90,7 +89,7 @@ impl<'a> SpatialEstimator<'a> {
         plan: Option<&'a Plan>,
         training: &SpatialTraining,
         max_bounces: u32,
-        recorder: Option<(PathRecorder, u32)>,
+        recorder: Option<(PathSegmentStorage, u32)>,
     ) -> Self {
         let guide = Guide::default().with_spatial(Some(Arc::clone(&training.guide)));
         Self {
@@ -138,7 +137,7 @@ const RECORDS_PER_SAMPLE: usize = 2;
 /// image like any other (each unbiased given the guide it was drawn with), and renders
 /// keep them.
 pub struct SpatialTraining {
-    pub guide: Arc<SpatialGuide>,
+    pub guide: Arc<SpatialField>,
     pub samples: PixelSums,
     /// Where a GA plan's per-pixel guides sample beside the spatial guide.
     pub levels: Levels,
@@ -246,10 +245,10 @@ pub fn train_spatial(
     let camera = &view.scene.camera;
     let tiles = tiles::tiles(camera.width, camera.height);
     let pixels = (camera.width * camera.height) as usize;
-    let mut records = Records::around(&view.scene.mesh);
+    let mut records = SampleStorage::around(&view.scene.mesh);
     // Before the first pass: no samples, and a guide that has learned nothing.
     let mut training = SpatialTraining {
-        guide: Arc::new(records.guide()),
+        guide: Arc::new(records.field()),
         samples: PixelSums::zero(pixels),
         levels: Levels::All,
     };
@@ -279,7 +278,7 @@ pub fn train_spatial(
         let per_tile: Vec<_> = tiles
             .par_iter()
             .map(|tile| {
-                let recorder = Some((PathRecorder::new(&records), recorded));
+                let recorder = Some((PathSegmentStorage::new(&records), recorded));
                 let max_bounces = settings.max_bounces;
                 let mut estimator = SpatialEstimator::new(plan, &training, max_bounces, recorder);
                 let result = render_tile(
@@ -330,7 +329,7 @@ pub fn train_spatial(
         }
         training.samples.spp += pass_settings.spp;
         recorded_in_all += records.len();
-        training.guide = Arc::new(records.guide());
+        training.guide = Arc::new(records.field());
         bar.set_position(u64::from(training.samples.spp));
         last = t0.elapsed().as_secs_f64();
         pass += 1;

@@ -1,19 +1,17 @@
 //! Light transport: the scene as the estimators see it, and the rendering methods.
 
 pub mod generator;
-pub mod guide;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
-pub mod spatial;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::Rng;
 use crate::scene::{Material, Scene};
 use glam::DVec3;
 use glam::Vec3;
-use guide::Guide;
 use mixture::{Mixture, MixtureScratch};
+use pt::{PathGuide, NO_RECORDER};
 
 /// A surface point reached by a ray.
 #[derive(Clone, Copy, Debug, Default)]
@@ -167,17 +165,21 @@ pub fn emitted(material: &Material, x: &SurfacePoint, w: Vec3) -> Vec3 {
 /// given, or with a mixture the emission seen at the first hit plus the mixture's estimator
 /// (eq. 8) from there.
 #[allow(clippy::too_many_arguments)]
-pub fn camera_sample(
+pub fn camera_sample<G: PathGuide>(
     view: &SceneView,
     ray: &Ray,
     max_bounces: u32,
-    (mixture, guide): (Option<&Mixture>, Option<&Guide>),
+    (mixture, guide): (Option<&Mixture>, Option<&G>),
     rng: &mut Rng,
     counts: &mut RayCounts,
     scratch: &mut MixtureScratch,
 ) -> DVec3 {
     let Some(mixture) = mixture else {
-        return pt::radiance_guided(view, ray, max_bounces, rng, counts, guide, None).as_dvec3();
+        let radiance = match guide {
+            Some(g) => pt::radiance_guided(view, ray, max_bounces, rng, counts, g, NO_RECORDER),
+            None => pt::radiance(view, ray, max_bounces, rng, counts),
+        };
+        return radiance.as_dvec3();
     };
     match view.trace(ray, counts) {
         None => DVec3::ZERO,

@@ -2,19 +2,167 @@
 //! sampling, combined by the power heuristic (Veach & Guibas 1995), Russian roulette from
 //! depth 5. The baseline users compare genpath against.
 //!
-//! With a [`Guide`] (`--method ga-pt`), directions out of non-delta vertices come from the
-//! guide's per-vertex mixture of BRDF and anchor samplers instead of the BSDF alone, and the
-//! power heuristic weighs light sampling against that mixture's density.
+//! With a guide (`--method ga-pt`, `pg`: `guiding::Guide`), directions out of
+//! non-delta vertices come from the guide's per-vertex mixture of BRDF and anchor samplers
+//! instead of the BSDF alone, and the power heuristic weighs light sampling against that
+//! mixture's density.
+//!
+//! # Guides as transport sees them
+//!
+//! Guiding builds on transport (a guide is made of a mixture's generators), so this module
+//! knows guides only by two traits and imports nothing of `guiding`:
+//!
+//! * a [`PathGuide`] is asked at each scattering vertex for a [`GuidedVertex`]: the
+//!   probability of next-event estimation there, and the BSDF that the loop evaluates,
+//!   weighs and samples there (a [`VertexBsdf`]: for `guiding::Guide`, its
+//!   `GuidedBsdf`, whose contract is written there);
+//! * a [`PathRecorder`] is told what a training path found at its vertices.
+//!
+//! [`radiance_guided`] is generic over both, so that each guide and recorder gets a loop of
+//! its own, monomorphised, with no virtual call per vertex. [`Unguided`], whose BSDF is the
+//! material's own ([`Bsdf`]), is plain path tracing, and [`NoRecorder`] records nothing:
+//! [`radiance`] is the loop with those two.
 
-use super::guide::Guide;
-use super::spatial::PathRecorder;
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
-use crate::sampling::{brdf, uniform, Rng};
+use crate::sampling::brdf::{self, BrdfSample};
+use crate::sampling::{uniform, Rng};
+use crate::scene::Material;
 use glam::Vec3;
 
 /// First bounce at which Russian roulette may end a path.
 pub const RR_START: u32 = 5;
+
+/// The BSDF at one path vertex, as the path tracer uses it: its value for next-event
+/// estimation, and a direction to continue along with the density multiple importance
+/// sampling weighs it with.
+pub trait VertexBsdf {
+    /// `f(wo, wi)`, the BSDF's own value (no cosine).
+    fn eval(&self, wi: Vec3) -> Vec3;
+    /// The solid-angle density with which [`Self::sample`] draws unit `wi`.
+    fn pdf(&self, wi: Vec3) -> f64;
+    /// A direction drawn with the next uniform numbers of `rng`; `None` where the direction
+    /// carries nothing (the path ends).
+    fn sample(&self, rng: &mut Rng) -> Option<BrdfSample>;
+    /// The sampler densities beyond the BSDF's that one evaluation of [`Self::pdf`] costs
+    /// (see [`RayCounts::densities`]).
+    fn samplers(&self) -> usize {
+        0
+    }
+}
+
+/// The BSDF of `material` at a vertex whose normal `n` faces `wo` ([`brdf::facing_normal`]):
+/// [`brdf`]'s evaluation, density and sampling.
+#[derive(Clone, Copy)]
+pub struct Bsdf<'a> {
+    pub material: &'a Material,
+    pub n: Vec3,
+    pub wo: Vec3,
+}
+
+impl VertexBsdf for Bsdf<'_> {
+    fn eval(&self, wi: Vec3) -> Vec3 {
+        brdf::eval(self.material, self.n, self.wo, wi)
+    }
+
+    fn pdf(&self, wi: Vec3) -> f64 {
+        brdf::pdf(self.material, self.n, self.wo, wi)
+    }
+
+    /// [`brdf::sample`] from three uniform numbers.
+    fn sample(&self, rng: &mut Rng) -> Option<BrdfSample> {
+        let u = [
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+        ];
+        brdf::sample(self.material, self.n, self.wo, u)
+    }
+}
+
+/// What a guide says about one vertex.
+pub struct GuidedVertex<B> {
+    /// The probability of next-event estimation here: its density for multiple importance
+    /// sampling is the light sample's times this.
+    pub light_share: f64,
+    /// What the vertex samples and weighs directions with.
+    pub bsdf: B,
+}
+
+/// What guides a path tracer's directions (see the module documentation).
+pub trait PathGuide {
+    type Bsdf<'a>: VertexBsdf
+    where
+        Self: 'a;
+    /// The `k`-th non-delta vertex of a path, at `x`, where the path meets `bsdf` (`last`:
+    /// at the path's last bounce, whose direction can only find emission).
+    fn vertex<'a>(
+        &'a self,
+        k: usize,
+        x: Vec3,
+        bsdf: Bsdf<'a>,
+        last: bool,
+    ) -> GuidedVertex<Self::Bsdf<'a>>;
+}
+
+/// No guide: next-event estimation at every vertex, and the material's own BSDF.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Unguided;
+
+impl PathGuide for Unguided {
+    type Bsdf<'a> = Bsdf<'a>;
+    fn vertex<'a>(&'a self, _: usize, _: Vec3, bsdf: Bsdf<'a>, _: bool) -> GuidedVertex<Bsdf<'a>> {
+        GuidedVertex {
+            light_share: 1.0,
+            bsdf,
+        }
+    }
+}
+
+/// What a training path tells the recorder that learns from it, vertex by vertex (at a
+/// vertex `x` with normal `n`; `wi` unit).
+pub trait PathRecorder {
+    /// A light sample was taken at `x`; whether it reached a light (an unoccluded emitter
+    /// that the BSDF reflects).
+    fn light_try(&mut self, x: Vec3, n: Vec3, reached: bool);
+    /// A light sample that reached a light along `wi`: `value` is its MIS-weighted
+    /// `L_e |cos| / pdf` (throughput excluded).
+    fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3);
+    /// The direction `wi` sampled at `x`, with `|cos| / pdf`, the throughput after the
+    /// sample and the radiance collected so far.
+    fn sampled(&mut self, x: Vec3, n: Vec3, wi: Vec3, cos_over_pdf: f32, beta: Vec3, before: Vec3);
+    /// The last sampled direction found emission at once, which brought the estimate to
+    /// `radiance`.
+    fn emission_seen(&mut self, radiance: Vec3);
+    /// The path ended with the estimate `radiance`.
+    fn finish(&mut self, radiance: Vec3);
+}
+
+/// The recorder of paths that record nothing: there is none (`Option<&mut NoRecorder>` is
+/// always `None`).
+#[derive(Debug)]
+pub enum NoRecorder {}
+
+/// No recorder, for paths that record nothing.
+pub const NO_RECORDER: Option<&mut NoRecorder> = None;
+
+impl PathRecorder for NoRecorder {
+    fn light_try(&mut self, _: Vec3, _: Vec3, _: bool) {
+        match *self {}
+    }
+    fn light(&mut self, _: Vec3, _: Vec3, _: Vec3, _: Vec3) {
+        match *self {}
+    }
+    fn sampled(&mut self, _: Vec3, _: Vec3, _: Vec3, _: f32, _: Vec3, _: Vec3) {
+        match *self {}
+    }
+    fn emission_seen(&mut self, _: Vec3) {
+        match *self {}
+    }
+    fn finish(&mut self, _: Vec3) {
+        match *self {}
+    }
+}
 
 fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
@@ -40,24 +188,98 @@ pub fn radiance(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
-    radiance_guided(view, ray, max_bounces, rng, counts, None, None)
+    radiance_guided(view, ray, max_bounces, rng, counts, &Unguided, NO_RECORDER)
 }
 
-/// [`radiance`], with directions drawn from `guide` where it has samplers (see the module
-/// documentation); `None` is plain path tracing, with the same random numbers. With a
-/// `recorder`, every non-delta vertex records the incident light along the light sample's
-/// and the sampled direction, for training a spatial guide.
-#[allow(clippy::too_many_arguments)]
-pub fn radiance_guided(
+/// A light sample that reached a light: the direction to it, its emission, the BSDF's value
+/// and the MIS-weighted `|cos| / pdf`.
+struct LightHit {
+    wi: Vec3,
+    le: Vec3,
+    f: Vec3,
+    scale: f32,
+}
+
+/// Next-event estimation at `x` (normal `n`), where it runs with probability `light_share`:
+/// a point on an emitter from three uniform numbers, and what it brings if it reaches `x`.
+fn next_event<B: VertexBsdf>(
+    view: &SceneView,
+    (x, n): (&SurfacePoint, Vec3),
+    bsdf: &B,
+    light_share: f64,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+) -> Option<LightHit> {
+    let scene = view.scene;
+    let u = [uniform(rng), uniform(rng), uniform(rng)];
+    let ls = scene.emitters.sample(&scene.mesh, u);
+    let y = SurfacePoint {
+        p: ls.point,
+        ng: scene.mesh.normals[ls.prim as usize],
+        prim: ls.prim,
+    };
+    let d = y.p - x.p;
+    let dist2 = d.length_squared();
+    let wi = d / dist2.sqrt();
+    let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
+    if !(cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0) {
+        return None;
+    }
+    let le = view.material(y.prim).ke;
+    let f = bsdf.eval(wi);
+    if !(le.max_element() > 0.0 && f.max_element() > 0.0 && view.unoccluded(x, &y, counts)) {
+        return None;
+    }
+    let pdf_light = light_share as f32 * light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
+    let pdf_brdf = bsdf.pdf(wi) as f32;
+    let weight = power_heuristic(pdf_light, pdf_brdf);
+    Some(LightHit {
+        wi,
+        le,
+        f,
+        scale: cos_x * weight / pdf_light,
+    })
+}
+
+/// The MIS weight of the emission that the direction `bs` sampled at `x` found at `y`, where
+/// next-event estimation ran with probability `light_share`; `None` where `y` emits away
+/// from `x`.
+fn emission_weight(
+    view: &SceneView,
+    (x, y): (&SurfacePoint, &SurfacePoint),
+    bs: &BrdfSample,
+    light_share: f64,
+) -> Option<f32> {
+    let cos_light = y.ng.dot(-bs.wi);
+    if cos_light > 0.0 {
+        Some(if bs.delta {
+            1.0
+        } else {
+            let dist2 = (y.p - x.p).length_squared();
+            let total_area = view.scene.emitters.total_area;
+            let pdf_light =
+                light_share as f32 * light_pdf_solid_angle(total_area.recip(), dist2, cos_light);
+            power_heuristic(bs.pdf as f32, pdf_light)
+        })
+    } else {
+        None
+    }
+}
+
+/// [`radiance`], with directions drawn from `guide`'s BSDF at every vertex and next-event
+/// estimation at its light share (see the module documentation); [`Unguided`] is plain path
+/// tracing, with the same random numbers. With a `recorder`, every non-delta vertex records
+/// the incident light along the light sample's and the sampled direction, for training a
+/// spatial guide.
+pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
     view: &SceneView,
     ray: &Ray,
     max_bounces: u32,
     rng: &mut Rng,
     counts: &mut RayCounts,
-    guide: Option<&Guide>,
-    mut recorder: Option<&mut PathRecorder>,
+    guide: &G,
+    mut recorder: Option<&mut R>,
 ) -> Vec3 {
-    let scene = view.scene;
     let Some(mut x) = view.trace(ray, counts) else {
         return Vec3::ZERO;
     };
@@ -74,81 +296,29 @@ pub fn radiance_guided(
         let n = brdf::facing_normal(x.ng, wo);
         let last = bounce == max_bounces;
         // At a diffuse vertex the spatial guide's records leave out the direct light, which
-        // next-event estimation samples well there (see `path::spatial`).
+        // next-event estimation samples well there (see `guiding::field`).
         let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
-        let vertex = guide
-            .filter(|g| !material.mirror && g.guides(k))
-            .map(|g| g.at(k, x.p, n, last));
-        // Next-event estimation runs with this probability: its density is the light
-        // sample's times it.
-        let light_share = vertex.map_or(1.0, |v| v.light_share());
-        let guide = vertex.filter(|v| v.guides());
-        if let Some(v) = guide {
-            // The light sample's and the guided sample's densities.
-            counts.densities += 2 * v.samplers() as u64;
-        }
+        let GuidedVertex { light_share, bsdf } =
+            guide.vertex(k, x.p, Bsdf { material, n, wo }, last);
+        // The light sample's and the sampled direction's densities.
+        counts.densities += 2 * bsdf.samplers() as u64;
 
         // Next-event estimation (impossible through a mirror's delta), where it runs.
         if !material.mirror && (light_share >= 1.0 || f64::from(uniform(rng)) < light_share) {
-            let mut reached = false;
-            let u = [uniform(rng), uniform(rng), uniform(rng)];
-            let ls = scene.emitters.sample(&scene.mesh, u);
-            let y = SurfacePoint {
-                p: ls.point,
-                ng: scene.mesh.normals[ls.prim as usize],
-                prim: ls.prim,
-            };
-            let d = y.p - x.p;
-            let dist2 = d.length_squared();
-            let wi = d / dist2.sqrt();
-            let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-            if cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 {
-                let le = view.material(y.prim).ke;
-                let f = brdf::eval(material, n, wo, wi);
-                if le.max_element() > 0.0
-                    && f.max_element() > 0.0
-                    && view.unoccluded(&x, &y, counts)
-                {
-                    reached = true;
-                    let pdf_light =
-                        light_share as f32 * light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
-                    let pdf_brdf = match guide {
-                        Some(g) => g.pdf(material, wo, wi),
-                        None => brdf::pdf(material, n, wo, wi),
-                    } as f32;
-                    let weight = power_heuristic(pdf_light, pdf_brdf);
-                    radiance += beta * f * le * (cos_x * weight / pdf_light);
-                    if let Some(r) = recorder.as_deref_mut().filter(|_| !diffuse) {
-                        r.light(x.p, n, wi, le * (cos_x * weight / pdf_light));
-                    }
+            let hit = next_event(view, (&x, n), &bsdf, light_share, rng, counts);
+            if let Some(h) = &hit {
+                radiance += beta * h.f * h.le * h.scale;
+                if let Some(r) = recorder.as_deref_mut().filter(|_| !diffuse) {
+                    r.light(x.p, n, h.wi, h.le * h.scale);
                 }
             }
             if let Some(r) = recorder.as_deref_mut() {
-                r.light_try(x.p, n, reached);
+                r.light_try(x.p, n, hit.is_some());
             }
         }
 
-        // BRDF (or guide) sampling.
-        let bs = match guide {
-            Some(g) => {
-                let u = std::array::from_fn(|_| uniform(rng) as f64);
-                g.sample(material, wo, u).map(|s| brdf::BrdfSample {
-                    wi: s.wi,
-                    pdf: s.pdf,
-                    weight: s.weight,
-                    delta: false,
-                })
-            }
-            None => {
-                let u = [
-                    uniform(rng) as f64,
-                    uniform(rng) as f64,
-                    uniform(rng) as f64,
-                ];
-                brdf::sample(material, n, wo, u)
-            }
-        };
-        let Some(bs) = bs else {
+        // BSDF sampling, guided where the guide's BSDF is.
+        let Some(bs) = bsdf.sample(rng) else {
             break;
         };
         if !material.mirror {
@@ -166,20 +336,7 @@ pub fn radiance_guided(
         };
         let y_material = view.material(y.prim);
         if y_material.is_emitter() {
-            let cos_light = y.ng.dot(-wi);
-            if cos_light > 0.0 {
-                let weight = if bs.delta {
-                    1.0
-                } else {
-                    let dist2 = (y.p - x.p).length_squared();
-                    let pdf_light = light_share as f32
-                        * light_pdf_solid_angle(
-                            scene.emitters.total_area.recip(),
-                            dist2,
-                            cos_light,
-                        );
-                    power_heuristic(bs.pdf as f32, pdf_light)
-                };
+            if let Some(weight) = emission_weight(view, (&x, &y), &bs, light_share) {
                 radiance += beta * emitted(y_material, &y, -wi) * weight;
                 if let Some(r) = recorder.as_deref_mut().filter(|_| diffuse && !bs.delta) {
                     r.emission_seen(radiance);

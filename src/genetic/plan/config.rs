@@ -43,7 +43,7 @@ pub struct PlanConfig {
     /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
     /// every step the test paths need.
     pub guide_steps: usize,
-    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`path::spatial`), as
+    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`guiding::field`), as
     /// `pg` guides every vertex. On by default: at equal time (reports at e5f1d58, 2 / 8 /
     /// 30 s) `ga-pt` had 0.32 / 0.27 / 0.27 of `pt`'s relMSE on fig5 with it and 0.33 /
     /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy

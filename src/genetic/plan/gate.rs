@@ -7,7 +7,7 @@ use super::baseline::Origin;
 use super::pixel::{Evolved, GaRun, PixelContext};
 use super::waves::Waves;
 use super::PlanFor;
-use crate::path::guide::Guide;
+use crate::guiding::Guide;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
