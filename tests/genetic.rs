@@ -11,7 +11,7 @@ use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
 use genpath::integrators::pg::{
-    train_spatial, Levels, TrainingSchedule, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO,
+    train_spatial, PlanGuides, TrainingSchedule, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO,
 };
 use genpath::integrators::RenderSettings;
 use genpath::path::generator::{
@@ -1026,18 +1026,18 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
     let schedule = TrainingSchedule::Passes(5);
     let trial_of = |plan: &Plan| {
         let training = train_spatial(&view, &settings, schedule, Some(plan));
-        let trial = training.guide.stats.levels_trial.expect("a trial ran");
+        let trial = training.guide.stats.guides_trial.expect("a trial ran");
         eprintln!("{trial:?}");
         assert_eq!(
             trial.pass, FIRST_TRIAL_PASS,
             "a clear outcome ends the trials"
         );
         assert!(trial.control_pixels >= 400, "{trial:?}");
-        (trial, training.levels)
+        (trial, training.plan_guides)
     };
     let (evolved, levels) = trial_of(&plan);
     assert!(evolved.kept && evolved.ratio < 1.0, "{evolved:?}");
-    assert_eq!(levels, Levels::All);
+    assert_eq!(levels, PlanGuides::Everywhere);
 
     let mut wrong = plan.clone();
     let aim = scene.camera.origin.as_dvec3();
@@ -1059,5 +1059,5 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         !astray.kept && astray.ratio > LEVELS_KEEP_RATIO,
         "{astray:?}"
     );
-    assert_eq!(levels, Levels::Off);
+    assert_eq!(levels, PlanGuides::Nowhere);
 }

@@ -29,7 +29,7 @@
 //! loop, with no virtual call per vertex, and one loop serves guided and unguided paths
 //! alike (moving the guided path tracer here instead would have made two loops, one in
 //! each layer, that must stay bit for bit the same). Guiding imports nothing of `genetic`
-//! or `integrators` (which is why [`LevelsTrial`], the GA trial's outcome that `pg` runs,
+//! or `integrators` (which is why [`GuidesTrial`], the GA trial's outcome that `pg` runs,
 //! stays here with the field's statistics that report it).
 //!
 //! [`PathGuide`]: crate::path::pt::PathGuide
@@ -50,6 +50,6 @@ pub use bsdf::GuidedBsdf;
 pub use field::SpatialField;
 pub use guide::Guide;
 pub use recorder::PathSegmentStorage;
-pub use stats::{FieldStats, LevelsTrial};
+pub use stats::{FieldStats, GuidesTrial};
 pub use storage::{Record, SampleStorage};
 pub use vertex::{GuideSample, Vertex};

@@ -1,7 +1,7 @@
 //! What training a [`SpatialField`] did, as the render's statistics report it: its
-//! [`FieldStats`], with the GA trial's outcome ([`LevelsTrial`]) where `ga-pt` ran one.
+//! [`FieldStats`], with the GA trial's outcome ([`GuidesTrial`]) where `ga-pt` ran one.
 //!
-//! [`LevelsTrial`] is the result of a trial that `integrators::pg` runs, but it is kept here,
+//! [`GuidesTrial`] is the result of a trial that `integrators::pg` runs, but it is kept here,
 //! beside the statistics that hold it: the render writes the field's statistics as they
 //! are, the trial's outcome among them, and guiding imports nothing from the integrators
 //! (they import guiding).
@@ -30,7 +30,7 @@ pub struct FieldStats {
     pub seconds: f64,
     /// With a GA plan's per-pixel guides: the last training pass's trial of them against
     /// this guide alone, which left them beside it or not.
-    pub levels_trial: Option<LevelsTrial>,
+    pub guides_trial: Option<GuidesTrial>,
 }
 
 /// A training pass's trial of a GA plan's per-pixel guides against this guide alone: the
@@ -38,7 +38,7 @@ pub struct FieldStats {
 /// errors) over the pixels the plan guides, against that over the control arm, the one
 /// pixel in sixteen that the pass leaves to this guide alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct LevelsTrial {
+pub struct GuidesTrial {
     /// The training pass that ran the trial.
     pub pass: u32,
     /// Pixels in each arm.

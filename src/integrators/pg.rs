@@ -11,7 +11,7 @@ use super::tiles::{self, render_tile, PixelSums};
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings};
 use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanConfig};
-use crate::guiding::{Guide, LevelsTrial, PathSegmentStorage, SampleStorage, SpatialField};
+use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
@@ -77,7 +77,7 @@ impl PixelIntegrator for SpatialIntegrator {
 /// else. In a training pass it records its pixel's first samples.
 pub struct SpatialEstimator<'a> {
     guide: GuideEstimator<'a>,
-    levels: Levels,
+    plan_guides: PlanGuides,
     recorder: Option<(PathSegmentStorage, u32)>,
     /// Samples of the pixel so far.
     taken: u32,
@@ -94,7 +94,7 @@ impl<'a> SpatialEstimator<'a> {
         let guide = Guide::default().with_spatial(Some(Arc::clone(&training.guide)));
         Self {
             guide: GuideEstimator::new(plan, max_bounces, guide),
-            levels: training.levels,
+            plan_guides: training.plan_guides,
             recorder,
             taken: 0,
         }
@@ -104,7 +104,7 @@ impl<'a> SpatialEstimator<'a> {
 impl PixelEstimator for SpatialEstimator<'_> {
     fn start(&mut self, x: u32, y: u32) {
         self.guide
-            .start_levels((x, y), self.levels.off_at(x, y), true);
+            .start_levels((x, y), self.plan_guides.off_at(x, y), true);
         self.taken = 0;
     }
     fn sample(
@@ -140,28 +140,28 @@ pub struct SpatialTraining {
     pub guide: Arc<SpatialField>,
     pub samples: PixelSums,
     /// Where a GA plan's per-pixel guides sample beside the spatial guide.
-    pub levels: Levels,
+    pub plan_guides: PlanGuides,
 }
 
 /// Where a GA plan's per-pixel guides (`ga-pt`) sample beside the spatial guide.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Levels {
+pub enum PlanGuides {
     /// At every pixel the plan guides.
-    All,
-    /// At fifteen pixels in sixteen: the sixteenth (row and column 3 modulo 4) is a
-    /// training pass's control arm, left to the spatial guide alone.
-    Trial,
+    Everywhere,
+    /// At fifteen pixels in sixteen, outside a training pass's trial's control arm: the
+    /// sixteenth (row and column 3 modulo 4), left to the spatial guide alone.
+    OutsideControl,
     /// Nowhere: the trial found that they cost the spatial guide more than they gave.
-    Off,
+    Nowhere,
 }
 
-impl Levels {
+impl PlanGuides {
     /// Whether pixel `(x, y)` renders without the plan's guides.
     fn off_at(self, x: u32, y: u32) -> bool {
         match self {
-            Levels::All => false,
-            Levels::Trial => x % 4 == 3 && y % 4 == 3,
-            Levels::Off => true,
+            PlanGuides::Everywhere => false,
+            PlanGuides::OutsideControl => x % 4 == 3 && y % 4 == 3,
+            PlanGuides::Nowhere => true,
         }
     }
 }
@@ -228,10 +228,10 @@ impl TrainingSchedule {
 /// tile order, so the guide does not depend on the thread count.
 ///
 /// With a plan that guides, the passes from [`FIRST_TRIAL_PASS`] on also try its guides:
-/// each leaves one pixel in sixteen to the spatial guide alone ([`Levels::Trial`]) and
+/// each leaves one pixel in sixteen to the spatial guide alone ([`PlanGuides::OutsideControl`]) and
 /// compares the two arms' relative variance, until the ratio leaves
 /// `[1 / LEVELS_KEEP_RATIO, LEVELS_KEEP_RATIO]`; above it, the plan's guides sample nowhere
-/// from then on ([`Levels::Off`]). The gate's pilot could only compare them with `pt`, since
+/// from then on ([`PlanGuides::Nowhere`]). The gate's pilot could only compare them with `pt`, since
 /// the spatial guide learns after the plan (with the plan's guides: fig5 needs that). Which
 /// estimator a later pass or the render uses depends on the samples of the passes before, as
 /// the spatial guide itself does, never on its own samples: every sample stays unbiased.
@@ -250,9 +250,9 @@ pub fn train_spatial(
     let mut training = SpatialTraining {
         guide: Arc::new(records.field()),
         samples: PixelSums::zero(pixels),
-        levels: Levels::All,
+        plan_guides: PlanGuides::Everywhere,
     };
-    let mut levels_trial = None;
+    let mut guides_trial = None;
     let open_plan = plan.filter(|p| !p.is_closed());
     let mut trialling = open_plan.is_some();
     let mut recorded_in_all = 0;
@@ -264,7 +264,7 @@ pub fn train_spatial(
         // spatial guide alone until a trial decides (the guides stay where it does not).
         let trial = trialling && pass >= FIRST_TRIAL_PASS;
         if trial {
-            training.levels = Levels::Trial;
+            training.plan_guides = PlanGuides::OutsideControl;
         }
         let pass_settings = RenderSettings {
             spp: 1 << pass,
@@ -320,12 +320,12 @@ pub fn train_spatial(
         if trial {
             let outcome;
             (outcome, trialling) = arms.decide(pass);
-            training.levels = if outcome.kept {
-                Levels::All
+            training.plan_guides = if outcome.kept {
+                PlanGuides::Everywhere
             } else {
-                Levels::Off
+                PlanGuides::Nowhere
             };
-            levels_trial = Some(outcome);
+            guides_trial = Some(outcome);
         }
         training.samples.spp += pass_settings.spp;
         recorded_in_all += records.len();
@@ -341,11 +341,11 @@ pub fn train_spatial(
     guide.stats.spp = training.samples.spp;
     guide.stats.records = recorded_in_all;
     guide.stats.seconds = start.elapsed().as_secs_f64();
-    guide.stats.levels_trial = levels_trial;
+    guide.stats.guides_trial = guides_trial;
     SpatialTraining {
         guide: Arc::new(guide),
         samples: training.samples,
-        levels: training.levels,
+        plan_guides: training.plan_guides,
     }
 }
 
@@ -388,7 +388,7 @@ impl<'a> TrialArms<'a> {
         // Unbiased sample variance of one sample, per channel, weighed as relMSE weighs.
         let variance = (sum_sq - sum * sum / n) / (n - 1.0);
         let relative = variance / (mean * mean + DVec3::splat(1e-2));
-        let arm = if Levels::Trial.off_at(x, y) {
+        let arm = if PlanGuides::OutsideControl.off_at(x, y) {
             &mut self.control
         } else {
             &mut self.guided
@@ -399,13 +399,13 @@ impl<'a> TrialArms<'a> {
 
     /// The trial's outcome in pass `pass`, and whether the next pass tries again: the
     /// guides stayed, but without a clear win (or with too few control pixels to tell).
-    fn decide(&self, pass: u32) -> (LevelsTrial, bool) {
+    fn decide(&self, pass: u32) -> (GuidesTrial, bool) {
         let mean = |arm: (f64, usize)| arm.0 / arm.1.max(1) as f64;
         let ratio = mean(self.guided) / mean(self.control);
         // A ratio that is not a number (no variance in either arm) decides nothing.
         let undecided = self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan();
         let kept = undecided || ratio <= LEVELS_KEEP_RATIO;
-        let trial = LevelsTrial {
+        let trial = GuidesTrial {
             pass,
             guided_pixels: self.guided.1,
             control_pixels: self.control.1,
