@@ -108,6 +108,7 @@ impl SpatialField {
         all.field()
     }
 
+    #[cfg(any(test, feature = "testing"))]
     /// This guide with every cell dark: next-event estimation at [`DARK_LIGHT_SHARE`]
     /// everywhere, where light arrives too (the estimator must stay unbiased there: a test
     /// of its weights).

@@ -230,6 +230,7 @@ impl Guide {
         self.levels[..self.depth].get(k)
     }
 
+    #[cfg(any(test, feature = "testing"))]
     /// This guide with every cone and patch density scaled by `factor` when evaluated (not when
     /// sampled): a wrong input that unbiasedness tests must reject.
     pub fn with_pdf_error(mut self, factor: f64) -> Self {

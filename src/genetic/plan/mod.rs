@@ -247,6 +247,7 @@ impl Plan {
         })
     }
 
+    #[cfg(any(test, feature = "testing"))]
     /// This plan with its interpolation weights deliberately left unnormalised: a wrong input
     /// that the unbiasedness test must reject.
     pub fn with_unnormalised_interpolation(mut self) -> Self {
