@@ -1,4 +1,5 @@
-//! Light transport: the scene as the estimators see it, and the rendering methods.
+//! Light transport: the scene as the estimators see it, path generators and mixtures, and the
+//! path tracer (the methods built on them are in `crate::integrators`).
 
 pub mod generator;
 pub mod mixture;
