@@ -11,7 +11,8 @@
 # the environment, and BASE_BIN, a binary already built from BASE, saves building it.
 # With TIMES=N (N odd, e.g. 5) each render is also timed N times per build, the two builds
 # alternating, and the median wall-clock seconds of the whole process are printed with
-# their ratio (new / base). Writes the images to target/bitcheck/out/{base,new}/ and prints one line
+# their ratio (new / base); with CLOCK=cpu, the CPU seconds (user + system) instead, which
+# other work on a shared machine disturbs less. Writes the images to target/bitcheck/out/{base,new}/ and prints one line
 # per render; exits 1 if any image's pixels differ in their bits (with its relMSE against
 # BASE's), 0 otherwise.
 set -euo pipefail
@@ -78,16 +79,22 @@ for scene in $scenes; do
                 for side in base new; do
                     bin=$base_bin
                     [[ $side == new ]] && bin=$new_bin
-                    s0=$(date +%s.%N)
-                    "$bin" render "$file" --method "${margs[@]}" --spp "$spp" --seed "$seed" \
-                        --quiet -o "$work/out/$side/time.exr"
-                    t[$side]+="$(echo "$(date +%s.%N) - $s0" | bc) "
+                    # Real, user and system seconds of the whole process.
+                    times=$( { TIMEFORMAT='%3R %3U %3S'; time "$bin" render "$file" \
+                        --method "${margs[@]}" --spp "$spp" --seed "$seed" --quiet \
+                        -o "$work/out/$side/time.exr"; } 2>&1)
+                    read -r real user sys <<<"$times"
+                    if [[ ${CLOCK:-wall} == cpu ]]; then
+                        t[$side]+="$(echo "$user + $sys" | bc) "
+                    else
+                        t[$side]+="$real "
+                    fi
                 done
             done
             median() { tr ' ' '\n' <<<"$1" | grep . | sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
             mb=$(median "${t[base]}") mn=$(median "${t[new]}")
-            printf 'time       %-48s base %6.3f s  new %6.3f s  ratio %.3f\n' "$tag" "$mb" "$mn" \
-                "$(echo "$mn / $mb" | bc -l)"
+            printf 'time       %-48s base %6.3f s  new %6.3f s  ratio %.3f (%s)\n' "$tag" "$mb" "$mn" \
+                "$(echo "$mn / $mb" | bc -l)" "${CLOCK:-wall}"
             unset t
         fi
         # Pixels bit for bit (the EXR's header holds the time it was written).

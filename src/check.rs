@@ -12,7 +12,7 @@
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
-use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::plan::{GateConfig, Plan, PlanConfig};
 use crate::genetic::GaConfig;
 use crate::integrators::{prepare, Film, Method, PrepareError, RenderSettings, Settings};
 use crate::path::generator::{Contribution, PathGenerator, PathVertices};
@@ -53,9 +53,9 @@ impl CheckConfig {
                 // wherever the GA found one, not with `pt`.
                 plan: PlanConfig {
                     grid: 8,
-                    gate: false,
                     ..PlanConfig::default()
                 },
+                gate: GateConfig { gate: false },
                 ..Settings::default()
             },
         }
@@ -205,7 +205,7 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
         })
         .collect();
     let mut without = config.clone();
-    without.plan.spatial = false;
+    without.spatial.spatial_guide = false;
     out.push(("ga-pt:spatial=0".to_string(), Method::GaPt, without));
     out
 }

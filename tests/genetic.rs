@@ -6,7 +6,7 @@ use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
 use genpath::genetic::individual::{GenePool, Individual, PATCH_HALF_RANGE};
 use genpath::genetic::operators::{crossover, mutate};
-use genpath::genetic::plan::{Plan, PlanConfig, PlanFor, PILOT_PIXELS};
+use genpath::genetic::plan::{GateConfig, Plan, PlanConfig, PlanFor, PlanInputs, PILOT_PIXELS};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
@@ -889,8 +889,13 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
         time_limit: Some(0.0),
         ..PlanConfig::default()
     };
-    let plan =
-        Plan::build(&view, &ga, &config, (MAX_BOUNCES, PlanFor::Guide), 5, false).expect("plan");
+    let plan = Plan::build(
+        &view,
+        &PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES),
+        5,
+        false,
+    )
+    .expect("plan");
     let stats = &plan.stats;
     eprintln!(
         "{} GA pixels, {} late, {} pt points, {} low-variance cells",
@@ -943,12 +948,10 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
         .num_threads(1)
         .build()
         .expect("pool");
-    let build = |config: &PlanConfig, target| {
-        one_thread.install(|| {
-            Plan::build(&view, &ga, config, (MAX_BOUNCES, target), 3, false).expect("plan")
-        })
+    let build = |inputs: PlanInputs| {
+        one_thread.install(|| Plan::build(&view, &inputs, 3, false).expect("plan"))
     };
-    let mixture = build(&config, PlanFor::Mixture);
+    let mixture = build(PlanInputs::new(&ga, &config, PlanFor::Mixture, MAX_BOUNCES));
     let gains: Vec<f64> = mixture
         .pixels
         .iter()
@@ -977,19 +980,16 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     }
     assert!((0..48).all(|y| (0..48).all(|x| mixture.local(x, y).is_none())));
 
-    let guide = build(&config, PlanFor::Guide);
+    let guide = build(PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES));
     assert!(
         guide.pixels.len() >= PILOT_PIXELS,
         "a guide's pilot does not stop early"
     );
 
-    let ungated = build(
-        &PlanConfig {
-            gate: false,
-            ..config.clone()
-        },
-        PlanFor::Mixture,
-    );
+    let ungated = build(PlanInputs {
+        gate: GateConfig { gate: false },
+        ..PlanInputs::new(&ga, &config, PlanFor::Mixture, MAX_BOUNCES)
+    });
     assert!(ungated.pixels.len() > PILOT_PIXELS);
     assert!(ungated.stats.baseline_ran);
     assert!((0..48).all(|y| (0..48).all(|x| ungated.local(x, y).is_some())));
@@ -1010,8 +1010,13 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         grid: 12,
         ..PlanConfig::default()
     };
-    let plan =
-        Plan::build(&view, &ga, &config, (MAX_BOUNCES, PlanFor::Guide), 5, false).expect("plan");
+    let plan = Plan::build(
+        &view,
+        &PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES),
+        5,
+        false,
+    )
+    .expect("plan");
     assert!(
         !plan.is_closed(),
         "the pilot must pay on fig5 for this test"

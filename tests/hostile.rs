@@ -8,7 +8,7 @@
 //! deadline, so a hang fails the test instead of stalling it.
 
 use genpath::accel::{self, AccelKind};
-use genpath::genetic::plan::{Plan, PlanConfig, PlanFor};
+use genpath::genetic::plan::{Plan, PlanConfig, PlanFor, PlanInputs};
 use genpath::genetic::GaConfig;
 use genpath::integrators::ga::Ga;
 use genpath::integrators::ga_pt::GaPt;
@@ -240,9 +240,8 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
             grid: 2,
             ..PlanConfig::default()
         };
-        let target = (max_bounces, PlanFor::Mixture);
-        let plan =
-            Plan::build(&view, &ga, &config, target, 3, false).map_err(|e| format!("GA: {e}"))?;
+        let inputs = PlanInputs::new(&ga, &config, PlanFor::Mixture, max_bounces);
+        let plan = Plan::build(&view, &inputs, 3, false).map_err(|e| format!("GA: {e}"))?;
         let plan_ga = Ga {
             plan: plan.clone(),
             max_bounces,

@@ -9,13 +9,14 @@
 #![cfg(feature = "testing")]
 
 use genpath::accel::{self, AccelKind};
-use genpath::genetic::plan::{Plan, PlanConfig, PlanFor};
+use genpath::genetic::plan::{GateConfig, Plan, PlanConfig, PlanFor, PlanInputs};
 use genpath::genetic::GaConfig;
 use genpath::integrators::ga::Ga;
 use genpath::integrators::ga_pt::GaPt;
 use genpath::integrators::mixture::MixtureIntegrator;
 use genpath::integrators::pg::{train_spatial, SpatialIntegrator, TrainingSchedule};
 use genpath::integrators::pt::PathTracing;
+use genpath::integrators::settings::SpatialConfig;
 use genpath::integrators::{Film, Integrator, Method, RenderSettings};
 use genpath::path::generator::PathGenerator;
 use genpath::path::mixture::Mixture;
@@ -59,21 +60,25 @@ enum Which {
     },
 }
 
-fn small_ga() -> (GaConfig, PlanConfig) {
+/// A small GA's plan for `plan_for`, without the gate: every pixel renders with evolved
+/// mixtures, the estimator under test.
+fn small_plan(view: &SceneView, plan_for: PlanFor, max_bounces: u32, seed: u64) -> Plan {
     let ga = GaConfig {
         population: 16,
         generations: 8,
         test_paths: 4000,
-        srt_absorption: SRT_ABSORPTION,
         ..GaConfig::default()
     };
-    // No gate: every pixel renders with evolved mixtures, the estimator under test.
     let plan = PlanConfig {
         grid: 16,
-        gate: false,
         ..PlanConfig::default()
     };
-    (ga, plan)
+    let inputs = PlanInputs {
+        gate: GateConfig { gate: false },
+        srt_absorption: SRT_ABSORPTION,
+        ..PlanInputs::new(&ga, &plan, plan_for, max_bounces)
+    };
+    Plan::build(view, &inputs, seed, false).unwrap()
 }
 
 fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
@@ -93,7 +98,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     };
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {
-        let schedule = TrainingSchedule::new(&PlanConfig::default(), spp);
+        let schedule = TrainingSchedule::new(&SpatialConfig::default(), spp);
         let t = train_spatial(&view, &settings, schedule, plan);
         assert!(
             t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
@@ -118,9 +123,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             None
         }
         Which::GaPt { spatial: with } => {
-            let (ga, config) = small_ga();
-            let target = (max_bounces, PlanFor::Guide);
-            plan = Some(Plan::build(&view, &ga, &config, target, seed, false).unwrap());
+            plan = Some(small_plan(&view, PlanFor::Guide, max_bounces, seed));
             guided = true;
             if with {
                 spatial = train(plan.as_ref());
@@ -128,9 +131,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             None
         }
         Which::Ga { unnormalised } => {
-            let (ga, config) = small_ga();
-            let target = (max_bounces, PlanFor::Mixture);
-            let p = Plan::build(&view, &ga, &config, target, seed, false).unwrap();
+            let p = small_plan(&view, PlanFor::Mixture, max_bounces, seed);
             assert!(
                 p.pixels.iter().any(|p| !p.kept_srt),
                 "{name}: the GA improved on srt nowhere, so the test would only test srt"

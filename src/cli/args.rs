@@ -4,9 +4,9 @@ use anyhow::{bail, Context, Result};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
 use genpath::accel::AccelKind;
-use genpath::genetic::plan::PlanConfig;
+use genpath::genetic::plan::{GateConfig, PlanConfig};
 use genpath::genetic::GaConfig;
-use genpath::integrators::settings::SrtConfig;
+use genpath::integrators::settings::{SpatialConfig, SrtConfig};
 use genpath::integrators::{Method, Settings};
 use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
@@ -77,6 +77,8 @@ pub struct SettingsArgs {
     #[command(flatten)]
     pub plan: PlanArgs,
     #[command(flatten)]
+    pub gate: GateArgs,
+    #[command(flatten)]
     pub spatial: SpatialArgs,
 }
 
@@ -139,9 +141,9 @@ pub struct GaArgs {
     pub max_light_paths: u32,
 }
 
-/// Where the GA runs and whether its result is used, tables `[plan]`.
+/// Where the GA runs and how its results spread over the image, table `[plan]`.
 #[derive(Args)]
-#[command(next_help_heading = "GA plan and gate (--method ga, ga-pt)")]
+#[command(next_help_heading = "GA plan (--method ga, ga-pt)")]
 #[allow(dead_code)]
 pub struct PlanArgs {
     /// Distance between GA pixels on the grid, in pixels.
@@ -180,17 +182,24 @@ pub struct PlanArgs {
     /// at most as many as the test paths need); path tracing's own sampling beyond.
     #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub guide_steps: u32,
+}
+
+/// The gate, table `[gate]`.
+#[derive(Args)]
+#[command(next_help_heading = "Gate (--method ga, ga-pt)")]
+#[allow(dead_code)]
+pub struct GateArgs {
     /// A pilot of the GA predicts whether it pays, and each pixel renders with its evolved
     /// mixture only where it is predicted to beat pt (see docs/methods.md, "the gate");
     /// `false` is the paper's method everywhere.
-    #[arg(long, default_value_t = PlanConfig::default().gate, action = clap::ArgAction::Set, value_name = "BOOL")]
+    #[arg(long, default_value_t = GateConfig::default().gate, action = clap::ArgAction::Set, value_name = "BOOL")]
     pub gate: bool,
     /// Alias of `--gate false` (the first line of work's spelling).
     #[arg(long)]
     pub no_gate: bool,
 }
 
-/// The spatial guide, in table `[plan]`.
+/// The spatial guide, table `[spatial]`.
 #[derive(Args)]
 #[command(next_help_heading = "Spatial guide (--method pg, ga-pt)")]
 #[allow(dead_code)]
@@ -198,7 +207,7 @@ pub struct SpatialArgs {
     /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned from
     /// path-traced training passes (see --spatial-passes), as --method pg does everywhere
     /// (beyond the paper). `false`: path tracing's own sampling there.
-    #[arg(long, default_value_t = PlanConfig::default().spatial, action = clap::ArgAction::Set, value_name = "BOOL")]
+    #[arg(long, default_value_t = SpatialConfig::default().spatial_guide, action = clap::ArgAction::Set, value_name = "BOOL")]
     pub spatial_guide: bool,
     /// pg, and ga-pt with the spatial guide: passes of path tracing that train the spatial
     /// guide, pass i with 2^i samples per pixel; their samples count in --spp and stay in
@@ -245,7 +254,7 @@ impl SettingsArgs {
             }
             match id {
                 "config" | "set" => {}
-                "no_gate" => settings.plan.gate = false,
+                "no_gate" => settings.gate.gate = false,
                 "no_prune" => settings.plan.prune = false,
                 "generators" => settings.mixture.generators = self.generators.clone(),
                 _ => {

@@ -6,8 +6,7 @@ use super::session::{rays_json, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
-use genpath::genetic::GaConfig;
-use genpath::integrators::{prepare, Method};
+use genpath::integrators::{prepare, Method, Settings};
 use genpath::path::SceneView;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -66,10 +65,11 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     let write_s = t_write.elapsed().as_secs_f64();
 
     let mut stats = session.stats(&settings);
+    stats.insert("method_settings".into(), serde_json::json!(config));
     stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
     stats.insert(
         "ga".into(),
-        serde_json::json!(plan.map(|p| ga_stats(p, &config.ga, &config.plan))),
+        serde_json::json!(plan.map(|p| ga_stats(p, &config))),
     );
     stats.insert(
         "times_s".into(),
@@ -177,7 +177,7 @@ fn left_out(
 
 /// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
 /// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list.
-fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Value {
+fn ga_stats(plan: &Plan, settings: &Settings) -> serde_json::Value {
     const CURVES: usize = 8;
     let n = plan.pixels.len();
     let curves: Vec<_> = (0..n.min(CURVES))
@@ -203,9 +203,10 @@ fn ga_stats(plan: &Plan, ga: &GaConfig, config: &PlanConfig) -> serde_json::Valu
     let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
     let analysis = plan.analysis.clone();
     serde_json::json!({
-        "config": ga,
-        "plan": config,
-        "left_out": left_out(plan, config, &analysis),
+        "config": settings.ga,
+        "plan": settings.plan,
+        "gate": settings.gate,
+        "left_out": left_out(plan, &settings.plan, &analysis),
         "scene_analysis": analysis,
         "stats": plan.stats,
         "ga_pixels": n,

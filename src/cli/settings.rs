@@ -38,7 +38,12 @@ pub fn markdown() -> String {
          `--set ga.test_paths=4000`), the key of `sweep --methods` (`ga:test_paths=4000`)\n\
          and the key in the JSON statistics. They apply in this order: the defaults,\n\
          `--config`, the flags given, each `--set`. A key no table has is refused.\n\
-         `genpath settings --toml` prints the defaults as a file to start from.\n",
+         `genpath settings --toml` prints the defaults as a file to start from.\n\n\
+         Path tracing (`--method pt`, and the path tracing inside `pg` and `ga-pt`) has no\n\
+         table: its settings are the render's, which every method shares and which are\n\
+         flags only (`--spp`, `--max-bounces`, `--seed`; see docs/cli.md). The tables are\n\
+         one per concern: `srt`, `mixture`, `ga` (the genetic algorithm), `plan` (where it\n\
+         runs), `gate` and `spatial` (the spatial guide).\n",
     );
     let mut heading = None;
     for arg in command.get_arguments() {

@@ -105,7 +105,7 @@ impl Default for GaConfig {
             p_weight: 0.3,
             p_absorb: 0.1,
             defensive_weight: 0.05,
-            srt_absorption: 0.5,
+            srt_absorption: crate::path::generator::SRT_ABSORPTION,
             anchor_shift: 0.05,
             max_steps: None,
             convex_weights: true,

@@ -3,8 +3,7 @@
 
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
-use crate::genetic::plan::{Plan, PlanFor};
-use crate::genetic::GaConfig;
+use crate::genetic::plan::{Plan, PlanFor, PlanInputs};
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::pt::Unguided;
 use crate::path::{camera_sample, RayCounts, SceneView};
@@ -17,18 +16,21 @@ pub struct Ga {
     pub max_bounces: u32,
 }
 
-/// Builds the GA plan for `target` with `context`'s settings.
-pub fn build_plan(context: &Context, target: PlanFor) -> Result<Plan, PrepareError> {
+/// Builds the GA plan for `plan_for` with `context`'s settings.
+pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareError> {
     let (config, settings) = (context.config, context.settings);
-    let ga = GaConfig {
+    let inputs = PlanInputs {
+        ga: &config.ga,
+        plan: &config.plan,
+        gate: config.gate,
+        plan_for,
+        max_bounces: settings.max_bounces,
         srt_absorption: config.srt.srt_absorption,
-        ..config.ga.clone()
+        spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
     };
     Ok(Plan::build(
         context.view,
-        &ga,
-        &config.plan,
-        (settings.max_bounces, target),
+        &inputs,
         settings.seed,
         settings.progress,
     )?)

@@ -20,7 +20,7 @@ pub struct GaPt {
 }
 
 pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
-    let spatial = context.config.plan.spatial;
+    let spatial = context.config.spatial.spatial_guide;
     if spatial {
         pg::check_schedule(context)?;
     }

@@ -7,10 +7,11 @@
 //! records, and the next pass samples with the guide learned from it.
 
 use super::ga_pt::GuideEstimator;
+use super::settings::SpatialConfig;
 use super::tiles::{self, render_tile, PixelSums};
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings};
 use crate::accel::Ray;
-use crate::genetic::plan::{Plan, PlanConfig};
+use crate::genetic::plan::Plan;
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
@@ -28,10 +29,10 @@ pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
 
 /// Refuses `--spatial-passes` whose training would take more samples than `--spp`.
 pub fn check_schedule(context: &Context) -> Result<(), PrepareError> {
-    let (plan, spp) = (&context.config.plan, context.settings.spp);
-    if let TrainingSchedule::Passes(passes) = TrainingSchedule::new(plan, spp) {
+    let (spatial, spp) = (&context.config.spatial, context.settings.spp);
+    if let TrainingSchedule::Passes(passes) = TrainingSchedule::new(spatial, spp) {
         let needs = (1u64 << passes) - 1;
-        if plan.spatial_time_limit.is_none() && needs > u64::from(spp) {
+        if spatial.spatial_time_limit.is_none() && needs > u64::from(spp) {
             return Err(PrepareError::TrainingExceedsSpp { passes, needs, spp });
         }
     }
@@ -40,7 +41,7 @@ pub fn check_schedule(context: &Context) -> Result<(), PrepareError> {
 
 /// Trains the spatial guide with `context`'s settings, beside `plan`'s per-pixel guides.
 pub fn train(context: &Context, plan: Option<Plan>) -> SpatialIntegrator {
-    let schedule = TrainingSchedule::new(&context.config.plan, context.settings.spp);
+    let schedule = TrainingSchedule::new(&context.config.spatial, context.settings.spp);
     let training = train_spatial(context.view, context.settings, schedule, plan.as_ref());
     SpatialIntegrator {
         plan,
@@ -196,10 +197,10 @@ pub enum TrainingSchedule {
 }
 
 impl TrainingSchedule {
-    /// `plan.spatial_passes` if set, else a share of `plan.spatial_time_limit` if set, else
-    /// half of `spp`.
-    pub fn new(plan: &PlanConfig, spp: u32) -> Self {
-        match (plan.spatial_passes, plan.spatial_time_limit) {
+    /// `spatial_passes` if set, else a share of `spatial_time_limit` if set, else half of
+    /// `spp`.
+    pub fn new(config: &SpatialConfig, spp: u32) -> Self {
+        match (config.spatial_passes, config.spatial_time_limit) {
             (Some(p), _) => Self::Passes(p),
             (None, Some(t)) => Self::Seconds(t),
             (None, None) => Self::Samples(spp),

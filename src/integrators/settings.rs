@@ -8,9 +8,9 @@
 //! key that no table has is refused wherever it is written (`deny_unknown_fields` on every
 //! table, and no `flatten`, which would silently defeat it).
 
-use crate::genetic::plan::PlanConfig;
+use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
-use crate::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
+use crate::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN, SRT_ABSORPTION};
 use crate::path::mixture::Mixture;
 use serde::de::{self, Visitor};
 use std::path::PathBuf;
@@ -23,6 +23,8 @@ pub struct Settings {
     pub mixture: MixtureConfig,
     pub ga: GaConfig,
     pub plan: PlanConfig,
+    pub gate: GateConfig,
+    pub spatial: SpatialConfig,
     /// The mixture of `mixture.generators`, loaded for the scene (`--method mixture`).
     #[serde(skip)]
     pub loaded_mixture: Option<Mixture>,
@@ -40,7 +42,7 @@ pub struct SrtConfig {
 impl Default for SrtConfig {
     fn default() -> Self {
         Self {
-            srt_absorption: 0.5,
+            srt_absorption: SRT_ABSORPTION,
         }
     }
 }
@@ -51,6 +53,57 @@ impl Default for SrtConfig {
 pub struct MixtureConfig {
     /// The file (TOML or JSON) of `--method mixture`.
     pub generators: Option<PathBuf>,
+}
+
+/// The spatial guide: `pg`'s, and `ga-pt`'s past the vertices its GA steers.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SpatialConfig {
+    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`guiding::field`), as
+    /// `pg` guides every vertex. On by default: at equal time (reports at e5f1d58, 2 / 8 /
+    /// 30 s) `ga-pt` had 0.32 / 0.27 / 0.27 of `pt`'s relMSE on fig5 with it and 0.33 /
+    /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy
+    /// 0.33 / 0.33 / 0.43 against 1.04 / 1.03 / 1.02 and cbox 0.92 / 0.92 / 0.82 against
+    /// 1.01 / 1.01 / 0.99.
+    pub spatial_guide: bool,
+    /// `pg`, and `ga-pt` with `spatial_guide`: passes of path tracing that train the spatial
+    /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
+    /// many as `spatial_time_limit` allows if set, else as many as fit in half the samples
+    /// per pixel.
+    pub spatial_passes: Option<u32>,
+    /// Seconds the spatial guide's training may take (see `spatial_passes`; set by the
+    /// equal-time sweep, not a setting).
+    #[serde(skip)]
+    pub spatial_time_limit: Option<f64>,
+}
+
+impl Default for SpatialConfig {
+    fn default() -> Self {
+        Self {
+            spatial_guide: true,
+            spatial_passes: None,
+            spatial_time_limit: None,
+        }
+    }
+}
+
+impl SpatialConfig {
+    fn validate(&self) -> Result<(), SettingsError> {
+        if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
+            return Err(SettingsError::Spatial(format!(
+                "spatial_passes {p} is not in [1, 12]"
+            )));
+        }
+        if let Some(t) = self
+            .spatial_time_limit
+            .filter(|t| !(t.is_finite() && *t >= 0.0))
+        {
+            return Err(SettingsError::Spatial(format!(
+                "the training's time limit {t} must be finite and ≥ 0 seconds"
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// Why settings cannot be read or set.
@@ -66,6 +119,8 @@ pub enum SettingsError {
     Invalid(#[from] GaConfigError),
     #[error("srt_absorption {0} is not in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]")]
     SrtAbsorption(f64),
+    #[error("invalid spatial guide setting: {0}")]
+    Spatial(String),
 }
 
 /// The tables and their keys, in the order documentation lists them.
@@ -75,6 +130,8 @@ pub fn tables() -> Vec<(&'static str, &'static [&'static str])> {
         ("mixture", fields::<MixtureConfig>()),
         ("ga", fields::<GaConfig>()),
         ("plan", fields::<PlanConfig>()),
+        ("gate", fields::<GateConfig>()),
+        ("spatial", fields::<SpatialConfig>()),
     ]
 }
 
@@ -177,7 +234,8 @@ impl Settings {
             return Err(SettingsError::SrtAbsorption(a));
         }
         self.ga.validate()?;
-        Ok(self.plan.validate()?)
+        self.plan.validate()?;
+        self.spatial.validate()
     }
 
     /// Each setting's value as TOML would write it, `table.key` → value (unset options

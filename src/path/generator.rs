@@ -25,6 +25,8 @@ use glam::{DVec3, Vec3};
 /// reachable (unbiasedness) and every generator able to continue.
 pub const ABSORPTION_MIN: f64 = 1e-3;
 pub const ABSORPTION_MAX: f64 = 1.0 - 1e-3;
+/// The default absorption of the `srt` generator at each vertex (`[srt] srt_absorption`).
+pub const SRT_ABSORPTION: f64 = 0.5;
 
 /// How a generator picks the direction out of a vertex.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

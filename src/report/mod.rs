@@ -179,7 +179,7 @@ const CALIBRATION_SPP: [u32; 2] = [2, 16];
 pub const GA_BUDGET_SHARE: f64 = 0.25;
 
 /// With budgets in seconds, a spatial guide's training passes may take this share of each
-/// budget (`PlanConfig::spatial_time_limit`); their samples stay in the image.
+/// budget (`SpatialConfig::spatial_time_limit`); their samples stay in the image.
 pub const SPATIAL_BUDGET_SHARE: f64 = 0.5;
 
 /// Samples per pixel that fill `seconds` of rendering with `prepared`: render time is a
@@ -248,7 +248,7 @@ impl Sweep<'_> {
                     };
                     let mut config = spec.config.clone();
                     config.plan.time_limit = seconds.map(|t| GA_BUDGET_SHARE * t);
-                    config.plan.spatial_time_limit = seconds.map(|t| SPATIAL_BUDGET_SHARE * t);
+                    config.spatial.spatial_time_limit = seconds.map(|t| SPATIAL_BUDGET_SHARE * t);
                     let t0 = Instant::now();
                     let integrator = prepare(view, &config, &settings)?;
                     let prepare_s = t0.elapsed().as_secs_f64();

@@ -135,9 +135,9 @@ fn sweep_writes_csv_and_plot() {
         (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
         (vec!["--methods", "ga:q=3"], "unknown setting `q`"),
         (vec!["--methods", "ga:m=many"], "ga.test_paths=many"),
-        (vec!["--methods", "ga-pt:gate=maybe"], "plan.gate=maybe"),
+        (vec!["--methods", "ga-pt:gate=maybe"], "gate.gate=maybe"),
         (vec!["--methods", "ga:pop=0"], "population"),
-        (vec!["--methods", "pg:sp=0"], "spatial guide passes"),
+        (vec!["--methods", "pg:sp=0"], "spatial_passes 0 is not in"),
         (vec!["--budgets", "0"], "--budgets"),
         (vec!["--budgets", "1.5"], "--budgets"),
         (vec!["--budgets=-1", "--time"], "--budgets"),
@@ -433,7 +433,7 @@ fn settings_apply_config_then_flags_then_set() {
     let config = dir.path().join("settings.toml");
     std::fs::write(
         &config,
-        "[ga]\ntest_paths = 300\npopulation = 5\ngenerations = 2\n[plan]\nga_grid = 8\ngate = false\n",
+        "[ga]\ntest_paths = 300\npopulation = 5\ngenerations = 2\n[plan]\nga_grid = 8\n[gate]\ngate = false\n",
     )
     .unwrap();
     let out = dir.path().join("ga.exr");
@@ -460,7 +460,11 @@ fn settings_apply_config_then_flags_then_set() {
     assert_eq!(ga["generations"], 3, "--set after --config");
     assert_eq!(ga["population"], 6, "--set after the flag");
     assert_eq!(plan["ga_grid"], 8);
-    assert_eq!(plan["gate"], false);
+    assert_eq!(json["ga"]["gate"]["gate"], false, "from --config");
+    let tables = &json["method_settings"];
+    assert_eq!(tables["gate"]["gate"], false);
+    assert_eq!(tables["ga"]["population"], 6);
+    assert_eq!(tables["spatial"]["spatial_guide"], true, "a default");
 }
 
 /// docs/settings.md is `genpath settings`'s output (regenerate it with

@@ -1,5 +1,6 @@
 //! The plan's settings ([`PlanConfig`]): where the GA runs, how its results spread over the
-//! image, and the gate's, the time limit's and the spatial guide's switches.
+//! image, and its time limit (the gate's settings are [`super::gate::GateConfig`], the
+//! spatial guide's `integrators::settings::SpatialConfig`).
 
 use super::super::GaConfigError;
 
@@ -24,9 +25,6 @@ pub struct PlanConfig {
     /// pruning or not).
     pub prune: bool,
     pub prune_variance: f64,
-    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
-    /// the GA when a pilot predicts no gain anywhere (see the module documentation).
-    pub gate: bool,
     /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
     /// individuals, with half the generations (beyond the paper).
     pub warm_start: bool,
@@ -43,22 +41,6 @@ pub struct PlanConfig {
     /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
     /// every step the test paths need.
     pub guide_steps: usize,
-    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`guiding::field`), as
-    /// `pg` guides every vertex. On by default: at equal time (reports at e5f1d58, 2 / 8 /
-    /// 30 s) `ga-pt` had 0.32 / 0.27 / 0.27 of `pt`'s relMSE on fig5 with it and 0.33 /
-    /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy
-    /// 0.33 / 0.33 / 0.43 against 1.04 / 1.03 / 1.02 and cbox 0.92 / 0.92 / 0.82 against
-    /// 1.01 / 1.01 / 0.99.
-    #[serde(rename = "spatial_guide")]
-    pub spatial: bool,
-    /// `pg`, and `ga-pt` with `spatial`: passes of path tracing that train the spatial
-    /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
-    /// many as `spatial_time_limit` allows if set, else as many as fit in half the samples
-    /// per pixel.
-    pub spatial_passes: Option<u32>,
-    /// Seconds the spatial guide's training may take (see `spatial_passes`).
-    #[serde(skip)]
-    pub spatial_time_limit: Option<f64>,
 }
 
 impl Default for PlanConfig {
@@ -70,13 +52,9 @@ impl Default for PlanConfig {
             neighbours: 4,
             prune: true,
             prune_variance: 0.5,
-            gate: true,
             warm_start: true,
             time_limit: None,
             guide_steps: 1,
-            spatial: true,
-            spatial_passes: None,
-            spatial_time_limit: None,
         }
     }
 }
@@ -111,15 +89,6 @@ impl PlanConfig {
             return fail(format!(
                 "guide steps {} is not in [1, 64]",
                 self.guide_steps
-            ));
-        }
-        if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
-            return fail(format!("spatial guide passes {p} is not in [1, 12]"));
-        }
-        if bad_seconds(self.spatial_time_limit) {
-            return fail(format!(
-                "spatial guide time limit {:?} must be finite and ≥ 0 seconds",
-                self.spatial_time_limit
             ));
         }
         if !(1..=64).contains(&self.neighbours) {

@@ -15,6 +15,22 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+/// The gate's settings, table `[gate]`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GateConfig {
+    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
+    /// the GA when a pilot predicts no gain anywhere (see the module documentation of
+    /// `genetic::plan`).
+    pub gate: bool,
+}
+
+impl Default for GateConfig {
+    fn default() -> Self {
+        Self { gate: true }
+    }
+}
+
 /// Samples of `pt` (and of the guided path tracer) with which the gate measures their
 /// variance at a GA pixel.
 pub const GATE_SAMPLES: u32 = 2048;

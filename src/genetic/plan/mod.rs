@@ -17,7 +17,7 @@
 //!    weights sum to 1, containing the defensive `srt` component, so the estimator stays
 //!    unbiased.
 //!
-//! 5. **Gate** (beyond the paper; off with `PlanConfig::gate = false`). The GA pays for
+//! 5. **Gate** (beyond the paper; off with `GateConfig::gate = false`). The GA pays for
 //!    itself only where its estimator beats path tracing at equal time, so each GA pixel
 //!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of
 //!    `pt` and of the evolved estimator (the mixture for `ga`, the guided path tracer for
@@ -56,7 +56,7 @@ mod waves;
 pub use baseline::Origin;
 pub use config::PlanConfig;
 pub use gate::{
-    gate_margins, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
+    gate_margins, GateConfig, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
 };
 pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
 
@@ -74,7 +74,7 @@ use waves::Waves;
 
 /// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
 /// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
-/// tracer. (`Plan::build(…, (max_bounces, PlanFor::Guide), …)` reads "a plan for a guide".)
+/// tracer. (`PlanInputs { plan_for: PlanFor::Guide, … }` reads "a plan for a guide".)
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PlanFor {
@@ -82,6 +82,43 @@ pub enum PlanFor {
     Mixture,
     /// `ga-pt`: path tracing guided by the mixture.
     Guide,
+}
+
+/// What a plan is built from: the settings of the GA, of the plan and of the gate, the
+/// estimator it is for, and what the scene's paths are.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanInputs<'a> {
+    pub ga: &'a GaConfig,
+    pub plan: &'a PlanConfig,
+    pub gate: GateConfig,
+    pub plan_for: PlanFor,
+    pub max_bounces: u32,
+    /// Absorption of the defensive `srt` generator.
+    pub srt_absorption: f64,
+    /// A spatial guide takes over where the plan's guides do not (`ga-pt` with
+    /// `spatial_guide`), so a failed pilot leaves every pixel to it.
+    pub spatial_guide: bool,
+}
+
+impl<'a> PlanInputs<'a> {
+    /// A plan for `plan_for` with `ga` and `plan`, and the defaults of the other settings:
+    /// the gate on, the default `srt` absorption, and for a guide the spatial guide.
+    pub fn new(
+        ga: &'a GaConfig,
+        plan: &'a PlanConfig,
+        plan_for: PlanFor,
+        max_bounces: u32,
+    ) -> Self {
+        Self {
+            ga,
+            plan,
+            gate: GateConfig::default(),
+            plan_for,
+            max_bounces,
+            srt_absorption: crate::path::generator::SRT_ABSORPTION,
+            spatial_guide: plan_for == PlanFor::Guide,
+        }
+    }
 }
 
 /// Per-phase totals of a plan.
@@ -185,12 +222,21 @@ impl Plan {
     /// estimator for `plan_for` with `pt` at each pixel that runs a trial.
     pub fn build(
         view: &SceneView,
-        ga: &GaConfig,
-        config: &PlanConfig,
-        (max_bounces, plan_for): (u32, PlanFor),
+        inputs: &PlanInputs,
         seed: u64,
         progress: bool,
     ) -> Result<Self, GaConfigError> {
+        let PlanInputs {
+            plan: config,
+            max_bounces,
+            plan_for,
+            ..
+        } = *inputs;
+        let gate = inputs.gate.gate;
+        let ga = &GaConfig {
+            srt_absorption: inputs.srt_absorption,
+            ..inputs.ga.clone()
+        };
         ga.validate()?;
         config.validate()?;
         let scene = view.scene;
@@ -211,16 +257,17 @@ impl Plan {
             config,
             max_bounces,
             plan_for,
+            gate,
             seed,
         };
-        let mut waves = Waves::new(&context, pilot_pixels(&grid, config.gate), progress, t0);
+        let mut waves = Waves::new(&context, pilot_pixels(&grid, gate), progress, t0);
         let scout = ga.generations.div_ceil(PILOT_SHARE);
         scout_pilot(&mut waves, scout);
         let pilot_pays = pilot_pays(&waves);
-        let closed = config.gate && !pilot_pays && (plan_for == PlanFor::Mixture || config.spatial);
+        let closed = gate && !pilot_pays && (plan_for == PlanFor::Mixture || inputs.spatial_guide);
         let mut pt_points = Vec::new();
         // Seconds of the baseline, which runs between GA waves.
-        let baseline_part = if !config.gate || pilot_pays {
+        let baseline_part = if !gate || pilot_pays {
             waves.past_pilot(&cells, scout, &mut stats, &mut pt_points)
         } else {
             waves.leave_to_pt(&grid, &mut stats, &mut pt_points);
@@ -229,13 +276,13 @@ impl Plan {
         let (results, scouted) = waves.finish();
         stats.baseline_seconds = grid_seconds + baseline_part;
         stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;
-        let pixels = stats.count_pixels(&scouted, results, config.gate, plan_for);
+        let pixels = stats.count_pixels(&scouted, results, gate, plan_for);
         Ok(Self {
             width,
             height,
             pixels,
             pt_points,
-            gate: config.gate,
+            gate,
             closed,
             plan_for,
             srt,

@@ -95,6 +95,8 @@ pub(super) struct PixelContext<'a> {
     pub(super) config: &'a PlanConfig,
     pub(super) max_bounces: u32,
     pub(super) plan_for: PlanFor,
+    /// Whether the gate runs (`GateConfig::gate`).
+    pub(super) gate: bool,
     pub(super) seed: u64,
 }
 
@@ -137,7 +139,6 @@ pub(super) fn run_pixel(
         view,
         srt,
         ga,
-        config,
         max_bounces,
         seed,
         ..
@@ -175,7 +176,7 @@ pub(super) fn run_pixel(
         let evolution = evolve_from(ga, &paths, view, &mut rng, &run.seeds);
         best_or_srt(view, ga, &paths, evolution, (srt, v_srt))
     };
-    let trial = (config.gate && run.trial && !outcome.kept_srt).then(|| {
+    let trial = (context.gate && run.trial && !outcome.kept_srt).then(|| {
         let at = ((x, y), paths.weights());
         run_trial(context, at, &outcome.mixture, &mut counts)
     });

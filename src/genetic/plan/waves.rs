@@ -136,7 +136,7 @@ impl<'a> Waves<'a> {
         let t2 = Instant::now();
         let keep = self.positions();
         let choice = baseline_choice(self.context, cells, &keep, stats);
-        let gate = self.context.config.gate;
+        let gate = self.context.gate;
         if gate {
             pt_points.extend(&choice.low);
         }
