@@ -8,7 +8,8 @@
 # target directory of their own there (kept between runs, so a second run only rebuilds
 # genpath itself). Without NEW the working tree is built as it is, uncommitted changes
 # included. SCENES, SPP (16), SEED (7) and FEATURES (the default features) may be set in
-# the environment, and BASE_BIN, a binary already built from BASE, saves building it.
+# the environment, and BASE_BIN (NEW_BIN), a binary already built from BASE (NEW or the working
+# tree), saves building it.
 # With TIMES=N (N odd, e.g. 5) each render is also timed N times per build, the two builds
 # alternating, and the median wall-clock seconds of the whole process are printed with
 # their ratio (new / base); with CLOCK=cpu, the CPU seconds (user + system) instead, which
@@ -45,7 +46,9 @@ if [[ -n ${BASE_BIN:-} ]]; then
 else
     base_bin=$(build "$1" base)
 fi
-if [[ $# -eq 2 ]]; then
+if [[ -n ${NEW_BIN:-} ]]; then
+    new_bin=$NEW_BIN # a binary already built from NEW (or the working tree)
+elif [[ $# -eq 2 ]]; then
     new_bin=$(build "$2" new)
 else
     cargo build -q --release "${features[@]}" >&2

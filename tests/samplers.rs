@@ -7,7 +7,9 @@
 #[path = "../src/sampling/chi2.rs"]
 mod chi2;
 
-use chi2::{chi2, chi2_test, sidak, Binning, Chi2, Histogram, SphereBins, TriangleBins};
+use chi2::{
+    chi2, chi2_test, gauss_legendre, Binning, Chi2, Family, Histogram, SphereBins, TriangleBins,
+};
 use genpath::accel::TriangleMesh;
 use genpath::sampling::anchor::{cone_solid_angle, AnchorSampler};
 use genpath::sampling::light_point::{solid_angle_pdf, LightPointSampler, LightRegion};
@@ -18,35 +20,9 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// χ² tests in this file that must accept: the Šidák correction's count (keep it in step).
-const CHI2_TESTS: usize = 27;
+/// The χ² tests in this file that must accept.
+const FAMILY: Family = Family { tests: 27 };
 const SAMPLES: u64 = 4_000_000;
-
-fn significance() -> f64 {
-    sidak(0.01, CHI2_TESTS)
-}
-
-fn accept(name: &str, hist: &Histogram, c: &Chi2) {
-    println!("accept {name}: {c}");
-    assert_eq!(
-        hist.bad_pdf, 0,
-        "{name}: samples without finite positive pdf"
-    );
-    assert!(
-        c.impossible.is_none() && c.p_value > significance(),
-        "{name}: {c}, significance {:.2e}",
-        significance()
-    );
-}
-
-fn reject(name: &str, c: &Chi2) {
-    println!("reject {name}: {c}");
-    assert!(
-        c.p_value <= significance(),
-        "{name} was not rejected: {c}, significance {:.2e}",
-        significance()
-    );
-}
 
 // ---------------------------------------------------------------- anchor-point sampler
 
@@ -82,7 +58,7 @@ fn check_anchor(theta_c: f64, alpha: f64, seed: u64) -> (AnchorSampler, SphereBi
     let bins = cone_bins((ANCHOR - FROM).normalize(), theta_c);
     let (hist, c) = anchor_chi2(&s, FROM, &bins, seed);
     let name = format!("anchor θc={theta_c:e} α={alpha}");
-    accept(&name, &hist, &c);
+    FAMILY.accept(&name, &hist, &c);
     let (p1, p2) = s.densities();
     let (w1, w2) = if alpha >= 0.5 {
         (1.01, 1.0)
@@ -96,7 +72,7 @@ fn check_anchor(theta_c: f64, alpha: f64, seed: u64) -> (AnchorSampler, SphereBi
             w2 * p2
         }
     };
-    reject(
+    FAMILY.reject(
         &format!("{name} with 1 % more mass on the heavier side"),
         &chi2(&bins, &hist, heavier),
     );
@@ -125,7 +101,7 @@ fn anchor_cone_1e_4_stable_solid_angle() {
         if alpha == 0.5 {
             // In f32, cos(1e-4) rounds to 1: the cone gets zero solid angle, infinite density.
             assert!(naive_f32_densities(&s).0.is_infinite());
-            reject(
+            FAMILY.reject(
                 "anchor θc=1e-4 with Ωc = 2π(1−cos θc) in f32",
                 &chi2(&bins, &hist, naive_f32_pdf(&s)),
             );
@@ -139,7 +115,7 @@ fn anchor_cone_1e_3_rejects_finite_f32_solid_angle() {
     let (p1, _) = naive_f32_densities(&s);
     let (good, _) = s.densities();
     println!("f32 p1 / f64 p1 at θc = 1e-3: {}", p1 / good);
-    reject(
+    FAMILY.reject(
         "anchor θc=1e-3 with Ωc = 2π(1−cos θc) in f32",
         &chi2(&bins, &hist, naive_f32_pdf(&s)),
     );
@@ -162,7 +138,7 @@ fn anchor_cone_1_0_rejects_outside_density_ignoring_the_cone() {
             let (p1, _) = s.densities();
             let whole_sphere = (1.0 - alpha) / (4.0 * PI);
             let wrong = |d: &DVec3| if s.inside(FROM, *d) { p1 } else { whole_sphere };
-            reject("anchor θc=1 with p2 = (1−α)/4π", &chi2(&bins, &hist, wrong));
+            FAMILY.reject("anchor θc=1 with p2 = (1−α)/4π", &chi2(&bins, &hist, wrong));
         }
     }
 }
@@ -182,7 +158,7 @@ fn anchor_extreme_cones() {
     check_anchor(1e-7, 0.5, 14);
     let (s, bins, hist) = check_anchor(PI - 1e-4, 0.5, 15);
     // 4π − Ωc in f32 has no significant digit left for a cone this wide.
-    reject(
+    FAMILY.reject(
         "anchor θc=π−1e-4 with 4π − 2π(1−cos θc) in f32",
         &chi2(&bins, &hist, naive_f32_pdf(&s)),
     );
@@ -199,10 +175,10 @@ fn anchor_off_axis_binning() {
         let name = format!("anchor θc={theta_c} α={alpha}, off-axis bins");
         // Quadrature error only matters against the bins' noise, 1/√(expected) ≈ 1e-2.
         assert!((c.pdf_total - 1.0).abs() < 1e-4, "{name}: quadrature {c}");
-        accept(&name, &hist, &c);
+        FAMILY.accept(&name, &hist, &c);
         let (p1, p2) = s.densities();
         let wrong = |d: &DVec3| if s.inside(FROM, *d) { 1.01 * p1 } else { p2 };
-        reject(&format!("{name} with α·1.01"), &chi2(&bins, &hist, wrong));
+        FAMILY.reject(&format!("{name} with α·1.01"), &chi2(&bins, &hist, wrong));
     }
 }
 
@@ -213,7 +189,7 @@ fn anchor_from_the_anchor_point() {
     let s = AnchorSampler::new(ANCHOR, 0.3, 0.9).unwrap();
     let bins = cone_bins(DVec3::Z, 0.3);
     let (hist, c) = anchor_chi2(&s, ANCHOR, &bins, 18);
-    accept("anchor from the anchor point", &hist, &c);
+    FAMILY.accept("anchor from the anchor point", &hist, &c);
     let (p1, p2) = s.densities();
     let minus_z = |d: &DVec3| {
         if d.angle_between(-DVec3::Z) < 0.3 {
@@ -222,7 +198,7 @@ fn anchor_from_the_anchor_point() {
             p2
         }
     };
-    reject(
+    FAMILY.reject(
         "anchor from the anchor point, cone about −z",
         &chi2(&bins, &hist, minus_z),
     );
@@ -284,7 +260,7 @@ fn check_light(region: LightRegion, beta: f64, seed: u64) {
         light_pdf(&s, &mesh, &emitters),
     );
     let name = format!("light k={} β={beta}", region.level);
-    accept(&name, &hist, &c);
+    FAMILY.accept(&name, &hist, &c);
 
     let (a_region, a_total) = (region.area(&mesh), emitters.total_area);
     let off_area = |&(prim, p): &(u32, DVec3)| {
@@ -300,7 +276,7 @@ fn check_light(region: LightRegion, beta: f64, seed: u64) {
             1.0 / (1.01 * a_total)
         }
     };
-    reject(
+    FAMILY.reject(
         &format!("{name} with an area off by 1 %"),
         &chi2(&bins, &hist, off_area),
     );
@@ -311,7 +287,7 @@ fn check_light(region: LightRegion, beta: f64, seed: u64) {
             ..region
         };
         let wrong = LightPointSampler::new(finer, beta, &emitters).unwrap();
-        reject(
+        FAMILY.reject(
             &format!("{name} with the region one level finer"),
             &chi2(&bins, &hist, light_pdf(&wrong, &mesh, &emitters)),
         );
@@ -344,30 +320,6 @@ fn light_level_2_cell() {
 }
 
 // ---------------------------------------------------------------- ∫ pdf = 1
-
-/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let k = k as f64;
-                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
-}
 
 /// `∫ pdf dω` over the sphere in polar coordinates about `axis`, split at the polar angle
 /// `theta_split`: Gauss–Legendre in θ on `[0, θs]` and in `ε = π − θ` on `[0, π − θs]` (so
@@ -552,13 +504,13 @@ fn check_patch(s: &PatchSampler, from: DVec3, cap: f64, seed: u64) {
         |d| s.pdf(from, *d),
     );
     let name = format!("patch α={} from {from}", s.alpha);
-    accept(&name, &hist, &c);
+    FAMILY.accept(&name, &hist, &c);
     // The bins' adaptive quadrature, which shares no code with the sampler, integrates the
     // density to 1 across the patch's edges.
     assert!((c.pdf_total - 1.0).abs() < 2e-3, "{name}: {c}");
     let uniform = (1.0 - s.alpha) / (4.0 * PI);
     let more = |d: &DVec3| 1.01 * (s.pdf(from, *d) - uniform) + uniform;
-    reject(
+    FAMILY.reject(
         &format!("{name} with 1 % more mass on the patch"),
         &chi2(&bins, &hist, more),
     );
@@ -568,7 +520,7 @@ fn check_patch(s: &PatchSampler, from: DVec3, cap: f64, seed: u64) {
         let on_patch = s.pdf(from, *d) - uniform;
         on_patch * n.dot(*d).abs() + uniform
     };
-    reject(
+    FAMILY.reject(
         &format!("{name} without the cosine"),
         &chi2(&bins, &hist, no_cosine),
     );

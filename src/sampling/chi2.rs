@@ -19,6 +19,67 @@ pub fn sidak(alpha: f64, tests: usize) -> f64 {
     1.0 - (1.0 - alpha).powf(1.0 / tests as f64)
 }
 
+/// A test file's family of χ² tests that must accept, `0.01` overall: each accepts above the
+/// Šidák-corrected significance, and each must-reject twin must fall at or below it.
+pub struct Family {
+    /// The tests that must accept (keep it in step with the file).
+    pub tests: usize,
+}
+
+impl Family {
+    pub fn significance(&self) -> f64 {
+        sidak(0.01, self.tests)
+    }
+
+    /// Asserts that `c` (of `hist`, every sample with a finite positive density) accepts.
+    pub fn accept(&self, name: &str, hist: &Histogram, c: &Chi2) {
+        println!("accept {name}: {c}");
+        assert_eq!(
+            hist.bad_pdf, 0,
+            "{name}: samples without finite positive pdf"
+        );
+        assert!(
+            c.impossible.is_none() && c.p_value > self.significance(),
+            "{name}: {c}, significance {:.2e}",
+            self.significance()
+        );
+    }
+
+    /// Asserts that `c` (a deliberately wrong density) rejects.
+    pub fn reject(&self, name: &str, c: &Chi2) {
+        println!("reject {name}: {c}");
+        assert!(
+            c.p_value <= self.significance(),
+            "{name} was not rejected: {c}, significance {:.2e}",
+            self.significance()
+        );
+    }
+}
+
+/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
+pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    (0..n)
+        .map(|i| {
+            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 0.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let k = k as f64;
+                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            (x, 2.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect()
+}
+
 /// A partition of a sampler's domain into bins that can be integrated over.
 pub trait Binning {
     /// A sample: a direction, or a point with its triangle.

@@ -97,11 +97,11 @@ pub(crate) fn check_guided(name: &str, k: usize, samplers: usize, seed: u64) {
         mismatched as u64 <= SAMPLES / 1000,
         "{name}: {mismatched} densities differ from pdf's"
     );
-    accept(name, &hist, &c);
+    FAMILY.accept(name, &hist, &c);
     let wrong = g.guide.clone().with_pdf_error(1.1);
     let wrong_bsdf = g.bsdf(&wrong, k);
     let wrong_pdf = |d: DVec3| wrong_bsdf.pdf(d.as_vec3());
-    reject(
+    FAMILY.reject(
         &format!("{name} with the guide's densities × 1.1"),
         &chi2(&outcomes, &hist, on_outcomes(wrong_pdf)),
     );

@@ -26,7 +26,7 @@ mod mixture;
 mod quadrature;
 mod vertex;
 
-use chi2::{chi2, chi2_test, sidak, Binning, Chi2, Histogram, SphereBins};
+use chi2::{chi2, chi2_test, gauss_legendre, Binning, Family, Histogram, SphereBins};
 use genpath::guiding::lattice::facing;
 use genpath::guiding::square::to_square;
 use genpath::guiding::{Guide, GuidedBsdf, Record, SpatialField};
@@ -42,35 +42,9 @@ use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::sync::Arc;
 
-/// χ² tests in this file that must accept: the Šidák correction's count (keep it in step).
-const CHI2_TESTS: usize = 11;
+/// The χ² tests in this file that must accept.
+const FAMILY: Family = Family { tests: 11 };
 const SAMPLES: u64 = 4_000_000;
-
-fn significance() -> f64 {
-    sidak(0.01, CHI2_TESTS)
-}
-
-fn accept(name: &str, hist: &Histogram, c: &Chi2) {
-    println!("accept {name}: {c}");
-    assert_eq!(
-        hist.bad_pdf, 0,
-        "{name}: samples without finite positive pdf"
-    );
-    assert!(
-        c.impossible.is_none() && c.p_value > significance(),
-        "{name}: {c}, significance {:.2e}",
-        significance()
-    );
-}
-
-fn reject(name: &str, c: &Chi2) {
-    println!("reject {name}: {c}");
-    assert!(
-        c.p_value <= significance(),
-        "{name} was not rejected: {c}, significance {:.2e}",
-        significance()
-    );
-}
 
 use vertex::*;
 
@@ -83,7 +57,7 @@ fn brdf_diffuse() {
     let n = v.nd();
     let k = 1.1;
     let wrong = |d: DVec3| (k + 1.0) / (2.0 * PI) * n.dot(d).max(0.0).powf(k);
-    reject(
+    FAMILY.reject(
         "diffuse with pdf ∝ cos^1.1",
         &chi2(&outcomes, &hist, on_outcomes(wrong)),
     );
@@ -204,7 +178,7 @@ fn brdf_pure_phong_ns_100() {
             0.0
         }
     };
-    reject(
+    FAMILY.reject(
         &format!("{name} renormalised to the upper hemisphere"),
         &chi2(&outcomes, &hist, on_outcomes(renormalised)),
     );

@@ -81,12 +81,12 @@ pub(crate) fn mixture_of_brdf_and_two_anchors() {
         |u| mix.sample(u),
         on_outcomes(|d| mix.pdf(d)),
     );
-    accept(
+    FAMILY.accept(
         "mixture 0.3 BRDF + 0.5 anchor(0.2, 0.9) + 0.2 anchor(1e-3, 0.5)",
         &hist,
         &c,
     );
-    reject(
+    FAMILY.reject(
         "mixture with weights summing to 1.05",
         &chi2(
             &outcomes,
@@ -94,7 +94,7 @@ pub(crate) fn mixture_of_brdf_and_two_anchors() {
             on_outcomes(|d| mix.pdf_with([0.3, 0.5, 0.25], d)),
         ),
     );
-    reject(
+    FAMILY.reject(
         "mixture without the tiny cone's pdf",
         &chi2(
             &outcomes,

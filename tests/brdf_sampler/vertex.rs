@@ -221,7 +221,7 @@ pub(crate) fn check_brdf(
     let observed = hist.counts[none] as f64 / SAMPLES as f64;
     let expected = outcomes.integrate(none, &on_outcomes(|d| v.pdf(d)));
     println!("{name}: no direction in {observed:.5} of the draws, {expected:.5} expected");
-    accept(name, &hist, &c);
+    FAMILY.accept(name, &hist, &c);
     (outcomes, hist)
 }
 
@@ -232,7 +232,7 @@ pub(crate) fn reject_model(
     hist: &Histogram,
     wrong: Model,
 ) {
-    reject(
+    FAMILY.reject(
         name,
         &chi2(outcomes, hist, on_outcomes(|d| wrong.pdf(v, d))),
     );
