@@ -107,9 +107,9 @@ impl PathGuide for Guide {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::guiding::field::tests::trained_around;
     use crate::guiding::guide::tests::mixture;
-    use crate::guiding::square::to_square;
-    use crate::guiding::{Record, SpatialField};
+    use crate::guiding::SpatialField;
     use crate::path::pt::Unguided;
     use crate::sampling::{brdf, sample_rng};
     use crate::scene::Material;
@@ -129,17 +129,7 @@ mod tests {
     /// A field trained at the origin, on a floor (facing +y), on records around one
     /// direction.
     fn field() -> Arc<SpatialField> {
-        let [tu, tv] = to_square(Vec3::new(0.6, 0.7, -0.3).normalize());
-        let mut rng = sample_rng(8, 0, 0);
-        let records: Vec<Record> = (0..4100)
-            .map(|i| Record {
-                p: Vec3::ZERO,
-                facing: 2,
-                dir: [tu + uniform(&mut rng) / 16.0, tv + uniform(&mut rng) / 16.0],
-                value: 1.0 + (i % 3) as f32,
-            })
-            .collect();
-        Arc::new(SpatialField::train(Vec3::splat(-1.0), Vec3::ONE, records))
+        Arc::new(trained_around(Vec3::new(0.6, 0.7, -0.3).normalize()).0)
     }
 
     /// The bits of a sample, to compare two for identity.

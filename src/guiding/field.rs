@@ -199,11 +199,28 @@ impl SpatialField {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::guiding::field_build::SPLIT_RECORDS;
     use crate::sampling::{sample_rng, uniform};
     use std::f64::consts::PI;
+
+    /// A field trained on 4100 records at the origin, on a floor (facing +y), spread over a
+    /// square of side 1/16 of the square map at `target`'s square-map point (returned too).
+    pub(crate) fn trained_around(target: Vec3) -> (SpatialField, [f32; 2]) {
+        let [tu, tv] = to_square(target);
+        let mut rng = sample_rng(8, 0, 0);
+        let records: Vec<Record> = (0..4100)
+            .map(|i| Record {
+                p: Vec3::ZERO,
+                facing: 2,
+                dir: [tu + uniform(&mut rng) / 16.0, tv + uniform(&mut rng) / 16.0],
+                value: 1.0 + (i % 3) as f32,
+            })
+            .collect();
+        let field = SpatialField::train(Vec3::splat(-1.0), Vec3::ONE, records);
+        (field, [tu, tv])
+    }
 
     fn uniforms(rng: &mut crate::sampling::Rng) -> [f64; 3] {
         [0; 3].map(|_| f64::from(uniform(rng)))

@@ -168,9 +168,10 @@ impl Vertex<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::guiding::field::tests::trained_around;
     use crate::guiding::guide::tests::{mixture, PATCH};
     use crate::guiding::square::to_square;
-    use crate::guiding::{Guide, Record};
+    use crate::guiding::Guide;
     use crate::sampling::patch::PatchShape;
     use crate::sampling::{sample_rng, uniform};
     use std::sync::Arc;
@@ -216,20 +217,10 @@ mod tests {
     #[test]
     fn spatial_guide_past_the_levels_is_a_density() {
         let material = white();
-        let target = Vec3::new(0.6, 0.7, -0.3).normalize();
-        let [tu, tv] = to_square(target);
         // Records spread over a square of side 1/16 of the square map at `target`, all
         // at the origin, on a floor (facing +y).
-        let mut rng = sample_rng(8, 0, 0);
-        let records: Vec<Record> = (0..4100)
-            .map(|i| Record {
-                p: Vec3::ZERO,
-                facing: 2,
-                dir: [tu + uniform(&mut rng) / 16.0, tv + uniform(&mut rng) / 16.0],
-                value: 1.0 + (i % 3) as f32,
-            })
-            .collect();
-        let spatial = Arc::new(SpatialField::train(Vec3::splat(-1.0), Vec3::ONE, records));
+        let (field, [tu, tv]) = trained_around(Vec3::new(0.6, 0.7, -0.3).normalize());
+        let spatial = Arc::new(field);
         // Near: within the records' square widened by the finest leaf (1/32 of the square),
         // the resolution of the guide.
         let near = |d: Vec3| {

@@ -8,6 +8,7 @@
 
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::path::pt::LightPoint;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{brdf, uniform, Rng};
 use crate::scene::Material;
@@ -41,23 +42,13 @@ fn light_sample(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
-    let scene = view.scene;
-    let u = [uniform(rng), uniform(rng), uniform(rng)];
-    let ls = scene.emitters.sample(&scene.mesh, u);
-    let y = SurfacePoint {
-        p: ls.point,
-        ng: scene.mesh.normals[ls.prim as usize],
-        prim: ls.prim,
-    };
-    let d = y.p - x.p;
-    let dist2 = d.length_squared();
-    let wi = d / dist2.sqrt();
-    let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-    if !(cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0 && view.unoccluded(x, &y, counts)) {
-        return Vec3::ZERO;
+    match LightPoint::sample(view, (x, n), rng) {
+        Some(l) if view.unoccluded(x, &l.y, counts) => {
+            let le = view.material(l.y.prim).ke;
+            brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
+        }
+        _ => Vec3::ZERO,
     }
-    let pdf_solid_angle = (ls.pdf_area * dist2 as f64 / cos_light as f64) as f32;
-    brdf::eval(material, n, wo, wi) * view.material(y.prim).ke * (cos_x / pdf_solid_angle)
 }
 
 impl PixelEstimator for NeeOnly {

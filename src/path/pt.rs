@@ -179,6 +179,52 @@ fn light_pdf_solid_angle(pdf_area: f64, dist2: f32, cos_light: f32) -> f32 {
     (pdf_area * dist2 as f64 / cos_light as f64) as f32
 }
 
+/// A point `y` on an emitter, sampled for next-event estimation at `x`, and what joins them.
+pub struct LightPoint {
+    pub y: SurfacePoint,
+    /// The unit direction from `x` to `y`, and their squared distance.
+    pub wi: Vec3,
+    pub dist2: f32,
+    /// `cos` at `x` (against its facing normal) and at `y` (against `y`'s, towards `x`).
+    pub cos_x: f32,
+    pub cos_light: f32,
+    /// The emitters' density of `y` per unit area.
+    pub pdf_area: f64,
+}
+
+impl LightPoint {
+    /// A point on the emitters from the next three uniform numbers of `rng`, seen from `x`
+    /// (facing normal `n`); `None` where it lies behind `x` or faces away from it (either
+    /// way it sends `x` nothing). Visibility is not tested.
+    pub fn sample(view: &SceneView, (x, n): (&SurfacePoint, Vec3), rng: &mut Rng) -> Option<Self> {
+        let scene = view.scene;
+        let u = [uniform(rng), uniform(rng), uniform(rng)];
+        let ls = scene.emitters.sample(&scene.mesh, u);
+        let y = SurfacePoint {
+            p: ls.point,
+            ng: scene.mesh.normals[ls.prim as usize],
+            prim: ls.prim,
+        };
+        let d = y.p - x.p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
+        (cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0).then_some(Self {
+            y,
+            wi,
+            dist2,
+            cos_x,
+            cos_light,
+            pdf_area: ls.pdf_area,
+        })
+    }
+
+    /// The density of `y` in solid angle at `x`.
+    pub fn pdf_solid_angle(&self) -> f32 {
+        light_pdf_solid_angle(self.pdf_area, self.dist2, self.cos_light)
+    }
+}
+
 /// One path-traced estimate of the radiance arriving along `ray`, with at most `max_bounces`
 /// scattering events.
 pub fn radiance(
@@ -210,27 +256,14 @@ fn next_event<B: VertexBsdf>(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Option<LightHit> {
-    let scene = view.scene;
-    let u = [uniform(rng), uniform(rng), uniform(rng)];
-    let ls = scene.emitters.sample(&scene.mesh, u);
-    let y = SurfacePoint {
-        p: ls.point,
-        ng: scene.mesh.normals[ls.prim as usize],
-        prim: ls.prim,
-    };
-    let d = y.p - x.p;
-    let dist2 = d.length_squared();
-    let wi = d / dist2.sqrt();
-    let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-    if !(cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0) {
-        return None;
-    }
-    let le = view.material(y.prim).ke;
+    let light = LightPoint::sample(view, (x, n), rng)?;
+    let (wi, cos_x) = (light.wi, light.cos_x);
+    let le = view.material(light.y.prim).ke;
     let f = bsdf.eval(wi);
-    if !(le.max_element() > 0.0 && f.max_element() > 0.0 && view.unoccluded(x, &y, counts)) {
+    if !(le.max_element() > 0.0 && f.max_element() > 0.0 && view.unoccluded(x, &light.y, counts)) {
         return None;
     }
-    let pdf_light = light_share as f32 * light_pdf_solid_angle(ls.pdf_area, dist2, cos_light);
+    let pdf_light = light_share as f32 * light.pdf_solid_angle();
     let pdf_brdf = bsdf.pdf(wi) as f32;
     let weight = power_heuristic(pdf_light, pdf_brdf);
     Some(LightHit {
