@@ -12,6 +12,7 @@ mod shapes;
 mod spectrum;
 mod tables;
 mod transform;
+mod values;
 
 use super::{Scene, SceneError};
 use std::path::Path;
