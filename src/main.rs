@@ -75,7 +75,7 @@ fn cli_markdown() -> String {
     let mut command = Cli::command().term_width(100);
     let mut out = String::from(
         "# Command line\n\nGenerated from the code by `GENPATH_WRITE_DOCS=1 cargo test --bin genpath`; \
-         do not edit. Every command that renders takes the scene options (`--max-bounces`, \
+         do not edit. Every command that renders takes the scene options (`-D NAME=VALUE` for Mitsuba XML scenes, `--max-bounces`, \
          `--seed`, `--threads`, `--accel`, `--width`, `--height`, `--quiet`); the method \
          settings are in [settings.md](settings.md). Errors (a malformed scene, a missing \
          file, a NaN vertex, a scene without emitters, an unwritable output, an impossible \

@@ -16,8 +16,11 @@ use std::path::PathBuf;
 /// What every command that renders needs: the scene, how to trace it, and the seed.
 #[derive(Args)]
 pub struct SceneArgs {
-    /// Scene description (TOML).
+    /// Scene description: genpath TOML, or Mitsuba 3 XML (`.xml`).
     pub scene: PathBuf,
+    /// A Mitsuba XML scene parameter, `NAME=VALUE` (its `$NAME`); repeatable.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub define: Vec<(String, String)>,
     /// Scattering events per path; defaults to the scene's `render.max_bounces`.
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES_LIMIT as i64))]
     pub max_bounces: Option<u32>,
@@ -296,4 +299,12 @@ pub fn load_mixture(settings: &mut Settings, scene: &Scene, max_bounces: u32) ->
         settings.loaded_mixture = Some(mixture_file::load(file, scene, max_bounces, absorption)?);
     }
     Ok(())
+}
+
+/// `-D NAME=VALUE`.
+pub fn parse_define(text: &str) -> Result<(String, String), String> {
+    match text.split_once('=') {
+        Some((name, value)) if !name.is_empty() => Ok((name.to_string(), value.to_string())),
+        _ => Err(format!("`{text}` is not NAME=VALUE")),
+    }
 }

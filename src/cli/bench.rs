@@ -21,6 +21,9 @@ pub struct BenchArgs {
     /// Scene whose camera gives the coherent rays and whose bounds the incoherent ones.
     #[arg(default_value = "scenes/fig5/scene.toml")]
     pub scene: PathBuf,
+    /// A Mitsuba XML scene parameter, `NAME=VALUE` (its `$NAME`); repeatable.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = super::args::parse_define)]
+    pub define: Vec<(String, String)>,
     /// Rays per set: the camera's image is resized to N × N.
     #[arg(long, value_name = "N", default_value_t = 512, value_parser = clap::value_parser!(u32).range(4..=8192))]
     pub rays: u32,
@@ -47,7 +50,7 @@ pub fn run_bench(args: BenchArgs, matches: &ArgMatches) -> Result<()> {
     }
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
-    let scene = Scene::load(&args.scene)?;
+    let scene = Scene::load_with(&args.scene, &args.define)?;
     let passes = args.passes as usize;
     let rays = ray_throughput(&scene, args.rays, passes)?;
     let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;

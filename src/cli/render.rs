@@ -18,9 +18,9 @@ pub struct RenderArgs {
     /// Output image; repeat for several formats. A `<FILE>.json` with statistics is written beside each.
     #[arg(short, long = "output", value_name = "FILE", required = true)]
     pub outputs: Vec<PathBuf>,
-    /// Samples (paths) per pixel.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
-    pub spp: u32,
+    /// Samples (paths) per pixel [default: a Mitsuba scene's `sample_count`, else 64].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
+    pub spp: Option<u32>,
     /// With `--method ga`: also write an image of the GA pixels with their evolved anchor
     /// points and cones drawn over the render.
     #[arg(long, value_name = "FILE")]
@@ -42,7 +42,8 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
-    let settings = session.settings(&args.scene, args.method.method, args.spp);
+    let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
+    let settings = session.settings(&args.scene, args.method.method, spp);
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let prepared = session

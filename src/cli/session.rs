@@ -21,7 +21,7 @@ pub struct Session {
 impl Session {
     pub fn open(args: &SceneArgs) -> Result<Self> {
         let t_load = Instant::now();
-        let mut scene = Scene::load(&args.scene)?;
+        let mut scene = Scene::load_with(&args.scene, &args.define)?;
         if args.width.is_some() || args.height.is_some() {
             scene.resize(
                 args.width.unwrap_or(scene.camera.width),

@@ -378,7 +378,7 @@ impl TestPaths {
             let pdf = if v.delta {
                 0.0
             } else {
-                let m = view.material(v.point.prim);
+                let m = view.scattering_material(&v.point, v.wo);
                 brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, v.wi)
             };
             self.point.push(v.point.p.as_dvec3());

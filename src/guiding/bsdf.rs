@@ -123,6 +123,8 @@ mod tests {
             ns: 20.0,
             mirror,
             ke: Vec3::ZERO,
+            two_sided: true,
+            conductor: None,
         }
     }
 

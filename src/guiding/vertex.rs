@@ -208,6 +208,8 @@ mod tests {
             ns: 0.0,
             mirror: false,
             ke: Vec3::ZERO,
+            two_sided: true,
+            conductor: None,
         }
     }
 

@@ -73,6 +73,7 @@ impl PixelEstimator for NeeOnly {
                 radiance += beta * emitted(material, &x, wo);
             }
             let n = brdf::facing_normal(x.ng, wo);
+            let material = view.scattering_material(&x, wo);
             if !material.scatters() {
                 break;
             }

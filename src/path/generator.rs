@@ -126,7 +126,7 @@ impl PathGenerator {
     fn direction_pdf(&self, view: &SceneView, k: usize, v: &PathVertex) -> f64 {
         match &self.steps[k].sampler {
             DirectionSampler::Brdf => {
-                let m = view.material(v.point.prim);
+                let m = view.scattering_material(&v.point, v.wo);
                 brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, v.wi)
             }
             DirectionSampler::Anchor(a) => a.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
@@ -321,7 +321,7 @@ impl Walk {
         }
         let scene = view.scene;
         let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
-        let material = view.material(x.prim);
+        let material = view.scattering_material(&x, wo);
         if !material.scatters() {
             return None;
         }
@@ -374,7 +374,7 @@ impl Walk {
             return None;
         }
         let wi = if material.mirror {
-            self.throughput *= material.ks.as_dvec3();
+            self.throughput *= material.mirror_reflectance(n.dot(wo)).as_dvec3();
             brdf::reflect(wo, n).normalize()
         } else {
             let u = [

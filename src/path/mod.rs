@@ -75,6 +75,17 @@ impl<'a> SceneView<'a> {
         self.scene.material(prim)
     }
 
+    /// The material that scatters at `x` towards `wo`: [`crate::scene::BLACK`] where a
+    /// one-sided material is seen from behind its normal.
+    pub fn scattering_material(&self, x: &SurfacePoint, wo: Vec3) -> &Material {
+        let m = self.scene.material(x.prim);
+        if m.two_sided || x.ng.dot(wo) > 0.0 {
+            m
+        } else {
+            &crate::scene::BLACK
+        }
+    }
+
     fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
         SurfacePoint {
             p: ray.origin + ray.dir * hit.t,

@@ -322,7 +322,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
     // Non-delta vertices so far: the guide's level.
     let mut k = 0;
     for bounce in 1..=max_bounces {
-        let material = view.material(x.prim);
+        let material = view.scattering_material(&x, wo);
         if !material.scatters() {
             break;
         }

@@ -128,7 +128,7 @@ pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample
         return (m.ks.max_element() > 0.0).then_some(BrdfSample {
             wi,
             pdf: 1.0,
-            weight: m.ks,
+            weight: m.mirror_reflectance(n.dot(wo)),
             delta: true,
         });
     }

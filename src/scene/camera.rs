@@ -15,6 +15,10 @@ pub struct Camera {
     /// Image-plane vectors at unit distance, scaled so that pixel coordinates map linearly.
     right: Vec3,
     up: Vec3,
+    /// Distances along the viewing direction between which camera rays see (Mitsuba's
+    /// `near_clip`, `far_clip`); 0 and infinity for TOML scenes.
+    near: f32,
+    far: f32,
 }
 
 impl Camera {
@@ -33,19 +37,53 @@ impl Camera {
             forward,
             right: right * half_w,
             up: true_up * half_h,
+            near: 0.0,
+            far: f32::INFINITY,
+        }
+    }
+
+    /// A camera looking along unit `forward` whose image right is unit `right` and image up
+    /// unit `up` (an orthonormal frame, either handedness: Mitsuba's `to_world` may mirror),
+    /// with clip distances along `forward`. The caller has validated the inputs.
+    pub fn with_frame(
+        origin: Vec3,
+        [forward, right, up]: [Vec3; 3],
+        fov_x: f32,
+        (width, height): (u32, u32),
+        (near, far): (f32, f32),
+    ) -> Self {
+        let half_w = (0.5 * fov_x).tan();
+        let half_h = half_w * height as f32 / width as f32;
+        Self {
+            origin,
+            fov_x,
+            width,
+            height,
+            forward,
+            right: right * half_w,
+            up: up * half_h,
+            near,
+            far,
         }
     }
 
     /// The same camera with another image size (the horizontal field of view is kept).
     pub fn resized(&self, width: u32, height: u32) -> Self {
-        Self::new(
+        let mut camera = Self::new(
             self.origin,
             self.origin + self.forward,
             self.up,
             self.fov_x,
             width,
             height,
-        )
+        );
+        // A mirrored frame (from Mitsuba's `to_world`) keeps its image right.
+        if camera.right.dot(self.right) < 0.0 {
+            camera.right = -camera.right;
+        }
+        camera.near = self.near;
+        camera.far = self.far;
+        camera
     }
 
     /// The primary ray through continuous pixel coordinates `(px, py)`, `px ∈ [0, width)`,
@@ -54,7 +92,12 @@ impl Camera {
         let sx = 2.0 * px / self.width as f32 - 1.0;
         let sy = 1.0 - 2.0 * py / self.height as f32;
         let dir = (self.forward + sx * self.right + sy * self.up).normalize();
-        Ray::new(self.origin, dir, 0.0, f32::INFINITY)
+        if self.near == 0.0 && self.far == f32::INFINITY {
+            return Ray::new(self.origin, dir, 0.0, f32::INFINITY);
+        }
+        // Mitsuba's clip planes are at distances along the viewing direction.
+        let cos = dir.dot(self.forward);
+        Ray::new(self.origin, dir, self.near / cos, self.far / cos)
     }
 
     /// Continuous pixel coordinates of world point `p` (the inverse of [`Camera::ray`]) and

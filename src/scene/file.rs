@@ -32,6 +32,10 @@ pub struct RenderDefaults {
     /// Scattering events on a path (Mitsuba's `max_depth` is this + 1).
     #[serde(default = "default_max_bounces")]
     pub max_bounces: u32,
+    /// Samples per pixel when the command line gives none (a Mitsuba scene's
+    /// `sample_count`; not a TOML field).
+    #[serde(skip_deserializing, skip_serializing_if = "Option::is_none")]
+    pub spp: Option<u32>,
 }
 
 fn default_max_bounces() -> u32 {
@@ -42,6 +46,7 @@ impl Default for RenderDefaults {
     fn default() -> Self {
         Self {
             max_bounces: default_max_bounces(),
+            spp: None,
         }
     }
 }

@@ -4,6 +4,7 @@
 mod camera;
 mod file;
 mod validate;
+pub mod xml;
 
 pub use camera::Camera;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
@@ -54,7 +55,25 @@ pub struct Material {
     pub mirror: bool,
     /// Radiance emitted on the normal side (`Ke`).
     pub ke: Vec3,
+    /// Whether the surface scatters on both sides (every TOML material; Mitsuba's
+    /// `twosided`). A one-sided material is black seen from behind its normal.
+    pub two_sided: bool,
+    /// A smooth conductor's complex index of refraction (η, k) per channel: the mirror's
+    /// reflectance is then `ks` times its Fresnel reflectance (Mitsuba's `conductor`).
+    pub conductor: Option<[Vec3; 2]>,
 }
+
+/// What a one-sided material is seen from behind: it neither scatters nor emits.
+pub static BLACK: Material = Material {
+    name: String::new(),
+    kd: Vec3::ZERO,
+    ks: Vec3::ZERO,
+    ns: 1.0,
+    mirror: false,
+    ke: Vec3::ZERO,
+    two_sided: true,
+    conductor: None,
+};
 
 impl Material {
     pub fn is_emitter(&self) -> bool {
@@ -64,6 +83,15 @@ impl Material {
     /// Whether the Phong lobe is present (and the surface is not a mirror).
     pub fn is_glossy(&self) -> bool {
         !self.mirror && self.ks.max_element() > 0.0
+    }
+
+    /// The mirror's reflectance for an incident direction at `cos_theta` to the normal:
+    /// `ks`, times the conductor's Fresnel reflectance for a conductor.
+    pub fn mirror_reflectance(&self, cos_theta: f32) -> Vec3 {
+        match self.conductor {
+            None => self.ks,
+            Some([eta, k]) => self.ks * fresnel_conductor(cos_theta, eta, k),
+        }
     }
 
     /// Whether light can scatter off the surface at all.
@@ -147,6 +175,26 @@ impl Emitters {
     }
 }
 
+/// The unpolarised Fresnel reflectance of a conductor of complex index `eta + i k` per
+/// channel (Mitsuba's `fresnel_conductor`, after Moeller, "Optics").
+pub fn fresnel_conductor(cos_theta: f32, eta: Vec3, k: Vec3) -> Vec3 {
+    let c2 = cos_theta * cos_theta;
+    let s2 = 1.0 - c2;
+    let s4 = s2 * s2;
+    let t1 = eta * eta - k * k - Vec3::splat(s2);
+    let a2b2 = (t1 * t1 + 4.0 * k * k * eta * eta)
+        .max(Vec3::ZERO)
+        .powf(0.5);
+    let a = (0.5 * (a2b2 + t1)).max(Vec3::ZERO).powf(0.5);
+    let term1 = a2b2 + Vec3::splat(c2);
+    let term2 = 2.0 * cos_theta * a;
+    let r_s = (term1 - term2) / (term1 + term2);
+    let term3 = a2b2 * c2 + Vec3::splat(s4);
+    let term4 = term2 * s2;
+    let r_p = r_s * (term3 - term4) / (term3 + term4);
+    0.5 * (r_s + r_p)
+}
+
 pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f64 {
     let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
     0.5 * (b - a).cross(c - a).length()
@@ -214,8 +262,29 @@ impl Scene {
         }
     }
 
-    /// Loads and validates a scene from its TOML file.
+    /// Loads and validates a scene: Mitsuba 3 XML for a `.xml` file, else genpath's TOML.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Self::load_with(path, &[])
+    }
+
+    /// [`Scene::load`] with `-D name=value` parameters for a Mitsuba XML scene.
+    pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
+        if xml::is_xml(path) {
+            return xml::load(path, defines);
+        }
+        if let Some((name, _)) = defines.first() {
+            return Err(SceneError::Field {
+                path: path.to_path_buf(),
+                field: "-D",
+                message: format!(
+                    "`{name}`: parameters are for Mitsuba XML scenes; this is a TOML scene"
+                ),
+            });
+        }
+        Self::load_toml(path)
+    }
+
+    fn load_toml(path: &Path) -> Result<Scene, SceneError> {
         let text = read(path)?;
         let file: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Toml {
             path: path.to_path_buf(),
@@ -371,6 +440,8 @@ fn material(
         ns: m.shininess.unwrap_or(1.0),
         mirror,
         ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+        two_sided: true,
+        conductor: None,
     })
 }
 

@@ -176,3 +176,166 @@ fn impossible_flags() {
     assert_fails(&scene, &["--accel", "optix"], &out, &["--accel"]);
     assert_fails(&scene, &["--width", "999999999"], &out, &["--width"]);
 }
+
+/// A small valid Mitsuba scene with `shapes` added, `film` as its film's content; written
+/// into `dir` as `s.xml`.
+fn xml_scene(dir: &Path, film: &str, shapes: &str) -> PathBuf {
+    let text = format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm">{film}</film>
+    </sensor>
+    <shape type="rectangle">
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+    {shapes}
+</scene>
+"#
+    );
+    let path = dir.join("s.xml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+const BOX_FILM: &str =
+    r#"<integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/>"#;
+
+#[test]
+fn a_small_xml_scene_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = xml_scene(dir.path(), BOX_FILM, "");
+    let out = dir.path().join("img.exr");
+    let output = genpath(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "2",
+        "-q",
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(out.is_file());
+}
+
+/// Each hostile XML scene: its file's content (or the shapes it adds), what the error must
+/// name.
+#[test]
+fn hostile_xml_scenes_fail_clearly() {
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("malformed", "<shape type=\"cube\">", &["s.xml", "malformed XML"]),
+        ("unknown plugin", "<bsdf type=\"principled\" id=\"p\"/><shape type=\"cube\"><ref id=\"p\"/></shape>", &["s.xml:", "principled"]),
+        ("unknown shape", "<shape type=\"instance\"/>", &["s.xml:", "instance"]),
+        ("missing ref", "<shape type=\"cube\"><ref id=\"nowhere\"/></shape>", &["s.xml:", "nowhere"]),
+        ("NaN in a transform", "<shape type=\"cube\"><transform name=\"to_world\"><translate x=\"NaN\"/></transform></shape>", &["s.xml:", "NaN"]),
+        ("text in a float", "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"big\"/></transform></shape>", &["s.xml:", "big"]),
+        ("unknown parameter", "<shape type=\"cube\"><float name=\"radius\" value=\"2\"/></shape>", &["s.xml:", "radius"]),
+        ("analytic sphere", "<shape type=\"sphere\"/>", &["s.xml:", "sphere"]),
+        ("dielectric", "<shape type=\"cube\"><bsdf type=\"dielectric\"/></shape>", &["s.xml:", "dielectric"]),
+        ("undefined parameter", "<shape type=\"cube\"><boolean name=\"flip_normals\" value=\"$flip\"/></shape>", &["s.xml:", "$flip"]),
+    ];
+    for (what, shapes, needles) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = xml_scene(dir.path(), BOX_FILM, shapes);
+        eprintln!("case: {what}");
+        assert_fails(&scene, &[], &dir.path().join("o.exr"), needles);
+    }
+}
+
+#[test]
+fn xml_films_genpath_cannot_render_fail_clearly() {
+    let cases: &[(&str, &[&str])] = &[
+        (
+            r#"<integer name="width" value="200000"/><integer name="height" value="200000"/><rfilter type="box"/>"#,
+            &["s.xml:", "200000"],
+        ),
+        (
+            r#"<integer name="width" value="8"/><integer name="height" value="8"/>"#,
+            &["s.xml:", "gaussian"],
+        ),
+        (
+            r#"<integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="gaussian"/>"#,
+            &["s.xml:", "gaussian"],
+        ),
+    ];
+    for (film, needles) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = xml_scene(dir.path(), film, "");
+        assert_fails(&scene, &[], &dir.path().join("o.exr"), needles);
+    }
+}
+
+#[test]
+fn recursive_xml_include_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("loop.xml"),
+        "<scene version=\"3.0.0\"><include filename=\"loop.xml\"/></scene>",
+    )
+    .unwrap();
+    let scene = xml_scene(dir.path(), BOX_FILM, "<include filename=\"loop.xml\"/>");
+    assert_fails(
+        &scene,
+        &[],
+        &dir.path().join("o.exr"),
+        &["loop.xml", "include"],
+    );
+}
+
+#[test]
+fn bad_ply_meshes_fail_clearly() {
+    let header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("truncated", "0 0 0\n1 0 0\n", &["m.ply"]),
+        (
+            "index out of range",
+            "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+            &["m.ply", "7", "out of range"],
+        ),
+        (
+            "text in a coordinate",
+            "0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n",
+            &["m.ply"],
+        ),
+    ];
+    for (what, body, needles) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("m.ply"), format!("{header}{body}")).unwrap();
+        let scene = xml_scene(
+            dir.path(),
+            BOX_FILM,
+            r#"<shape type="ply"><string name="filename" value="m.ply"/></shape>"#,
+        );
+        eprintln!("case: {what}");
+        assert_fails(&scene, &[], &dir.path().join("o.exr"), needles);
+    }
+    // A binary PLY cut short.
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = header.replace("ascii", "binary_little_endian").into_bytes();
+    bytes.extend_from_slice(&[0u8; 20]);
+    std::fs::write(dir.path().join("m.ply"), bytes).unwrap();
+    let scene = xml_scene(
+        dir.path(),
+        BOX_FILM,
+        r#"<shape type="ply"><string name="filename" value="m.ply"/></shape>"#,
+    );
+    assert_fails(&scene, &[], &dir.path().join("o.exr"), &["m.ply"]);
+}
+
+#[test]
+fn defines_are_only_for_xml_scenes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene_with(dir.path(), None, None, None);
+    assert_fails(
+        &scene,
+        &["-D", "res=8"],
+        &dir.path().join("o.exr"),
+        &["-D", "res"],
+    );
+}

@@ -1,0 +1,156 @@
+//! PLY meshes (ASCII and binary, through `ply-rs-bw`) as Mitsuba's `ply` shape reads them:
+//! the `vertex` element's `x y z` (and `nx ny nz`, when all three are there), the `face`
+//! element's `vertex_indices` (or `vertex_index`) lists as fans; other elements skipped.
+
+use super::shapes::RawMesh;
+use glam::DVec3;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{Property, PropertyAccess};
+use std::io::BufReader;
+use std::path::Path;
+
+#[derive(Default)]
+struct Vertex {
+    p: [f64; 3],
+    n: [f64; 3],
+}
+
+#[derive(Default)]
+struct Face {
+    indices: Vec<i64>,
+}
+
+/// An element genpath does not read.
+struct Skipped;
+
+fn scalar(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => v.into(),
+        Property::UChar(v) => v.into(),
+        Property::Short(v) => v.into(),
+        Property::UShort(v) => v.into(),
+        Property::Int(v) => v.into(),
+        Property::UInt(v) => v.into(),
+        Property::Float(v) => v.into(),
+        Property::Double(v) => v,
+        _ => return None,
+    })
+}
+
+impl PropertyAccess for Vertex {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(&mut self, name: &str, property: Property) {
+        let slot = match name {
+            "x" => &mut self.p[0],
+            "y" => &mut self.p[1],
+            "z" => &mut self.p[2],
+            "nx" => &mut self.n[0],
+            "ny" => &mut self.n[1],
+            "nz" => &mut self.n[2],
+            _ => return,
+        };
+        *slot = scalar(&property).unwrap_or(f64::NAN);
+    }
+}
+
+impl PropertyAccess for Face {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(&mut self, name: &str, property: Property) {
+        if name != "vertex_indices" && name != "vertex_index" {
+            return;
+        }
+        self.indices = match property {
+            Property::ListChar(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUChar(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListShort(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUShort(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListInt(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUInt(v) => v.into_iter().map(i64::from).collect(),
+            _ => vec![-1],
+        };
+    }
+}
+
+impl PropertyAccess for Skipped {
+    fn new() -> Self {
+        Skipped
+    }
+}
+
+/// Reads a PLY file; errors are messages for the caller to place.
+pub fn load(path: &Path) -> Result<RawMesh, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+    let size = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut reader = BufReader::new(file);
+    let header = Parser::<Skipped>::new()
+        .read_header(&mut reader)
+        .map_err(|e| format!("malformed PLY header: {e}"))?;
+    let mut mesh = RawMesh::default();
+    let mut normals = Vec::new();
+    let mut has_normals = false;
+    for (name, def) in &header.elements {
+        // Every element takes at least one byte: a count beyond the file is a lie.
+        if def.count as u64 > size {
+            return Err(format!(
+                "element `{name}` claims {} entries, more than the file's {size} bytes",
+                def.count
+            ));
+        }
+        let truncated =
+            |e: std::io::Error| format!("element `{name}`: {e} (truncated or malformed)");
+        match name.as_str() {
+            "vertex" => {
+                has_normals = ["nx", "ny", "nz"]
+                    .iter()
+                    .all(|n| def.properties.contains_key(*n));
+                let vertices = Parser::<Vertex>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(truncated)?;
+                for (i, v) in vertices.iter().enumerate() {
+                    let p = DVec3::from(v.p);
+                    if !p.is_finite() || (has_normals && !DVec3::from(v.n).is_finite()) {
+                        return Err(format!("vertex {i} is not finite"));
+                    }
+                    mesh.positions.push(p);
+                    normals.push(DVec3::from(v.n));
+                }
+            }
+            "face" => {
+                let faces = Parser::<Face>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(truncated)?;
+                let n = mesh.positions.len() as i64;
+                for (i, f) in faces.iter().enumerate() {
+                    if f.indices.len() < 3 {
+                        return Err(format!("face {i} has fewer than 3 vertex indices"));
+                    }
+                    if let Some(bad) = f.indices.iter().find(|&&k| k < 0 || k >= n) {
+                        return Err(format!(
+                            "face {i}: vertex index {bad} is out of range ({n} vertices)"
+                        ));
+                    }
+                    let k = |j: usize| f.indices[j] as u32;
+                    for j in 1..f.indices.len() - 1 {
+                        mesh.triangles.push([k(0), k(j), k(j + 1)]);
+                    }
+                }
+            }
+            _ => {
+                Parser::<Skipped>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(truncated)?;
+            }
+        }
+    }
+    if mesh.positions.is_empty() {
+        return Err("no `vertex` element".into());
+    }
+    if has_normals {
+        mesh.normals = Some(normals);
+    }
+    Ok(mesh)
+}

@@ -1,0 +1,360 @@
+//! Mitsuba's shapes as triangles: `obj`, `ply`, `serialized`, `rectangle`, `cube`, placed
+//! by `to_world` the way Mitsuba places a mesh (`PackedMesh::set_transform`: the winding is
+//! reversed where the transform mirrors, and again for `flip_normals`; normals go through
+//! the inverse transpose). Analytic shapes (`sphere`, `disk`, `cylinder`) are refused:
+//! tessellating them would change the image.
+
+use super::parse::Loc;
+use super::props::Props;
+use super::{ply, serialized};
+use crate::scene::validate::MAX_COORDINATE;
+use crate::scene::SceneError;
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// A mesh in object space, as a file or a built-in shape gives it.
+#[derive(Debug, Default)]
+pub struct RawMesh {
+    pub positions: Vec<DVec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex normals, when the mesh has them.
+    pub normals: Option<Vec<DVec3>>,
+}
+
+impl RawMesh {
+    /// Checks that every index names a vertex.
+    pub fn check_indices(&self, what: &str) -> Result<(), String> {
+        let n = self.positions.len() as u64;
+        match self
+            .triangles
+            .iter()
+            .flatten()
+            .find(|&&i| u64::from(i) >= n)
+        {
+            Some(i) => Err(format!(
+                "{what}: face index {i} is out of range ({n} vertices)"
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The triangles of shape `p` in object space.
+pub fn load(p: &Props) -> Result<RawMesh, SceneError> {
+    let plugin = p.object().plugin.as_str();
+    let file = |p: &Props| -> Result<std::path::PathBuf, SceneError> {
+        let name = p
+            .string("filename")?
+            .ok_or_else(|| p.error("needs a `filename`"))?;
+        let path = p.doc.resolve(p.loc(), name);
+        if !path.is_file() {
+            return Err(p.error(format!("file `{}` not found", path.display())));
+        }
+        Ok(path)
+    };
+    let mesh = match plugin {
+        "rectangle" => rectangle(),
+        "cube" => cube(),
+        "obj" => {
+            let path = file(p)?;
+            // UVs are read by the next issue's textures; the flag changes nothing before.
+            p.bool("flip_tex_coords", true)?;
+            obj(&path)?
+        }
+        "ply" => {
+            let path = file(p)?;
+            ply::load(&path).map_err(|m| mesh_error(&path, m))?
+        }
+        "serialized" => {
+            let path = file(p)?;
+            let index = p.int("shape_index", 0)?;
+            let index = u32::try_from(index)
+                .map_err(|_| p.error(format!("`shape_index` {index} is negative")))?;
+            serialized::load(&path, index).map_err(|m| mesh_error(&path, m))?
+        }
+        "sphere" | "disk" | "cylinder" => {
+            return Err(p.error(format!(
+                "analytic {plugin}s are not supported yet, and genpath does not tessellate them silently (that would change the image); give the shape as a mesh (obj, ply or serialized)"
+            )))
+        }
+        other => {
+            return Err(p.error(format!(
+                "genpath does not implement the `{other}` shape (supported: obj, ply, serialized, rectangle, cube)"
+            )))
+        }
+    };
+    if mesh.triangles.is_empty() {
+        return Err(p.error("the shape has no triangles"));
+    }
+    Ok(mesh)
+}
+
+fn mesh_error(path: &Path, message: String) -> SceneError {
+    SceneError::Mesh {
+        path: path.to_path_buf(),
+        message,
+    }
+}
+
+/// Mitsuba's rectangle: [-1, 1]² in the z = 0 plane, normal +z.
+pub fn rectangle() -> RawMesh {
+    let positions = [(-1., -1.), (1., -1.), (1., 1.), (-1., 1.)]
+        .map(|(x, y)| DVec3::new(x, y, 0.0))
+        .to_vec();
+    RawMesh {
+        positions,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        normals: Some(vec![DVec3::Z; 4]),
+    }
+}
+
+/// Mitsuba's cube: [-1, 1]³, four vertices per face with the face's outward normal.
+pub fn cube() -> RawMesh {
+    let mut mesh = RawMesh {
+        normals: Some(Vec::new()),
+        ..RawMesh::default()
+    };
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let mut n = DVec3::ZERO;
+            n[axis] = sign;
+            let (u, v) = (DVec3::new(n.y, n.z, n.x), DVec3::new(n.z, n.x, n.y));
+            let base = mesh.positions.len() as u32;
+            for (a, b) in [(-1., -1.), (1., -1.), (1., 1.), (-1., 1.)] {
+                mesh.positions.push(n + u * a + v * b);
+            }
+            // (u × v) is ±n: wind each face so that its normal points outward.
+            let t = if u.cross(v).dot(n) > 0.0 {
+                [[0, 1, 2], [0, 2, 3]]
+            } else {
+                [[0, 2, 1], [0, 3, 2]]
+            };
+            mesh.triangles.extend(t.map(|f| f.map(|i| base + i)));
+            if let Some(normals) = &mut mesh.normals {
+                normals.extend([n; 4]);
+            }
+        }
+    }
+    mesh
+}
+
+/// A Wavefront OBJ as Mitsuba reads it: `v`, `vn`, `vt`, `f` (polygons as fans, negative
+/// indices relative); materials, groups and everything else ignored.
+pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let err = |line: usize, message: String| SceneError::Syntax {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let (mut v, mut vn) = (Vec::new(), Vec::new());
+    let mut mesh = RawMesh::default();
+    let mut normals = Vec::new();
+    let mut any_normal = false;
+    let mut vertex_of: HashMap<(usize, Option<usize>), u32> = HashMap::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let mut words = raw.split('#').next().unwrap_or("").split_whitespace();
+        match words.next() {
+            Some(kind @ ("v" | "vn")) => {
+                let numbers: Vec<f64> = words
+                    .take(3)
+                    .map(|w| super::parse::parse_f64(w).ok_or(w))
+                    .collect::<Result<_, _>>()
+                    .map_err(|w| err(line, format!("`{kind}`: `{w}` is not a finite number")))?;
+                let [x, y, z] = numbers[..] else {
+                    return Err(err(line, format!("`{kind}` needs 3 numbers")));
+                };
+                if kind == "v" { &mut v } else { &mut vn }.push(DVec3::new(x, y, z));
+            }
+            Some("f") => {
+                let mut corners = Vec::new();
+                for w in words {
+                    let mut parts = w.split('/');
+                    let index = |part: Option<&str>, count: usize, what: &str| {
+                        obj_index(part, count).map_err(|m| err(line, format!("`f`: {what} {m}")))
+                    };
+                    let p = index(parts.next(), v.len(), "vertex")?
+                        .ok_or_else(|| err(line, format!("`f`: `{w}` has no vertex index")))?;
+                    let _uv = parts.next();
+                    let n = index(parts.next(), vn.len(), "normal")?;
+                    any_normal |= n.is_some();
+                    let next = mesh.positions.len() as u32;
+                    let id = *vertex_of.entry((p, n)).or_insert_with(|| {
+                        mesh.positions.push(v[p]);
+                        normals.push(n.map_or(DVec3::ZERO, |n| vn[n]));
+                        next
+                    });
+                    corners.push(id);
+                }
+                if corners.len() < 3 {
+                    return Err(err(line, "`f` needs at least 3 vertices".into()));
+                }
+                for k in 1..corners.len() - 1 {
+                    mesh.triangles
+                        .push([corners[0], corners[k], corners[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    if any_normal {
+        if normals.contains(&DVec3::ZERO) {
+            return Err(mesh_error(
+                path,
+                "some faces give vertex normals and some do not".into(),
+            ));
+        }
+        mesh.normals = Some(normals);
+    }
+    Ok(mesh)
+}
+
+/// A 1-based (or negative, relative) OBJ index into `count` items; `None` for an empty one.
+fn obj_index(part: Option<&str>, count: usize) -> Result<Option<usize>, String> {
+    let Some(text) = part.filter(|t| !t.is_empty()) else {
+        return Ok(None);
+    };
+    let k: i64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not an index"))?;
+    let i = if k > 0 { k - 1 } else { count as i64 + k };
+    if k == 0 || i < 0 || i >= count as i64 {
+        return Err(format!(
+            "index {k} is out of range ({count} defined so far)"
+        ));
+    }
+    Ok(Some(i as usize))
+}
+
+/// Shape options that decide how a mesh is placed.
+pub struct Placement {
+    pub to_world: DMat4,
+    pub flip_normals: bool,
+    pub face_normals: bool,
+}
+
+/// The mesh in world space, wound so that its geometric normals are Mitsuba's. Where
+/// Mitsuba would shade with vertex normals that differ from the faces' (given ones, or the
+/// angle-weighted ones it computes for a mesh without any), the shape is refused: genpath
+/// does not implement shading normals yet.
+pub fn place(
+    mesh: RawMesh,
+    how: &Placement,
+    loc: Loc,
+    p: &Props,
+) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), SceneError> {
+    let linear = DMat3::from_mat4(how.to_world);
+    let mirrored = linear.determinant() < 0.0;
+    let normal_matrix = linear.inverse().transpose();
+    let positions: Vec<DVec3> = mesh
+        .positions
+        .iter()
+        .map(|&x| how.to_world.transform_point3(x))
+        .collect();
+    if let Some(x) = positions
+        .iter()
+        .find(|x| !x.is_finite() || x.abs().max_element() > MAX_COORDINATE)
+    {
+        return Err(p.doc.error(
+            loc,
+            format!(
+                "{}: vertex {x} is not finite or beyond ±{MAX_COORDINATE:e}",
+                p.what()
+            ),
+        ));
+    }
+    let mut triangles = mesh.triangles;
+    if mirrored != how.flip_normals {
+        for t in &mut triangles {
+            t.swap(1, 2);
+        }
+    }
+    if !how.face_normals {
+        let sign = if how.flip_normals { -1.0 } else { 1.0 };
+        let normals = match &mesh.normals {
+            Some(n) => n
+                .iter()
+                .map(|&n| (normal_matrix * n).normalize_or_zero() * sign)
+                .collect(),
+            None => angle_weighted_normals(&positions, &triangles),
+        };
+        check_flat(&positions, &triangles, &normals, p)?;
+    }
+    Ok((positions.iter().map(|x| x.as_vec3()).collect(), triangles))
+}
+
+/// Mitsuba's `recompute_vertex_normals`: each face's normal weighted by its angle at the
+/// vertex.
+fn angle_weighted_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::ZERO; positions.len()];
+    for t in triangles {
+        let v = t.map(|i| positions[i as usize]);
+        let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        for i in 0..3 {
+            let d0 = (v[(i + 1) % 3] - v[i]).normalize_or_zero();
+            let d1 = (v[(i + 2) % 3] - v[i]).normalize_or_zero();
+            let angle = d0.dot(d1).clamp(-1.0, 1.0).acos();
+            normals[t[i] as usize] += n * angle;
+        }
+    }
+    normals.iter().map(|n| n.normalize_or_zero()).collect()
+}
+
+/// Largest angle (its cosine) between a vertex normal and its face's normal that still
+/// shades as the flat face: 0.25°.
+const FLAT_COS: f64 = 0.999_990_5;
+
+fn check_flat(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    normals: &[DVec3],
+    p: &Props,
+) -> Result<(), SceneError> {
+    let curved = triangles
+        .iter()
+        .filter(|t| {
+            let v = t.map(|i| positions[i as usize]);
+            let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            ng != DVec3::ZERO && t.iter().any(|&i| normals[i as usize].dot(ng) < FLAT_COS)
+        })
+        .count();
+    if curved == 0 {
+        return Ok(());
+    }
+    Err(p.error(format!(
+        "Mitsuba shades {curved} of its {} triangles with vertex normals that differ from the faces' normals; genpath does not implement shading normals yet. Add <boolean name=\"face_normals\" value=\"true\"/> to render the faces flat (Mitsuba then renders them the same way)",
+        triangles.len()
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_point_outward() {
+        let m = cube();
+        assert_eq!(m.triangles.len(), 12);
+        for t in &m.triangles {
+            let v = t.map(|i| m.positions[i as usize]);
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            let centre = (v[0] + v[1] + v[2]) / 3.0;
+            assert!(n.dot(centre) > 0.0, "{t:?}");
+        }
+    }
+
+    #[test]
+    fn obj_indices_are_checked() {
+        assert_eq!(obj_index(Some("2"), 3), Ok(Some(1)));
+        assert_eq!(obj_index(Some("-1"), 3), Ok(Some(2)));
+        assert_eq!(obj_index(Some(""), 3), Ok(None));
+        assert!(obj_index(Some("4"), 3).is_err());
+        assert!(obj_index(Some("0"), 3).is_err());
+        assert!(obj_index(Some("x"), 3).is_err());
+    }
+}

@@ -1,0 +1,200 @@
+//! Mitsuba 3 XML scenes: genpath's `pt` against Mitsuba 3's own render of the same file
+//! (`scenes/mitsuba/*.ref.exr`, rendered by `scripts/mitsuba_reference.py` at 64 × this
+//! test's samples), per block of pixels inside a 99.9 % interval (Šidák-corrected), with a
+//! must-reject twin: the same render mirrored left-right (a camera frame with +x to the
+//! right instead of Mitsuba's left). And the mesh formats: ASCII and binary PLY and
+//! Mitsuba's serialized format give the same triangles.
+
+use flate2::write::ZlibEncoder;
+use genpath::accel::{self, AccelKind};
+use genpath::image::Image;
+use genpath::integrators::pt::PathTracing;
+use genpath::integrators::{Film, Integrator, Method, RenderSettings};
+use genpath::path::SceneView;
+use genpath::scene::Scene;
+use statrs::distribution::{ContinuousCDF, Normal};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+const SPP: u32 = 256;
+const BLOCK: u32 = 8;
+
+fn scene_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes/mitsuba")
+        .join(name)
+}
+
+fn render(scene: &Scene) -> Film {
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(scene, accel.as_ref());
+    let settings = RenderSettings {
+        method: Method::Pt,
+        spp: SPP,
+        max_bounces: scene.render.max_bounces,
+        seed: 3,
+        progress: false,
+    };
+    PathTracing {
+        max_bounces: scene.render.max_bounces,
+    }
+    .render(&view, &settings)
+}
+
+/// Critical |z| of a two-sided 99.9 % interval, Šidák-corrected over `comparisons`.
+fn z_critical(comparisons: usize) -> f64 {
+    let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
+    Normal::new(0.0, 1.0)
+        .unwrap()
+        .inverse_cdf(1.0 - alpha / 2.0)
+}
+
+/// The largest |z| over blocks and channels of genpath's film (mirrored left-right when
+/// `mirrored`) against the reference, and the number of comparisons. The reference's own
+/// variance is genpath's over 64 (it has 64 × the samples).
+fn max_z(film: &Film, reference: &Image, mirrored: bool) -> (f64, usize) {
+    let (w, h) = (reference.width, reference.height);
+    let (mut max_z, mut n) = (0.0f64, 0);
+    for by in (0..h).step_by(BLOCK as usize) {
+        for bx in (0..w).step_by(BLOCK as usize) {
+            for c in 0..3 {
+                let (mut ours, mut var, mut theirs) = (0.0, 0.0, 0.0);
+                for y in by..by + BLOCK {
+                    for x in bx..bx + BLOCK {
+                        let xs = if mirrored { w - 1 - x } else { x };
+                        ours += f64::from(film.image.get(xs, y)[c]);
+                        var += film.variance_of_mean[(y * w + xs) as usize][c];
+                        theirs += f64::from(reference.get(x, y)[c]);
+                    }
+                }
+                let k = f64::from(BLOCK * BLOCK);
+                let se = (var * (1.0 + 1.0 / 64.0)).sqrt() / k;
+                let diff = (ours - theirs).abs() / k;
+                if se > 0.0 {
+                    max_z = max_z.max(diff / se);
+                } else {
+                    assert!(diff < 1e-6, "zero variance but the means differ by {diff}");
+                }
+                n += 1;
+            }
+        }
+    }
+    (max_z, n)
+}
+
+#[test]
+fn pt_agrees_with_mitsuba_and_a_mirrored_camera_does_not() {
+    let scene = Scene::load(&scene_path("box.xml")).unwrap();
+    let reference = genpath::image::read(&scene_path("box.ref.exr")).unwrap();
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "box.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let (z_mirrored, _) = max_z(&film, &reference, true);
+    assert!(
+        z_mirrored > critical,
+        "box.xml mirrored: max |z| {z_mirrored:.2} < {critical:.2}, the test cannot see a mirrored camera"
+    );
+}
+
+/// The scene of `box.xml` with the cube replaced by the shape `shape`.
+fn with_mesh(dir: &Path, shape: &str) -> Scene {
+    let text = std::fs::read_to_string(scene_path("box.xml")).unwrap();
+    let start = text.find("<shape type=\"cube\">").unwrap();
+    let end = start + text[start..].find("</shape>").unwrap() + "</shape>".len();
+    let text = format!("{}{shape}{}", &text[..start], &text[end..]);
+    let path = dir.join("s.xml");
+    std::fs::write(&path, text).unwrap();
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const QUAD: [[f32; 3]; 4] = [
+    [-0.5, 0.2, 0.0],
+    [0.5, 0.2, 0.0],
+    [0.5, 1.2, 0.0],
+    [-0.5, 1.2, 0.0],
+];
+
+fn ply(encoding: &str) -> Vec<u8> {
+    let mut out = format!("ply\nformat {encoding} 1.0\ncomment a quad\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n").into_bytes();
+    if encoding == "ascii" {
+        for v in QUAD {
+            out.extend(format!("{} {} {}\n", v[0], v[1], v[2]).bytes());
+        }
+        out.extend(b"4 0 1 2 3\n");
+    } else {
+        for v in QUAD.iter().flatten() {
+            out.extend(v.to_le_bytes());
+        }
+        out.push(4);
+        for i in 0..4i32 {
+            out.extend(i.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Mitsuba's serialized format, version 4, one mesh: the quad as two triangles.
+fn serialized() -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend(0x1000u32.to_le_bytes()); // single precision, no normals
+    body.extend(b"quad\0");
+    body.extend(4u64.to_le_bytes());
+    body.extend(2u64.to_le_bytes());
+    for v in QUAD.iter().flatten() {
+        body.extend(v.to_le_bytes());
+    }
+    for i in [0u32, 1, 2, 0, 2, 3] {
+        body.extend(i.to_le_bytes());
+    }
+    let mut z = ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+    z.write_all(&body).unwrap();
+    let mut out = vec![0x1C, 0x04, 0x04, 0x00];
+    out.extend(z.finish().unwrap());
+    out
+}
+
+#[test]
+fn ply_ascii_binary_obj_and_serialized_give_the_same_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    let files: [(&str, Vec<u8>); 4] = [
+        ("a.ply", ply("ascii")),
+        ("b.ply", ply("binary_little_endian")),
+        ("c.serialized", serialized()),
+        ("d.obj", {
+            let mut s = String::new();
+            for v in QUAD {
+                s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+            }
+            (s + "f 1 2 3 4\n").into_bytes()
+        }),
+    ];
+    let mut meshes = Vec::new();
+    for (name, bytes) in &files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+        let plugin = name.rsplit('.').next().unwrap();
+        let shape = format!(
+            r#"<shape type="{plugin}"><string name="filename" value="{name}"/><transform name="to_world"><translate z="-0.2"/></transform></shape>"#
+        );
+        let scene = with_mesh(dir.path(), &shape);
+        let n = scene.mesh.triangles.len();
+        // The quad is the last shape but the light: its two triangles come before the
+        // light's.
+        let quad: Vec<[glam::Vec3; 3]> = (n - 4..n - 2)
+            .map(|p| scene.mesh.vertices(p as u32))
+            .collect();
+        meshes.push((name, quad));
+    }
+    for (name, quad) in &meshes[1..] {
+        assert_eq!(quad, &meshes[0].1, "{name} differs from a.ply");
+    }
+    assert!(
+        (meshes[0].1[0][0] - glam::Vec3::new(-0.5, 0.2, -0.2)).length() < 1e-6,
+        "{:?}",
+        meshes[0].1
+    );
+}
