@@ -15,7 +15,7 @@ use genpath::integrators::pg::{
 };
 use genpath::integrators::RenderSettings;
 use genpath::path::generator::{
-    DirectionSampler, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
+    DirectionSampler, Nee, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use genpath::path::mixture::{Mixture, MixtureScratch};
 use genpath::path::mixture_file::{self, check_generator};
@@ -255,6 +255,12 @@ fn operators_keep_every_invariant() {
 
 #[test]
 fn stored_paths_give_the_generators_own_densities() {
+    for nee in [Nee::End, Nee::Every] {
+        stored_paths_give_the_generators_own_densities_with(nee);
+    }
+}
+
+fn stored_paths_give_the_generators_own_densities_with(nee: Nee) {
     let (scene, accel) = fig5();
     let view = SceneView::new(&scene, accel.as_ref());
     let config = GaConfig::default();
@@ -263,7 +269,7 @@ fn stored_paths_give_the_generators_own_densities() {
     // Hand-made anchors find light often; random generators exercise every sampler type.
     let anchors = anchors_mixture(&scene);
     let random = pool.random_individual(&config, &mut rng).to_mixture();
-    let sampler = Mixture::combine(&[(1.0, &anchors), (1.0, &random)]);
+    let sampler = Mixture::combine(&[(1.0, &anchors), (1.0, &random)]).with_nee(nee);
     let mut judges: Vec<_> = (0..8).map(|_| pool.random_gene(&mut rng)).collect();
     // A patch over the red wall's lit top at the first step.
     let mut patched = judges[0].clone();
@@ -278,7 +284,7 @@ fn stored_paths_give_the_generators_own_densities() {
     );
     patched.anchor_prims[0] = None;
     judges.push(patched);
-    let mut paths = TestPaths::new(MAX_BOUNCES);
+    let mut paths = TestPaths::new(MAX_BOUNCES, nee);
     let mut expected = Vec::new();
     let (mut path, mut contributions) = (PathVertices::default(), Vec::new());
     let mut counts = RayCounts::default();
@@ -298,7 +304,7 @@ fn stored_paths_give_the_generators_own_densities() {
             &view,
             ray.origin,
             x1,
-            MAX_BOUNCES,
+            (MAX_BOUNCES, nee),
             &mut rng,
             &mut counts,
             &mut path,
@@ -311,7 +317,7 @@ fn stored_paths_give_the_generators_own_densities() {
                     .iter()
                     .map(|j| {
                         j.generator
-                            .pdf_path(&view, &path, c.len, c.nee, MAX_BOUNCES)
+                            .pdf_contribution(&view, &path, c, (MAX_BOUNCES, nee))
                     })
                     .collect::<Vec<_>>(),
             );
@@ -330,7 +336,7 @@ fn stored_paths_give_the_generators_own_densities() {
             let e = expected[i][j];
             assert!(
                 (g - e).abs() <= 1e-12 * e.abs(),
-                "path {i}, generator {j}: {g} vs {e}"
+                "{nee:?}: path {i}, generator {j}: {g} vs {e}"
             );
             nonzero += (e > 0.0) as usize;
         }

@@ -22,6 +22,7 @@ pub fn build_plan(context: &Context, target: PlanFor) -> Result<Plan, PrepareErr
     let (config, settings) = (context.config, context.settings);
     let ga = GaConfig {
         srt_absorption: config.srt.srt_absorption,
+        nee: config.srt.nee,
         ..config.ga.clone()
     };
     Ok(Plan::build(

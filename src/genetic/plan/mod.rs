@@ -62,6 +62,7 @@ pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
+use crate::path::generator::Nee;
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::scene::SceneAnalysis;
@@ -195,7 +196,13 @@ impl Plan {
         config.validate()?;
         let scene = view.scene;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
+        // A guide's GA keeps the end-only estimator's test paths, with which `ga-pt` was
+        // tuned: the guided path tracer does its own next-event estimation.
+        let nee = match plan_for {
+            PlanFor::Mixture => ga.nee,
+            PlanFor::Guide => Nee::End,
+        };
+        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(nee);
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();
@@ -252,6 +259,18 @@ impl Plan {
     /// that the unbiasedness test must reject.
     pub fn with_unnormalised_interpolation(mut self) -> Self {
         self.unnormalised = true;
+        self
+    }
+
+    #[cfg(any(test, feature = "testing"))]
+    /// This plan with every mixture's light-technique densities left out when evaluated
+    /// (`Mixture::with_light_density_dropped`): a wrong input that the unbiasedness test
+    /// must reject.
+    pub fn with_light_density_dropped(mut self) -> Self {
+        self.srt = self.srt.with_light_density_dropped();
+        for p in &mut self.pixels {
+            p.mixture = p.mixture.clone().with_light_density_dropped();
+        }
         self
     }
 
