@@ -566,7 +566,7 @@ impl TestPaths {
             };
             if connected && pdf > 0.0 {
                 // As `PathGenerator::pdf_techniques`: `p_dir + p_light`.
-                let a = g.absorption(k, len, self.max_bounces);
+                let a = g.absorption_after_light(k, len, self.max_bounces);
                 let dir = if a >= 1.0 {
                     0.0
                 } else {

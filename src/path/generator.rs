@@ -176,6 +176,19 @@ impl PathGenerator {
         }
     }
 
+    /// With [`Nee::Every`], the absorption at the `k`-th non-delta vertex, scattering event
+    /// `bounce`, after its light point: as [`Self::absorption`], but at `max_bounces` itself
+    /// the path may still sample a direction, which can only find emission (as `pt`'s last
+    /// BSDF sample: light points alone there have unbounded variance where an emitter meets
+    /// the surface, as in a furnace's corners).
+    pub fn absorption_after_light(&self, k: usize, bounce: usize, max_bounces: u32) -> f64 {
+        if bounce > max_bounces as usize || k >= self.steps.len() {
+            1.0
+        } else {
+            self.steps[k].absorption
+        }
+    }
+
     fn direction_pdf(&self, view: &SceneView, k: usize, v: &PathVertex) -> f64 {
         match &self.steps[k].sampler {
             DirectionSampler::Brdf => {
@@ -261,7 +274,7 @@ impl PathGenerator {
             wi: end.wi,
             ..path.vertices[c.len - 1]
         };
-        let a = self.absorption(k, c.len, max_bounces);
+        let a = self.absorption_after_light(k, c.len, max_bounces);
         let dir = if a >= 1.0 {
             0.0
         } else {

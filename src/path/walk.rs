@@ -287,7 +287,8 @@ impl Walk {
             (None, 0.0)
         } else {
             let shadow = self.light_point(g, view, rng, (material, n));
-            (shadow, g.absorption(self.k, self.bounce, self.max_bounces))
+            let a = g.absorption_after_light(self.k, self.bounce, self.max_bounces);
+            (shadow, a)
         };
         if (uniform(rng) as f64) >= absorption {
             if let Some((wi, pdf)) = self.direction(g, rng, (material, n), absorption) {
