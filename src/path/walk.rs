@@ -340,7 +340,9 @@ impl Walk {
             return None;
         }
         let f = brdf::eval(material, n, self.wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
-        if !(f.max_element() > 0.0) {
+        // Also false for a NaN.
+        let carries = f.max_element() > 0.0;
+        if !carries {
             return None;
         }
         self.pending = Some(Contribution {
