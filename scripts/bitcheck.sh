@@ -9,7 +9,8 @@
 # genpath itself). Without NEW the working tree is built as it is, uncommitted changes
 # included. SCENES, SPP (16), SEED (7) and FEATURES (the default features) may be set in
 # the environment, and BASE_BIN (NEW_BIN), a binary already built from BASE (NEW or the working
-# tree), saves building it.
+# tree), saves building it. NEW_ARGS are given to the new build's renders only (a setting
+# that selects what BASE did where a later default differs, e.g. `--nee end`).
 # With TIMES=N (N odd, e.g. 5) each render is also timed N times per build, the two builds
 # alternating, and the median wall-clock seconds of the whole process are printed with
 # their ratio (new / base); with CLOCK=cpu, the CPU seconds (user + system) instead, which
@@ -72,8 +73,10 @@ for scene in $scenes; do
         for side in base new; do
             bin=$base_bin
             [[ $side == new ]] && bin=$new_bin
+            extra=()
+            [[ $side == new ]] && read -ra extra <<<"${NEW_ARGS:-}"
             "$bin" render "$file" --method "${margs[@]}" --spp "$spp" --seed "$seed" --quiet \
-                -o "$work/out/$side/$tag.exr"
+                -o "$work/out/$side/$tag.exr" "${extra[@]}"
         done
         count=$((count + 1))
         if ((${TIMES:-0} > 0)); then

@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Paper Fig. 7 on fig5: relMSE against paths per pixel for srt, pt and ga, and ga for several
 # test-path counts M. Usage: scripts/fig7.sh REFERENCE.exr [OUTDIR]
-# Prints a Markdown table (method, M, spp, GA seconds, render seconds, relMSE).
+# Prints a Markdown table (method, M, spp, GA seconds, render seconds, relMSE). srt and ga
+# use the paper's estimator, next-event estimation at the path's end only (--nee end); NEE=every
+# gives the same table for next-event estimation at every vertex.
 set -euo pipefail
 ref=${1:?usage: scripts/fig7.sh REFERENCE.exr [OUTDIR]}
 out=${2:-fig7-out}
 bin=${GENPATH:-target/release/genpath}
 scene=scenes/fig5/scene.toml
+nee=${NEE:-end}
 mkdir -p "$out"
 echo "| method | M | spp | GA s | render s | relMSE |"
 echo "|---|---|---|---|---|---|"
@@ -21,16 +24,16 @@ PY
 }
 for spp in 16 64 256; do
   for m in pt srt; do
-    "$bin" render "$scene" --method $m --spp $spp --max-bounces 5 -q -o "$out/$m-$spp.exr"
+    "$bin" render "$scene" --method $m --nee "$nee" --spp $spp --max-bounces 5 -q -o "$out/$m-$spp.exr"
     row $m - $spp "$out/$m-$spp.exr"
   done
 done
 for M in 100 1000 10000; do
   for spp in 16 64 256; do
-    "$bin" render "$scene" --method ga --test-paths $M --spp $spp --max-bounces 5 -q -o "$out/ga-$M-$spp.exr"
+    "$bin" render "$scene" --method ga --nee "$nee" --test-paths $M --spp $spp --max-bounces 5 -q -o "$out/ga-$M-$spp.exr"
     row ga $M $spp "$out/ga-$M-$spp.exr"
   done
 done
 # The default M, once.
-"$bin" render "$scene" --method ga --spp 64 --max-bounces 5 -q -o "$out/ga-default-64.exr"
+"$bin" render "$scene" --method ga --nee "$nee" --spp 64 --max-bounces 5 -q -o "$out/ga-default-64.exr"
 row ga default 64 "$out/ga-default-64.exr"

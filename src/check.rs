@@ -1,9 +1,10 @@
 //! `genpath check SCENE`: the numerical invariants of design §8 on any scene, at a small
 //! size.
 //!
-//! * Every method ([`Method`]'s list, `ga-pt` with and without the spatial guide, and
-//!   `mixture` when given one) renders without a NaN, infinite or negative pixel; each is
-//!   prepared and rendered as `genpath render` does it.
+//! * Every method ([`Method`]'s list, `ga-pt` with and without the spatial guide, `srt`
+//!   and `ga` with either estimator (`nee`), and `mixture` when given one) renders without a
+//!   NaN, infinite or negative pixel; each is prepared and rendered as `genpath render`
+//!   does it.
 //! * Every density a generator samples with — the `srt` generator and every generator the GA
 //!   evolved — is finite and positive, and so is the mixture density of every light-carrying
 //!   path (the estimator divides by it).
@@ -15,7 +16,7 @@
 use crate::genetic::plan::{GateConfig, Plan, PlanConfig};
 use crate::genetic::GaConfig;
 use crate::integrators::{prepare, Film, Method, PrepareError, RenderSettings, Settings};
-use crate::path::generator::{Contribution, PathGenerator, PathVertices};
+use crate::path::generator::{Contribution, Nee, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::sampling::{camera_ray, sample_rng};
@@ -169,7 +170,7 @@ impl PdfSurvey {
                 view,
                 ray.origin,
                 x1,
-                max_bounces,
+                (max_bounces, mixture.nee),
                 &mut rng,
                 &mut counts,
                 &mut path,
@@ -186,6 +187,9 @@ impl PdfSurvey {
                 self.see(light.pdf_sampled);
             }
             for c in &contributions {
+                if let Some(light) = c.light {
+                    self.see(light.pdf_sampled);
+                }
                 self.see(mixture.pdf_path(view, &path, c, max_bounces));
             }
         }
@@ -193,7 +197,8 @@ impl PdfSurvey {
 }
 
 /// The methods `check` renders: every [`Method`] with `config`'s settings (`mixture` only
-/// with a mixture), and `ga-pt` without the spatial guide.
+/// with a mixture), `ga-pt` without the spatial guide, and `srt` and `ga` with the
+/// estimator that `config` does not use.
 fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     use clap::ValueEnum as _;
     let mut out: Vec<_> = Method::value_variants()
@@ -207,6 +212,20 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     let mut without = config.clone();
     without.spatial.spatial_guide = false;
     out.push(("ga-pt:spatial=0".to_string(), Method::GaPt, without));
+    let mut other = config.clone();
+    other.srt.nee = match config.srt.nee {
+        Nee::Every => Nee::End,
+        Nee::End => Nee::Every,
+    };
+    let name = other
+        .srt
+        .nee
+        .to_possible_value()
+        .map(|v| v.get_name().to_string());
+    let name = name.unwrap_or_default();
+    for (label, method) in [("srt", Method::Srt), ("ga", Method::Ga)] {
+        out.push((format!("{label}:nee={name}"), method, other.clone()));
+    }
     out
 }
 
@@ -289,11 +308,9 @@ fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<Met
 
 /// The densities `srt` and every evolved generator sample with, from their GA pixels.
 fn survey_densities(view: &SceneView, config: &CheckConfig, plans: &[Plan]) -> PdfSurvey {
-    let srt = mixture_file::srt(
-        view.scene,
-        config.max_bounces,
-        config.methods.srt.srt_absorption,
-    );
+    let methods = &config.methods.srt;
+    let srt = mixture_file::srt(view.scene, config.max_bounces, methods.srt_absorption)
+        .with_nee(methods.nee);
     let mut survey = PdfSurvey::default();
     let camera = &view.scene.camera;
     let centre = (camera.width / 2, camera.height / 2);

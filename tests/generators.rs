@@ -1,10 +1,13 @@
-//! `PathGenerator::pdf_path`, evaluated from the stored vertices alone, equals the product of
-//! the densities used while the path was sampled, for paths of every generator type
-//! (BRDF-only `srt`, anchor-point, with a light-point region), in a diffuse scene and in a
-//! scene with Phong lobes and a mirror.
+//! `PathGenerator::pdf_path` (and, with next-event estimation at every vertex, the density
+//! of the technique that sampled a path, `PathGenerator::pdf_techniques`), evaluated from the
+//! stored vertices alone, equals the product of the densities used while the path was
+//! sampled, for paths of every generator type (BRDF-only `srt`, anchor-point, with a
+//! light-point region), in a diffuse scene and in a scene with Phong lobes and a mirror.
 
 use genpath::accel::{self, AccelKind};
-use genpath::path::generator::{Contribution, DirectionSampler, PathGenerator, PathVertices, Step};
+use genpath::path::generator::{
+    Contribution, DirectionSampler, Nee, PathGenerator, PathVertices, Step,
+};
 use genpath::path::{mixture_file, RayCounts, SceneView};
 use genpath::sampling::anchor::AnchorSampler;
 use genpath::sampling::{sample_rng, uniform};
@@ -65,7 +68,48 @@ fn relative_difference(a: f64, b: f64) -> f64 {
     (a - b).abs() / a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
 }
 
-fn check_scene(name: &str) -> usize {
+/// The product of the densities `g` sampled contribution `c` of `path` with, and the same
+/// density as `g` evaluates it from the stored vertices.
+fn sampled_and_evaluated(
+    view: &SceneView,
+    g: &PathGenerator,
+    path: &PathVertices,
+    c: &Contribution,
+    nee: Nee,
+) -> (f64, f64) {
+    if nee == Nee::End {
+        let scattering = if c.nee { c.len - 1 } else { c.len };
+        let mut product: f64 = path.vertices[..scattering]
+            .iter()
+            .map(|v| v.pdf_sampled)
+            .product();
+        if c.nee {
+            product *= path.light.unwrap().pdf_sampled;
+        }
+        return (product, g.pdf_path(view, path, c.len, c.nee, 5));
+    }
+    let (dir, light) = g.pdf_techniques(view, path, c, 5);
+    let Some(end) = c.light else {
+        // Through a delta last vertex: directions only, the last one of density 1.
+        let product = path.vertices[..c.len]
+            .iter()
+            .map(|v| v.pdf_sampled)
+            .product();
+        return (product, dir);
+    };
+    let product: f64 = path.vertices[..c.len - 1]
+        .iter()
+        .map(|v| v.pdf_sampled)
+        .product();
+    if c.nee {
+        // The light point's area density, as `pdf_techniques` converts it.
+        (product * end.pdf_sampled * end.area_to_solid_angle, light)
+    } else {
+        (product * end.pdf_sampled, dir)
+    }
+}
+
+fn check_scene(name: &str, nee: Nee) -> usize {
     let scene = load(name);
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
@@ -88,29 +132,21 @@ fn check_scene(name: &str) -> usize {
                 &view,
                 ray.origin,
                 x1,
-                5,
+                (5, nee),
                 &mut rng,
                 &mut counts,
                 &mut path,
                 &mut contributions,
             );
             for c in &contributions {
-                let scattering = if c.nee { c.len - 1 } else { c.len };
-                let mut product: f64 = path.vertices[..scattering]
-                    .iter()
-                    .map(|v| v.pdf_sampled)
-                    .product();
-                if c.nee {
-                    product *= path.light.unwrap().pdf_sampled;
-                }
-                let evaluated = g.pdf_path(&view, &path, c.len, c.nee, 5);
+                let (product, evaluated) = sampled_and_evaluated(&view, g, &path, c, nee);
                 assert!(
                     product > 0.0 && product.is_finite(),
                     "{name}: sampled density {product}"
                 );
                 assert!(
                     relative_difference(product, evaluated) <= 1e-9,
-                    "{name}, generator {gi}, pixel {pixel}: sampled {product:e} vs pdf_path {evaluated:e}"
+                    "{name} {nee:?}, generator {gi}, pixel {pixel}: sampled {product:e} vs evaluated {evaluated:e}"
                 );
                 checked += 1;
             }
@@ -122,11 +158,13 @@ fn check_scene(name: &str) -> usize {
 #[test]
 fn pdf_path_matches_the_sampling_densities() {
     for name in ["fig5", "glossy"] {
-        let checked = check_scene(name);
-        assert!(
-            checked > 200,
-            "{name}: only {checked} light-carrying paths checked"
-        );
+        for nee in [Nee::End, Nee::Every] {
+            let checked = check_scene(name, nee);
+            assert!(
+                checked > 200,
+                "{name} {nee:?}: only {checked} light-carrying paths checked"
+            );
+        }
     }
 }
 
@@ -155,7 +193,7 @@ fn pdf_path_of_another_generator_differs() {
             &view,
             ray.origin,
             x1,
-            5,
+            (5, Nee::End),
             &mut rng,
             &mut counts,
             &mut path,

@@ -15,7 +15,7 @@ use genpath::integrators::pg::{
 };
 use genpath::integrators::RenderSettings;
 use genpath::path::generator::{
-    DirectionSampler, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
+    DirectionSampler, Nee, PathGenerator, PathVertices, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use genpath::path::mixture::{Mixture, MixtureScratch};
 use genpath::path::mixture_file::{self, check_generator};
@@ -255,6 +255,12 @@ fn operators_keep_every_invariant() {
 
 #[test]
 fn stored_paths_give_the_generators_own_densities() {
+    for nee in [Nee::End, Nee::Every] {
+        stored_paths_give_the_generators_own_densities_with(nee);
+    }
+}
+
+fn stored_paths_give_the_generators_own_densities_with(nee: Nee) {
     let (scene, accel) = fig5();
     let view = SceneView::new(&scene, accel.as_ref());
     let config = GaConfig::default();
@@ -263,7 +269,7 @@ fn stored_paths_give_the_generators_own_densities() {
     // Hand-made anchors find light often; random generators exercise every sampler type.
     let anchors = anchors_mixture(&scene);
     let random = pool.random_individual(&config, &mut rng).to_mixture();
-    let sampler = Mixture::combine(&[(1.0, &anchors), (1.0, &random)]);
+    let sampler = Mixture::combine(&[(1.0, &anchors), (1.0, &random)]).with_nee(nee);
     let mut judges: Vec<_> = (0..8).map(|_| pool.random_gene(&mut rng)).collect();
     // A patch over the red wall's lit top at the first step.
     let mut patched = judges[0].clone();
@@ -278,7 +284,7 @@ fn stored_paths_give_the_generators_own_densities() {
     );
     patched.anchor_prims[0] = None;
     judges.push(patched);
-    let mut paths = TestPaths::new(MAX_BOUNCES);
+    let mut paths = TestPaths::new(MAX_BOUNCES, nee);
     let mut expected = Vec::new();
     let (mut path, mut contributions) = (PathVertices::default(), Vec::new());
     let mut counts = RayCounts::default();
@@ -298,7 +304,7 @@ fn stored_paths_give_the_generators_own_densities() {
             &view,
             ray.origin,
             x1,
-            MAX_BOUNCES,
+            (MAX_BOUNCES, nee),
             &mut rng,
             &mut counts,
             &mut path,
@@ -311,7 +317,7 @@ fn stored_paths_give_the_generators_own_densities() {
                     .iter()
                     .map(|j| {
                         j.generator
-                            .pdf_path(&view, &path, c.len, c.nee, MAX_BOUNCES)
+                            .pdf_contribution(&view, &path, c, (MAX_BOUNCES, nee))
                     })
                     .collect::<Vec<_>>(),
             );
@@ -330,7 +336,7 @@ fn stored_paths_give_the_generators_own_densities() {
             let e = expected[i][j];
             assert!(
                 (g - e).abs() <= 1e-12 * e.abs(),
-                "path {i}, generator {j}: {g} vs {e}"
+                "{nee:?}: path {i}, generator {j}: {g} vs {e}"
             );
             nonzero += (e > 0.0) as usize;
         }
@@ -603,11 +609,19 @@ fn reaimed(good: &Mixture, anchor: DVec3) -> Mixture {
     bad
 }
 
+/// With next-event estimation at every vertex, `srt` finds the walls' light from every
+/// vertex, and the anchors (made for the end-only estimator) gain less over it.
 #[test]
 fn eq10_ranks_good_anchors_above_bad_ones() {
+    for (nee, over_srt) in [(Nee::End, 0.5), (Nee::Every, 0.9)] {
+        eq10_ranks_good_anchors_above_bad_ones_with(nee, over_srt);
+    }
+}
+
+fn eq10_ranks_good_anchors_above_bad_ones_with(nee: Nee, over_srt: f64) {
     let (scene, accel) = fig5();
     let view = SceneView::new(&scene, accel.as_ref());
-    let srt = srt_mixture(&scene);
+    let srt = srt_mixture(&scene).with_nee(nee);
     let (paths, _) = TestPaths::sample(&view, &srt, FLOOR_PIXEL, 20_000, MAX_BOUNCES, 6);
     let good = anchors_mixture(&scene);
     let v_good = second_moment(&view, &paths, &good);
@@ -615,10 +629,18 @@ fn eq10_ranks_good_anchors_above_bad_ones() {
     // The black occluder, and a floor corner far from both walls' lit parts.
     for anchor in [DVec3::new(0.0, 1.8, 0.0), DVec3::new(0.0, 0.0, -1.0)] {
         let v_bad = second_moment(&view, &paths, &reaimed(&good, anchor));
-        eprintln!("V: anchors {v_good:.4e}, srt {v_srt:.4e}, aimed at {anchor} {v_bad:.4e}");
-        assert!(v_good < 0.5 * v_bad, "good {v_good} vs bad {v_bad}");
+        eprintln!(
+            "{nee:?} V: anchors {v_good:.4e}, srt {v_srt:.4e}, aimed at {anchor} {v_bad:.4e}"
+        );
+        assert!(
+            v_good < 0.5 * v_bad,
+            "{nee:?}: good {v_good} vs bad {v_bad}"
+        );
     }
-    assert!(v_good < 0.5 * v_srt, "good {v_good} vs srt {v_srt}");
+    assert!(
+        v_good < over_srt * v_srt,
+        "{nee:?}: good {v_good} vs srt {v_srt}"
+    );
 }
 
 /// The cached evaluator gives eq. 10 of each individual's own mixture.

@@ -12,7 +12,7 @@ use genpath::check::{check, CheckConfig};
 use genpath::integrators::mixture::MixtureIntegrator;
 use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::generator::{
-    DirectionSampler, PathGenerator, PathVertices, Step, ABSORPTION_MAX, ABSORPTION_MIN,
+    DirectionSampler, Nee, PathGenerator, PathVertices, Step, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use genpath::path::mixture::Mixture;
 use genpath::path::{mixture_file, RayCounts, SceneView};
@@ -134,12 +134,13 @@ fn generators_at_their_bounds_stay_finite() {
     let srt = PathGenerator::srt(5, 0.5, mixture_file::uniform_light(&scene));
     let mut generators = vec![srt];
     generators.extend(extremes);
-    for weights in [
+    let cases = [
         vec![0.5, 0.25, 0.25],
         vec![1.0, 1e-12, 1e-12],
         vec![0.01, 0.99 - 1e-12, 1e-12],
-    ] {
-        let mixture = Mixture::new(generators.clone(), weights.clone());
+    ];
+    for (weights, nee) in cases.iter().flat_map(|w| [(w, Nee::Every), (w, Nee::End)]) {
+        let mixture = Mixture::new(generators.clone(), weights.clone()).with_nee(nee);
         let settings = RenderSettings {
             method: Method::Mixture,
             spp: 32,
@@ -159,7 +160,7 @@ fn generators_at_their_bounds_stay_finite() {
             .flatten()
             .filter(|c| !c.is_finite() || **c < 0.0)
             .count();
-        assert_eq!(bad, 0, "weights {weights:?}");
+        assert_eq!(bad, 0, "weights {weights:?}, {nee:?}");
         // Sampled densities of each generator, and the mixture density of each path.
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
@@ -179,7 +180,7 @@ fn generators_at_their_bounds_stay_finite() {
                     &view,
                     ray.origin,
                     x1,
-                    5,
+                    (5, mixture.nee),
                     &mut rng,
                     &mut counts,
                     &mut path,
@@ -190,7 +191,13 @@ fn generators_at_their_bounds_stay_finite() {
                     .iter()
                     .filter(|v| !v.delta && v.wi != glam::Vec3::ZERO)
                     .map(|v| v.pdf_sampled)
-                    .chain(path.light.map(|l| l.pdf_sampled));
+                    .chain(path.light.map(|l| l.pdf_sampled))
+                    .chain(
+                        contributions
+                            .iter()
+                            .filter_map(|c| c.light)
+                            .map(|l| l.pdf_sampled),
+                    );
                 for pdf in sampled.chain(
                     contributions
                         .iter()

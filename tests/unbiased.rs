@@ -1,9 +1,11 @@
-//! Unbiasedness: `srt`, a hand-made anchor mixture, `ga`, `ga-pt` (with and without the
-//! spatial guide), `pg` and `pt` estimate the same image. Per
-//! block of pixels, the difference of two methods' means must lie inside a 99.9 % interval
-//! (Šidák-corrected over all blocks and channels) computed from their sample variances; and
-//! the same comparison must reject a mixture whose one component's density is off by 10 %,
-//! and a `ga` render whose interpolation weights were left unnormalised.
+//! Unbiasedness: `srt` and `ga` with next-event estimation at every vertex and at the path's
+//! end only, a hand-made anchor mixture, `ga-pt` (with and without the spatial guide), `pg`
+//! and `pt` estimate the same image. Per block of pixels, the difference of two methods'
+//! means must lie inside a 99.9 % interval (Šidák-corrected over all blocks and channels)
+//! computed from their sample variances; and the same comparison must reject a mixture whose
+//! one component's density is off by 10 %, an `srt` and a `ga` whose light technique's
+//! densities were left out of the balance heuristic, and a `ga` render whose interpolation
+//! weights were left unnormalised.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -18,7 +20,7 @@ use genpath::integrators::pg::{train_spatial, SpatialIntegrator, TrainingSchedul
 use genpath::integrators::pt::PathTracing;
 use genpath::integrators::settings::SpatialConfig;
 use genpath::integrators::{Film, Integrator, Method, RenderSettings};
-use genpath::path::generator::PathGenerator;
+use genpath::path::generator::{Nee, PathGenerator};
 use genpath::path::mixture::Mixture;
 use genpath::path::{mixture_file, SceneView};
 use genpath::scene::Scene;
@@ -39,14 +41,21 @@ fn scene_dir(name: &str) -> PathBuf {
 
 enum Which {
     Pt,
-    Srt,
+    /// `srt` with the estimator `nee`, optionally with the light technique's densities left
+    /// out of the balance heuristic's denominator.
+    Srt {
+        nee: Nee,
+        light_dropped: bool,
+    },
     Anchors {
         pdf_error: Option<f64>,
     },
     /// A small GA (cheap test paths and generations; unbiasedness does not depend on how
     /// well it converged), optionally with unnormalised interpolation weights.
     Ga {
+        nee: Nee,
         unnormalised: bool,
+        light_dropped: bool,
     },
     /// Path tracing guided by the same small GA's mixtures (`ga-pt`), optionally with the
     /// spatial guide past the GA's vertices.
@@ -60,9 +69,14 @@ enum Which {
     },
 }
 
-/// A small GA's plan for `plan_for`, without the gate: every pixel renders with evolved
-/// mixtures, the estimator under test.
-fn small_plan(view: &SceneView, plan_for: PlanFor, max_bounces: u32, seed: u64) -> Plan {
+/// A small GA's plan for `plan_for` with the estimator `nee`, without the gate: every pixel
+/// renders with evolved mixtures, the estimator under test.
+fn small_plan(
+    view: &SceneView,
+    (plan_for, nee): (PlanFor, Nee),
+    max_bounces: u32,
+    seed: u64,
+) -> Plan {
     let ga = GaConfig {
         population: 16,
         generations: 8,
@@ -76,6 +90,7 @@ fn small_plan(view: &SceneView, plan_for: PlanFor, max_bounces: u32, seed: u64) 
     let inputs = PlanInputs {
         gate: GateConfig { gate: false },
         srt_absorption: SRT_ABSORPTION,
+        nee,
         ..PlanInputs::new(&ga, &plan, plan_for, max_bounces)
     };
     Plan::build(view, &inputs, seed, false).unwrap()
@@ -123,19 +138,32 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             None
         }
         Which::GaPt { spatial: with } => {
-            plan = Some(small_plan(&view, PlanFor::Guide, max_bounces, seed));
+            plan = Some(small_plan(
+                &view,
+                (PlanFor::Guide, Nee::default()),
+                max_bounces,
+                seed,
+            ));
             guided = true;
             if with {
                 spatial = train(plan.as_ref());
             }
             None
         }
-        Which::Ga { unnormalised } => {
-            let p = small_plan(&view, PlanFor::Mixture, max_bounces, seed);
+        Which::Ga {
+            nee,
+            unnormalised,
+            light_dropped,
+        } => {
+            let mut p = small_plan(&view, (PlanFor::Mixture, nee), max_bounces, seed);
             assert!(
                 p.pixels.iter().any(|p| !p.kept_srt),
                 "{name}: the GA improved on srt nowhere, so the test would only test srt"
             );
+            assert!(p.pixels.iter().all(|p| p.mixture.nee == nee));
+            if light_dropped {
+                p = p.with_light_density_dropped();
+            }
             plan = Some(if unnormalised {
                 p.with_unnormalised_interpolation()
             } else {
@@ -143,14 +171,21 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             });
             None
         }
-        Which::Srt => Some(Mixture::new(
-            vec![PathGenerator::srt(
-                max_bounces,
-                SRT_ABSORPTION,
-                mixture_file::uniform_light(&scene),
-            )],
-            vec![1.0],
-        )),
+        Which::Srt { nee, light_dropped } => {
+            let srt = Mixture::new(
+                vec![PathGenerator::srt(
+                    max_bounces,
+                    SRT_ABSORPTION,
+                    mixture_file::uniform_light(&scene),
+                )],
+                vec![1.0],
+            )
+            .with_nee(nee);
+            Some(match light_dropped {
+                true => srt.with_light_density_dropped(),
+                false => srt,
+            })
+        }
         Which::Anchors { pdf_error } => {
             let m = mixture_file::load(
                 &scene_dir(name).join("anchors.toml"),
@@ -230,16 +265,21 @@ fn compare(a: &Film, b: &Film) -> (f64, f64, usize) {
 
 fn check_agree(name: &str, max_bounces: u32) {
     let pt = render_with(name, Which::Pt, max_bounces, SPP, 11);
+    let srt = |nee| Which::Srt {
+        nee,
+        light_dropped: false,
+    };
+    let ga = |nee| Which::Ga {
+        nee,
+        unnormalised: false,
+        light_dropped: false,
+    };
     for (label, which, spp) in [
-        ("srt", Which::Srt, SPP),
+        ("srt", srt(Nee::Every), SPP),
+        ("srt, nee end", srt(Nee::End), SPP),
         ("anchors", Which::Anchors { pdf_error: None }, SPP),
-        (
-            "ga",
-            Which::Ga {
-                unnormalised: false,
-            },
-            SPP,
-        ),
+        ("ga", ga(Nee::Every), SPP),
+        ("ga, nee end", ga(Nee::End), SPP),
         ("ga-pt", Which::GaPt { spatial: false }, SPP / 2),
         ("ga-pt, spatial", Which::GaPt { spatial: true }, SPP / 2),
         (
@@ -298,7 +338,12 @@ fn check_rejects_wrong_pdf(name: &str) {
 #[test]
 fn fig5_rejects_unnormalised_interpolation_weights() {
     let pt = render_with("fig5", Which::Pt, 5, SPP / 8, 11);
-    let wrong = render_with("fig5", Which::Ga { unnormalised: true }, 5, SPP / 8, 23);
+    let which = Which::Ga {
+        nee: Nee::default(),
+        unnormalised: true,
+        light_dropped: false,
+    };
+    let wrong = render_with("fig5", which, 5, SPP / 8, 23);
     let (z, _, n) = compare(&wrong, &pt);
     eprintln!(
         "fig5: ga with unnormalised interpolation: max |z| {z:.2} (critical {:.2})",
@@ -308,6 +353,42 @@ fn fig5_rejects_unnormalised_interpolation_weights() {
         z > z_critical(n),
         "fig5: unnormalised interpolation weights went unnoticed (max |z| {z:.2})"
     );
+}
+
+/// With next-event estimation at every vertex, `srt` and `ga` whose mixtures leave the light
+/// technique's densities out of the balance heuristic (each path then counts about twice
+/// where both techniques can make it) must be told apart from `pt`.
+#[test]
+fn fig5_rejects_a_dropped_light_density() {
+    let pt = render_with("fig5", Which::Pt, 5, SPP / 8, 11);
+    for (label, which) in [
+        (
+            "srt",
+            Which::Srt {
+                nee: Nee::Every,
+                light_dropped: true,
+            },
+        ),
+        (
+            "ga",
+            Which::Ga {
+                nee: Nee::Every,
+                unnormalised: false,
+                light_dropped: true,
+            },
+        ),
+    ] {
+        let wrong = render_with("fig5", which, 5, SPP / 8, 23);
+        let (z, _, n) = compare(&wrong, &pt);
+        eprintln!(
+            "fig5: {label} without the light technique's density: max |z| {z:.2} (critical {:.2})",
+            z_critical(n)
+        );
+        assert!(
+            z > z_critical(n),
+            "fig5: {label}: the light technique's density left out went unnoticed (max |z| {z:.2})"
+        );
+    }
 }
 
 #[test]

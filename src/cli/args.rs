@@ -8,7 +8,7 @@ use genpath::genetic::plan::{GateConfig, PlanConfig};
 use genpath::genetic::GaConfig;
 use genpath::integrators::settings::{SpatialConfig, SrtConfig};
 use genpath::integrators::{Method, Settings};
-use genpath::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN};
+use genpath::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
 use std::path::PathBuf;
@@ -75,6 +75,11 @@ pub struct SettingsArgs {
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
     #[arg(long, default_value_t = SrtConfig::default().srt_absorption, value_parser = parse_absorption, help_heading = "srt (--method srt, and the defensive generator of ga)")]
     pub srt_absorption: f64,
+    /// Where srt, mixture and ga do next-event estimation: at every non-delta vertex
+    /// (balance heuristic over each generator's direction and light-point techniques), or
+    /// only at the path's end (the paper's, for its Fig. 7).
+    #[arg(long, value_enum, default_value_t = SrtConfig::default().nee, help_heading = "srt (--method srt, and the defensive generator of ga)")]
+    pub nee: Nee,
     #[command(flatten)]
     pub ga: GaArgs,
     #[command(flatten)]

@@ -150,7 +150,7 @@ fn ga_throughput(view: &SceneView, passes: usize) -> serde_json::Value {
         ..GaConfig::default()
     };
     let max_bounces = scene.render.max_bounces;
-    let q = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
+    let q = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(ga.nee);
     let pixel = (scene.camera.width / 2, scene.camera.height / 2);
     let m = ga.test_paths;
     let [(packet_t, _), (single_t, _)] = best_interleaved(

@@ -53,6 +53,9 @@ pub struct GaConfig {
     /// Absorption of the defensive `srt` generator (Russian roulette at every vertex).
     #[serde(skip)]
     pub srt_absorption: f64,
+    /// The estimator whose test paths, fitness and mixtures the GA works with (`srt.nee`).
+    #[serde(skip)]
+    pub nee: crate::path::generator::Nee,
     /// Standard deviation of an anchor shift along its triangle, relative to the scene size.
     pub anchor_shift: f64,
     /// Steps per evolved generator; `None`: one per vertex that can scatter before
@@ -106,6 +109,7 @@ impl Default for GaConfig {
             p_absorb: 0.1,
             defensive_weight: 0.05,
             srt_absorption: crate::path::generator::SRT_ABSORPTION,
+            nee: crate::path::generator::Nee::default(),
             anchor_shift: 0.05,
             max_steps: None,
             convex_weights: true,

@@ -4,6 +4,11 @@
 //! tracing a ray, and `F²/q` for `F² = Σ_c w_c f_c²` ([`ChannelWeights`]: by default
 //! relative to the pixel value the paths themselves estimate).
 //!
+//! The paths and their densities are those of `q`'s estimator ([`Nee`]): with
+//! [`Nee::Every`] each stored path is one contribution of a light point or of an emitter
+//! hit at any vertex, its last vertex's direction the one to its emitter point, and every
+//! generator's density the sum of its two techniques'.
+//!
 //! Storage is structure-of-arrays: the scattering vertices of all paths are flattened into
 //! per-vertex arrays indexed through `offsets`. The BRDF density of each scattering vertex is
 //! the same for every generator that uses a BRDF sampler there, so it is computed once here.
@@ -21,7 +26,7 @@
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
-    Contribution, DirectionSampler, PathGenerator, PathVertices, Query, Walk,
+    Contribution, DirectionSampler, Nee, PathGenerator, PathVertices, Query, Walk,
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
@@ -34,6 +39,8 @@ pub struct TestPaths {
     /// Number of sampled paths, zero-contribution ones included (`M` of eq. 10).
     pub sampled: usize,
     pub max_bounces: u32,
+    /// The estimator whose contributions and densities the paths are.
+    estimator: Nee,
     /// Per stored path: `F²/q`, `F² = Σ_c w_c f_c²` for the contribution `f` and
     /// [`Self::weights`].
     pub f2_over_q: Vec<f64>,
@@ -46,11 +53,17 @@ pub struct TestPaths {
     len: Vec<u32>,
     /// Per stored path: ends with a light point (next-event estimation).
     nee: Vec<bool>,
-    /// Per stored path: the light point and its triangle (unused where `nee` is false).
+    /// Per stored path: the light point and its triangle (with [`Nee::End`] unused where
+    /// `nee` is false; with [`Nee::Every`] the emitter point after a non-delta last vertex,
+    /// `u32::MAX` after a delta one).
     light_point: Vec<DVec3>,
     light_prim: Vec<u32>,
-    /// Per stored path ending in next-event estimation: the vertex that absorbed (reached by
-    /// the last stored direction) and its triangle.
+    /// Per stored path with [`Nee::Every`]: `d²/cos` at the emitter point, which turns its
+    /// area density into solid angle at the last vertex.
+    area_to_solid_angle: Vec<f64>,
+    /// Per stored path: the point the last stored direction reached, where it is not a
+    /// stored vertex, and its triangle (`u32::MAX`: none): with [`Nee::End`] the vertex that
+    /// absorbed, with [`Nee::Every`] the emitter point.
     end_point: Vec<DVec3>,
     end_prim: Vec<u32>,
     /// Scattering vertices of path `i` are `offsets[i]..offsets[i + 1]`.
@@ -163,8 +176,9 @@ impl Packet {
                 lane.generator = q.choose(uniform(&mut lane.rng) as f64);
                 let g = &q.generators[lane.generator];
                 let rng = &mut lane.rng;
+                let estimator = (max_bounces, q.nee);
                 (lane.walk, lane.query) =
-                    Walk::start(g, view, ray.origin, x1, max_bounces, rng, &mut lane.path);
+                    Walk::start(g, view, ray.origin, x1, estimator, rng, &mut lane.path);
             }
         }
     }
@@ -208,7 +222,8 @@ impl Packet {
         count
     }
 
-    /// Traces the pending shadow rays as one packet and ends their walks; returns how many.
+    /// Traces the pending shadow rays as one packet and hands each walk its answer; returns
+    /// how many.
     fn trace_shadows(&mut self, view: &SceneView, counts: &mut RayCounts) -> usize {
         let count = self.gather(true);
         if count >= MIN_INCOHERENT_PACKET {
@@ -220,19 +235,19 @@ impl Packet {
         }
         for (&i, &free) in self.owner[..count].iter().zip(&self.free) {
             let lane = &mut self.lanes[i];
-            lane.walk.shadow(free, &mut lane.contributions);
-            lane.query = None;
+            lane.query = lane.walk.shadow(free, &mut lane.contributions);
         }
         count
     }
 }
 
 impl TestPaths {
-    /// An empty store (no path sampled yet).
-    pub fn new(max_bounces: u32) -> Self {
+    /// An empty store (no path sampled yet) of the estimator `nee`'s paths.
+    pub fn new(max_bounces: u32, nee: Nee) -> Self {
         Self {
             sampled: 0,
             max_bounces,
+            estimator: nee,
             f2_over_q: Vec::new(),
             f2_rgb_over_q: Vec::new(),
             f_over_q_sum: DVec3::ZERO,
@@ -241,6 +256,7 @@ impl TestPaths {
             nee: Vec::new(),
             light_point: Vec::new(),
             light_prim: Vec::new(),
+            area_to_solid_angle: Vec::new(),
             end_point: Vec::new(),
             end_prim: Vec::new(),
             offsets: vec![0],
@@ -280,7 +296,7 @@ impl TestPaths {
         max_bounces: u32,
         seed: u64,
     ) -> (Self, RayCounts) {
-        let mut paths = Self::new(max_bounces);
+        let mut paths = Self::new(max_bounces, q.nee);
         let mut counts = RayCounts::default();
         let mut packet = Packet::new();
         for first in (0..m).step_by(PACKET_SIZE) {
@@ -324,7 +340,7 @@ impl TestPaths {
         seed: u64,
     ) -> (Self, RayCounts) {
         let pixel = pixel_index(view, (x, y));
-        let mut paths = Self::new(max_bounces);
+        let mut paths = Self::new(max_bounces, q.nee);
         let mut counts = RayCounts::default();
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
@@ -338,7 +354,7 @@ impl TestPaths {
                     view,
                     ray.origin,
                     x1,
-                    max_bounces,
+                    (max_bounces, q.nee),
                     &mut rng,
                     &mut counts,
                     &mut path,
@@ -373,30 +389,40 @@ impl TestPaths {
     /// Stores the part of `path` that contribution `c` uses, with its `f_c²/q` (`sampled`,
     /// the `M` of eq. 10, is the caller's to count; `f2_over_q` is [`Self::weigh`]'s).
     pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: DVec3) {
-        let scattering = if c.nee { c.len - 1 } else { c.len };
-        for v in &path.vertices[..scattering] {
+        let every = self.estimator == Nee::Every;
+        let scattering = if c.nee && !every { c.len - 1 } else { c.len };
+        for (j, v) in path.vertices[..scattering].iter().enumerate() {
+            // With an emitter point, the last vertex's direction is the one to it.
+            let wi = match c.light {
+                Some(l) if j + 1 == c.len => l.wi,
+                _ => v.wi,
+            };
             let pdf = if v.delta {
                 0.0
             } else {
                 let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, v.wi)
+                brdf::pdf(m, brdf::facing_normal(v.point.ng, v.wo), v.wo, wi)
             };
             self.point.push(v.point.p.as_dvec3());
             self.prim.push(v.point.prim);
-            self.wi.push(v.wi.as_dvec3());
+            self.wi.push(wi.as_dvec3());
             self.brdf_pdf.push(pdf);
             self.delta.push(v.delta);
         }
         self.offsets.push(self.point.len() as u32);
         self.len.push(c.len as u32);
         self.nee.push(c.nee);
-        let (point, prim) = match (c.nee, path.light) {
-            (true, Some(l)) => (l.point, l.prim),
+        let (point, prim) = match (c.light, c.nee, path.light) {
+            (Some(l), _, _) => (l.point, l.prim),
+            (None, true, Some(l)) if !every => (l.point, l.prim),
             _ => (DVec3::ZERO, u32::MAX),
         };
         self.light_point.push(point);
         self.light_prim.push(prim);
+        self.area_to_solid_angle
+            .push(c.light.map_or(0.0, |l| l.area_to_solid_angle));
         let end = match path.vertices.get(scattering) {
+            _ if every => (point, prim),
             Some(v) if c.nee => (v.point.p.as_dvec3(), v.point.prim),
             _ => (DVec3::ZERO, u32::MAX),
         };
@@ -464,15 +490,16 @@ impl TestPaths {
     }
 
     /// Where step `k` of a generator must aim to reproduce stored path `i`: the point its
-    /// `k`-th non-delta scattering vertex's direction reached (the next vertex, or the one
-    /// that absorbed and connected to the light) and its triangle; `None` where the path has
-    /// no such step or it ended on an emitter it hit through a mirror.
+    /// `k`-th non-delta scattering vertex's direction reached (the next vertex, or: with
+    /// [`Nee::End`] the one that absorbed and connected to the light, with [`Nee::Every`] the
+    /// emitter point) and its triangle; `None` where the path has no such step or it ended on
+    /// an emitter it hit through a mirror.
     pub fn step_target(&self, i: usize, k: usize) -> Option<(DVec3, u32)> {
         let j = self.step_vertex(i, k)?;
         let end = self.offsets[i + 1] as usize;
         if j + 1 < end {
             Some((self.point[j + 1], self.prim[j + 1]))
-        } else if self.nee[i] {
+        } else if self.end_prim[i] != u32::MAX {
             Some((self.end_point[i], self.end_prim[i]))
         } else {
             None
@@ -502,11 +529,23 @@ impl TestPaths {
     }
 
     /// The density `p_g` of every stored path, into `out` (`out.len() == self.len()`):
-    /// the same value as `PathGenerator::pdf_path` on the original path.
+    /// the same value as `PathGenerator::pdf_contribution` on the original path.
     pub fn generator_pdfs(&self, view: &SceneView, g: &PathGenerator, out: &mut [f64]) {
         let scene = view.scene;
+        let every = self.estimator == Nee::Every;
+        let direction = |j: usize, k: usize| match &g.steps[k].sampler {
+            DirectionSampler::Brdf => self.brdf_pdf[j],
+            DirectionSampler::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
+            DirectionSampler::Patch(s) => s.pdf(self.point[j], self.wi[j]),
+        };
         for (i, out) in out.iter_mut().enumerate() {
-            let (start, end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+            let (start, mut end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+            let len = self.len[i] as usize;
+            // With an emitter point, the last vertex has two techniques (below).
+            let connected = every && self.light_prim[i] != u32::MAX;
+            if connected {
+                end -= 1;
+            }
             let mut pdf = 1.0;
             let mut k = 0;
             for j in start..end {
@@ -518,23 +557,25 @@ impl TestPaths {
                     pdf = 0.0;
                     break;
                 }
-                let direction = match &g.steps[k].sampler {
-                    DirectionSampler::Brdf => self.brdf_pdf[j],
-                    DirectionSampler::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
-                    DirectionSampler::Patch(s) => s.pdf(self.point[j], self.wi[j]),
-                };
-                pdf *= (1.0 - a) * direction;
+                pdf *= (1.0 - a) * direction(j, k);
                 k += 1;
             }
-            if self.nee[i] && pdf > 0.0 {
-                let len = self.len[i] as usize;
-                pdf *= g.absorption(k, len, self.max_bounces)
-                    * g.light.pdf_area(
-                        &scene.mesh,
-                        &scene.emitters,
-                        self.light_point[i],
-                        self.light_prim[i],
-                    );
+            let light_pdf = |g: &PathGenerator| {
+                let (point, prim) = (self.light_point[i], self.light_prim[i]);
+                g.light.pdf_area(&scene.mesh, &scene.emitters, point, prim)
+            };
+            if connected && pdf > 0.0 {
+                // As `PathGenerator::pdf_techniques`: `p_dir + p_light`.
+                let a = g.absorption_after_light(k, len, self.max_bounces);
+                let dir = if a >= 1.0 {
+                    0.0
+                } else {
+                    (1.0 - a) * direction(end, k)
+                };
+                let light = light_pdf(g) * self.area_to_solid_angle[i];
+                pdf = pdf * dir + pdf * light;
+            } else if self.nee[i] && !every && pdf > 0.0 {
+                pdf *= g.absorption(k, len, self.max_bounces) * light_pdf(g);
             }
             *out = pdf;
         }
@@ -547,7 +588,7 @@ mod tests {
 
     /// A store of paths with `(sampled directions, F²/q)`, in this order.
     fn store(paths: &[(u32, f64)]) -> TestPaths {
-        let mut t = TestPaths::new(5);
+        let mut t = TestPaths::new(5, Nee::End);
         for &(steps, f2q) in paths {
             // A path of `steps + 1` vertices ending with a light point.
             t.len.push(steps + 1);

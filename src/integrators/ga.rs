@@ -26,6 +26,7 @@ pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareE
         plan_for,
         max_bounces: settings.max_bounces,
         srt_absorption: config.srt.srt_absorption,
+        nee: config.srt.nee,
         spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
     };
     Ok(Plan::build(

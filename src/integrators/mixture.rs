@@ -17,11 +17,9 @@ pub struct MixtureIntegrator {
 /// `srt`: the paper's stochastic ray tracing, a mixture of its one generator.
 pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let max_bounces = context.settings.max_bounces;
-    let mixture = mixture_file::srt(
-        context.view.scene,
-        max_bounces,
-        context.config.srt.srt_absorption,
-    );
+    let srt = &context.config.srt;
+    let mixture =
+        mixture_file::srt(context.view.scene, max_bounces, srt.srt_absorption).with_nee(srt.nee);
     Ok(Box::new(MixtureIntegrator {
         mixture,
         max_bounces,
@@ -34,7 +32,8 @@ pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
         .config
         .loaded_mixture
         .clone()
-        .ok_or(PrepareError::NoMixture)?;
+        .ok_or(PrepareError::NoMixture)?
+        .with_nee(context.config.srt.nee);
     Ok(Box::new(MixtureIntegrator {
         mixture,
         max_bounces: context.settings.max_bounces,

@@ -63,7 +63,8 @@ methods! {
     /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
     Pt => pt::prepare,
     /// The paper's baseline "stochastic ray tracing": BRDF sampling with fixed absorption,
-    /// next-event estimation only at the path's end.
+    /// next-event estimation at every vertex (`--nee every`) or only at the path's end
+    /// (`--nee end`, the paper's).
     Srt => mixture::prepare_srt,
     /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
     Mixture => mixture::prepare,

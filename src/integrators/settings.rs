@@ -10,7 +10,7 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
-use crate::path::generator::{ABSORPTION_MAX, ABSORPTION_MIN, SRT_ABSORPTION};
+use crate::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN, SRT_ABSORPTION};
 use crate::path::mixture::Mixture;
 use serde::de::{self, Visitor};
 use std::path::PathBuf;
@@ -37,12 +37,17 @@ pub struct Settings {
 pub struct SrtConfig {
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
     pub srt_absorption: f64,
+    /// Where the mixture estimators (`srt`, `mixture`, `ga`) do next-event estimation:
+    /// `every` non-delta vertex, with the balance heuristic over each generator's direction
+    /// and light-point techniques, or only at the path's `end` (the paper's, for its Fig. 7).
+    pub nee: Nee,
 }
 
 impl Default for SrtConfig {
     fn default() -> Self {
         Self {
             srt_absorption: SRT_ABSORPTION,
+            nee: Nee::default(),
         }
     }
 }
@@ -313,6 +318,14 @@ mod tests {
         s.set("anchor_shift", "1").unwrap();
         assert_eq!((s.ga.test_paths, s.ga.population), (1234, 7));
         assert_eq!(s.srt.srt_absorption, 0.25);
+        assert_eq!(
+            s.srt.nee,
+            Nee::Every,
+            "next-event estimation at every vertex by default"
+        );
+        s.set("nee", "end").unwrap();
+        assert_eq!(s.srt.nee, Nee::End);
+        assert!(s.set("nee", "sometimes").is_err());
         assert_eq!(s.mixture.generators, Some(PathBuf::from("anchors.toml")));
         assert_eq!(s.ga.anchor_shift, 1.0);
         let unknown = s.set("test_pathz", "1").unwrap_err().to_string();

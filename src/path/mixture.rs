@@ -1,7 +1,7 @@
 //! Weighted sets of path generators (paper eq. 7) and the balance-heuristic estimator
-//! (paper eq. 8).
+//! (paper eq. 8), with next-event estimation at the path's end or at every vertex ([`Nee`]).
 
-use super::generator::{Contribution, PathGenerator, PathVertices};
+use super::generator::{Contribution, Nee, PathGenerator, PathVertices};
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{uniform, Rng};
 use glam::{DVec3, Vec3};
@@ -13,10 +13,17 @@ use glam::{DVec3, Vec3};
 pub struct Mixture {
     pub generators: Vec<PathGenerator>,
     pub weights: Vec<f64>,
+    /// Where the estimator does next-event estimation: with [`Nee::Every`] the density of
+    /// a contribution is `Σ_g w_g (p_g,dir + p_g,light)` (design §13).
+    pub nee: Nee,
     /// Fault injection for statistical tests: (component, factor) multiplies that
     /// component's density in [`Mixture::pdf_path`] only, making the estimator biased.
     #[serde(skip)]
     pdf_error: Option<(usize, f64)>,
+    /// Fault injection for statistical tests: with [`Nee::Every`], [`Mixture::pdf_path`]
+    /// leaves the light technique's densities out.
+    #[serde(skip)]
+    light_density_dropped: bool,
 }
 
 /// Reusable buffers of one worker, so that sampling allocates nothing per path.
@@ -27,14 +34,23 @@ pub struct MixtureScratch {
 }
 
 impl Mixture {
-    /// A mixture of the given generators; `weights` are normalised.
+    /// A mixture of the given generators with the default estimator ([`Nee::default`]);
+    /// `weights` are normalised.
     pub fn new(generators: Vec<PathGenerator>, weights: Vec<f64>) -> Self {
         let total: f64 = weights.iter().sum();
         Self {
             generators,
             weights: weights.iter().map(|w| w / total).collect(),
+            nee: Nee::default(),
             pdf_error: None,
+            light_density_dropped: false,
         }
+    }
+
+    /// This mixture with the estimator `nee`.
+    pub fn with_nee(mut self, nee: Nee) -> Self {
+        self.nee = nee;
+        self
     }
 
     /// This mixture with component `index`'s density deliberately scaled by `factor` when
@@ -42,6 +58,15 @@ impl Mixture {
     #[cfg(any(test, feature = "testing"))]
     pub fn with_pdf_error(mut self, index: usize, factor: f64) -> Self {
         self.pdf_error = Some((index, factor));
+        self
+    }
+
+    /// This mixture (with [`Nee::Every`]) with the light technique's densities left out of
+    /// every contribution's density when evaluated: a wrong input that unbiasedness tests
+    /// must reject.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn with_light_density_dropped(mut self) -> Self {
+        self.light_density_dropped = true;
         self
     }
 
@@ -54,9 +79,9 @@ impl Mixture {
     }
 
     /// The union of several mixtures, mixture `m` scaled by `w`, with the weights as given
-    /// (the caller normalises them). A generator that occurs in several parts (the defensive
-    /// `srt` one, a shared neighbour's) becomes one component with the summed weight, so its
-    /// density is evaluated once per path.
+    /// (the caller normalises them), and the first one's estimator. A generator that occurs
+    /// in several parts (the defensive `srt` one, a shared neighbour's) becomes one component
+    /// with the summed weight, so its density is evaluated once per path.
     pub fn union(parts: &[(f64, &Mixture)]) -> Self {
         let mut generators: Vec<PathGenerator> = Vec::new();
         let mut weights: Vec<f64> = Vec::new();
@@ -74,11 +99,14 @@ impl Mixture {
         Self {
             generators,
             weights,
+            nee: parts.first().map_or_else(Nee::default, |(_, m)| m.nee),
             pdf_error: None,
+            light_density_dropped: parts.iter().any(|(_, m)| m.light_density_dropped),
         }
     }
 
-    /// Mixture density of a path (eq. 7).
+    /// Mixture density of a contribution (eq. 7; with [`Nee::Every`], over every
+    /// generator's two techniques).
     pub fn pdf_path(
         &self,
         view: &SceneView,
@@ -93,7 +121,11 @@ impl Mixture {
                     Some((index, factor)) if index == i => factor,
                     _ => 1.0,
                 };
-                pdf += w * scale * g.pdf_path(view, path, c.len, c.nee, max_bounces);
+                let p = match (self.nee, self.light_density_dropped) {
+                    (Nee::Every, true) => g.pdf_techniques(view, path, c, max_bounces).0,
+                    (nee, _) => g.pdf_contribution(view, path, c, (max_bounces, nee)),
+                };
+                pdf += w * scale * p;
             }
         }
         pdf
@@ -130,7 +162,7 @@ impl Mixture {
             view,
             camera,
             x1,
-            max_bounces,
+            (max_bounces, self.nee),
             rng,
             counts,
             &mut scratch.path,
@@ -138,8 +170,11 @@ impl Mixture {
         );
         let mut sum = DVec3::ZERO;
         let components = self.weights.iter().filter(|&&w| w > 0.0).count() as u64;
+        // With a light point at every vertex, each density has one sampler more: the
+        // other technique's at the last vertex.
+        let extra = u64::from(self.nee == Nee::Every);
         for c in &scratch.contributions {
-            counts.densities += components * c.len as u64;
+            counts.densities += components * (c.len as u64 + extra);
             let pdf = self.pdf_path(view, &scratch.path, c, max_bounces);
             if pdf > 0.0 {
                 sum += c.f / pdf;

@@ -5,6 +5,7 @@ pub mod generator;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;
+pub mod walk;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::Rng;

@@ -33,6 +33,8 @@ pub(crate) fn material(kd: Vec3, ks: Vec3, ns: f32) -> Material {
         ns,
         mirror: false,
         ke: Vec3::ZERO,
+        two_sided: true,
+        conductor: None,
     }
 }
 

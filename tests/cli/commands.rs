@@ -249,7 +249,8 @@ fn check_passes_on_fig5() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
     // Every method of the list (pt, srt, ga, ga-pt, pg, and nee-only where the test-only
-    // method is built), and ga-pt without the spatial guide.
+    // method is built), ga-pt without the spatial guide, and srt and ga with the end-only
+    // estimator.
     let names: Vec<&str> = report["methods"]
         .as_array()
         .unwrap()
@@ -260,7 +261,7 @@ fn check_passes_on_fig5() {
     if cfg!(feature = "testing") {
         expected.push("nee-only");
     }
-    expected.push("ga-pt:spatial=0");
+    expected.extend(["ga-pt:spatial=0", "srt:nee=end", "ga:nee=end"]);
     assert_eq!(names, expected);
     assert_eq!(report["pdf_bad"], 0);
     let out = genpath(&["check", "/nonexistent/scene.toml"]);

@@ -8,6 +8,7 @@ use super::pixel::{Evolved, GaRun, PixelContext};
 use super::waves::Waves;
 use super::PlanFor;
 use crate::guiding::Guide;
+use crate::path::generator::Nee;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
@@ -250,7 +251,10 @@ pub(super) fn run_trial(
 }
 
 /// The mixture estimator's moments in a trial: its cost from `COST_SAMPLES` of its samples,
-/// its variance from eq. 10 on fresh `srt` test paths (see [`run_trial`]).
+/// its variance from eq. 10 on fresh `srt` test paths (see [`run_trial`]). With next-event
+/// estimation at every vertex a sample sums many contributions, whose covariances eq. 10
+/// (a sum over contributions) leaves out, so that `V − mean²` can fall below the variance,
+/// even below 0: there the variance of the `COST_SAMPLES` samples is the floor.
 fn mixture_moments(
     context: &PixelContext,
     trial: &TrialAt,
@@ -271,9 +275,14 @@ fn mixture_moments(
     counts.add(c);
     check.weigh(trial.weights);
     let mean = check.mean();
+    let variance = (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0);
+    let floor = match mixture.nee {
+        Nee::Every => cost.variance,
+        Nee::End => 0.0,
+    };
     Moments {
         mean,
-        variance: (fitness::second_moment(view, &check, mixture) - mean * mean).max(0.0),
+        variance: variance.max(floor),
         cost: cost.cost,
     }
 }

@@ -62,6 +62,7 @@ pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
+use crate::path::generator::Nee;
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::scene::SceneAnalysis;
@@ -95,6 +96,9 @@ pub struct PlanInputs<'a> {
     pub max_bounces: u32,
     /// Absorption of the defensive `srt` generator.
     pub srt_absorption: f64,
+    /// The estimator a mixture plan's test paths, fitness and mixtures are those of (a
+    /// guide's GA keeps the end-only one).
+    pub nee: Nee,
     /// A spatial guide takes over where the plan's guides do not (`ga-pt` with
     /// `spatial_guide`), so a failed pilot leaves every pixel to it.
     pub spatial_guide: bool,
@@ -116,6 +120,7 @@ impl<'a> PlanInputs<'a> {
             plan_for,
             max_bounces,
             srt_absorption: crate::path::generator::SRT_ABSORPTION,
+            nee: Nee::default(),
             spatial_guide: plan_for == PlanFor::Guide,
         }
     }
@@ -235,13 +240,20 @@ impl Plan {
         let gate = inputs.gate.gate;
         let ga = &GaConfig {
             srt_absorption: inputs.srt_absorption,
+            nee: inputs.nee,
             ..inputs.ga.clone()
         };
         ga.validate()?;
         config.validate()?;
         let scene = view.scene;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption);
+        // A guide's GA keeps the end-only estimator's test paths, with which `ga-pt` was
+        // tuned: the guided path tracer does its own next-event estimation.
+        let nee = match plan_for {
+            PlanFor::Mixture => ga.nee,
+            PlanFor::Guide => Nee::End,
+        };
+        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(nee);
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();
@@ -299,6 +311,18 @@ impl Plan {
     /// that the unbiasedness test must reject.
     pub fn with_unnormalised_interpolation(mut self) -> Self {
         self.unnormalised = true;
+        self
+    }
+
+    #[cfg(any(test, feature = "testing"))]
+    /// This plan with every mixture's light-technique densities left out when evaluated
+    /// (`Mixture::with_light_density_dropped`): a wrong input that the unbiasedness test
+    /// must reject.
+    pub fn with_light_density_dropped(mut self) -> Self {
+        self.srt = self.srt.with_light_density_dropped();
+        for p in &mut self.pixels {
+            p.mixture = p.mixture.clone().with_light_density_dropped();
+        }
         self
     }
 

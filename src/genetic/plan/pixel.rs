@@ -242,7 +242,8 @@ fn best_or_srt(
     }
     let best = Some(evolution.best.clone());
     let (mixture, v_best, kept_srt) = if evolution.best_v < v_srt {
-        (evolution.best.to_mixture(), evolution.best_v, false)
+        let mixture = evolution.best.to_mixture().with_nee(srt.nee);
+        (mixture, evolution.best_v, false)
     } else {
         (srt.clone(), v_srt, true)
     };

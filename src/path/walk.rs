@@ -1,0 +1,407 @@
+//! One eye path of a [`PathGenerator`] being sampled ([`Walk`]), for either estimator
+//! ([`Nee`]; see [`super::generator`]).
+
+use super::generator::{
+    Connection, Contribution, DirectionSampler, LightVertex, Nee, PathGenerator, PathVertex,
+    PathVertices,
+};
+use super::{emitted, SceneView, SurfacePoint};
+use crate::accel::Ray;
+use crate::sampling::brdf;
+use crate::sampling::{uniform, Rng};
+use crate::scene::Material;
+use glam::{DVec3, Vec3};
+
+/// The ray a [`Walk`] waits on before it can go on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Query {
+    /// The closest surface along the ray; answer with [`Walk::hit`].
+    Closest(Ray),
+    /// Whether the shadow ray (from [`SceneView::shadow_ray`]) is unblocked; answer with
+    /// [`Walk::shadow`] (with [`Nee::End`] the walk's last query).
+    Shadow(Ray),
+}
+
+/// One eye path of a [`PathGenerator`] being sampled, as a resumable state machine: it runs
+/// until it needs a ray traced, returns that [`Query`], and goes on when handed the answer.
+/// A driver can thus trace the rays of many walks as packets, or one at a time
+/// ([`PathGenerator::sample_path`]); either way a walk draws the same random numbers in the
+/// same order and does the same arithmetic. The random stream, the vertices and the
+/// contributions are the caller's, so that a walk is a few plain values and allocates nothing.
+///
+/// With [`Nee::Every`] a non-delta vertex draws its light point, its absorption and its
+/// direction at once, and asks for the shadow ray first, then for the closest hit.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Walk {
+    /// The current vertex, the unit direction back towards the previous one, and the
+    /// throughput of the path up to it.
+    x: SurfacePoint,
+    wo: Vec3,
+    throughput: DVec3,
+    /// Non-delta vertices passed (the generator's next step), and the current vertex's
+    /// scattering event (1 at `x1`).
+    k: usize,
+    bounce: usize,
+    max_bounces: u32,
+    estimator: Nee,
+    /// Direction of the pending closest-hit query, whether it leaves a mirror, and the
+    /// density it was sampled with (`(1 − a)·p`).
+    wi: Vec3,
+    mirror: bool,
+    pdf_dir: f64,
+    /// [`Nee::End`]: contribution of the pending shadow query, counted if it is unblocked.
+    nee: DVec3,
+    /// [`Nee::Every`]: the light point's contribution, counted if its shadow ray is
+    /// unblocked, and the closest-hit query that follows it.
+    pending: Option<Contribution>,
+    then: Option<Ray>,
+}
+
+impl Walk {
+    /// Starts an eye path of `g` for the estimator `nee` at the first hit `x1` (reached
+    /// from `camera`), clearing `path`; returns the walk and its first query (`None`: the
+    /// path ended without one).
+    pub fn start(
+        g: &PathGenerator,
+        view: &SceneView,
+        camera: Vec3,
+        x1: SurfacePoint,
+        (max_bounces, nee): (u32, Nee),
+        rng: &mut Rng,
+        path: &mut PathVertices,
+    ) -> (Self, Option<Query>) {
+        path.vertices.clear();
+        path.light = None;
+        let mut walk = Self {
+            x: x1,
+            wo: (camera - x1.p).normalize(),
+            throughput: DVec3::ONE,
+            bounce: 1,
+            max_bounces,
+            estimator: nee,
+            ..Self::default()
+        };
+        let query = walk.scatter(g, view, rng, path);
+        (walk, query)
+    }
+
+    /// Answers a [`Query::Closest`]: moves to the hit `y` (counting the emission found
+    /// there where the estimator does) and scatters there; returns the next query, `None`
+    /// at the end.
+    pub fn hit(
+        &mut self,
+        g: &PathGenerator,
+        view: &SceneView,
+        rng: &mut Rng,
+        path: &mut PathVertices,
+        contributions: &mut Vec<Contribution>,
+        y: Option<SurfacePoint>,
+    ) -> Option<Query> {
+        let y = y?;
+        if self.mirror || self.estimator == Nee::Every {
+            self.emission_found(view, &y, contributions);
+        }
+        self.x = y;
+        self.wo = -self.wi;
+        self.bounce += 1;
+        self.scatter(g, view, rng, path)
+    }
+
+    /// The emission the pending direction found at `y`, as a contribution: after a delta
+    /// vertex (no shadow ray can find it, so it counts on hit), or with [`Nee::Every`] as
+    /// the direction technique's sample.
+    fn emission_found(&self, view: &SceneView, y: &SurfacePoint, out: &mut Vec<Contribution>) {
+        let le = emitted(view.material(y.prim), y, -self.wi);
+        if le.max_element() <= 0.0 {
+            return;
+        }
+        let light = match (self.mirror, self.estimator) {
+            (true, _) | (_, Nee::End) => None,
+            (false, Nee::Every) => {
+                let dist2 = (y.p.as_dvec3() - self.x.p.as_dvec3()).length_squared();
+                let cos_y = f64::from(y.ng.dot(-self.wi));
+                if !(dist2 > 0.0 && cos_y > 0.0) {
+                    return;
+                }
+                Some(Connection {
+                    point: y.p.as_dvec3(),
+                    prim: y.prim,
+                    wi: self.wi,
+                    area_to_solid_angle: dist2 / cos_y,
+                    pdf_sampled: self.pdf_dir,
+                })
+            }
+        };
+        out.push(Contribution {
+            f: self.throughput * le.as_dvec3(),
+            len: self.bounce,
+            nee: false,
+            light,
+        });
+    }
+
+    /// Answers a [`Query::Shadow`]: the light point counts if `unblocked`; returns the next
+    /// query (with [`Nee::End`] none: the walk is over).
+    pub fn shadow(
+        &mut self,
+        unblocked: bool,
+        contributions: &mut Vec<Contribution>,
+    ) -> Option<Query> {
+        match self.estimator {
+            Nee::End => {
+                if unblocked {
+                    contributions.push(Contribution {
+                        f: self.nee,
+                        len: self.bounce,
+                        nee: true,
+                        light: None,
+                    });
+                }
+                None
+            }
+            Nee::Every => {
+                let pending = self.pending.take();
+                if let (true, Some(c)) = (unblocked, pending) {
+                    contributions.push(c);
+                }
+                self.then.take().map(Query::Closest)
+            }
+        }
+    }
+
+    /// The current vertex's scattering event for the walk's estimator; `None` where the
+    /// path ends.
+    fn scatter(
+        &mut self,
+        g: &PathGenerator,
+        view: &SceneView,
+        rng: &mut Rng,
+        path: &mut PathVertices,
+    ) -> Option<Query> {
+        if self.bounce > self.max_bounces as usize {
+            return None;
+        }
+        let material = view.scattering_material(&self.x, self.wo);
+        if !material.scatters() {
+            return None;
+        }
+        match self.estimator {
+            Nee::End => self.scatter_at_end(g, view, rng, path, material),
+            Nee::Every => self.scatter_every(g, view, rng, path, material),
+        }
+    }
+
+    /// [`Nee::End`]: absorb (then a light point and a shadow query) or sample a direction
+    /// (then a closest-hit query).
+    fn scatter_at_end(
+        &mut self,
+        g: &PathGenerator,
+        view: &SceneView,
+        rng: &mut Rng,
+        path: &mut PathVertices,
+        material: &Material,
+    ) -> Option<Query> {
+        let scene = view.scene;
+        let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
+        let n = brdf::facing_normal(x.ng, wo);
+        let mut vertex = PathVertex {
+            point: x,
+            wo,
+            wi: Vec3::ZERO,
+            delta: material.mirror,
+            pdf_sampled: 1.0,
+        };
+        let absorption = if material.mirror {
+            0.0
+        } else {
+            g.absorption(k, bounce, self.max_bounces)
+        };
+        if (uniform(rng) as f64) < absorption {
+            // Absorbed: one shadow ray to a light point (next-event estimation).
+            path.vertices.push(vertex);
+            let u = [
+                uniform(rng) as f64,
+                uniform(rng) as f64,
+                uniform(rng) as f64,
+            ];
+            let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
+            let pdf_area = g.light.pdf_area(&scene.mesh, &scene.emitters, y, prim);
+            path.light = Some(LightVertex {
+                point: y,
+                prim,
+                pdf_sampled: absorption * pdf_area,
+            });
+            let y_point = SurfacePoint {
+                p: y.as_vec3(),
+                ng: scene.mesh.normals[prim as usize],
+                prim,
+            };
+            let d = y_point.p - x.p;
+            let dist2 = d.length_squared();
+            let wi = d / dist2.sqrt();
+            let (cos_x, cos_y) = (n.dot(wi), -y_point.ng.dot(wi));
+            if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
+                let f =
+                    brdf::eval(material, n, wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
+                if f.max_element() > 0.0 {
+                    let geometry = cos_x as f64 * cos_y as f64 / dist2 as f64;
+                    self.nee = self.throughput * f * geometry;
+                    return Some(Query::Shadow(view.shadow_ray(&x, &y_point)));
+                }
+            }
+            return None;
+        }
+        let (wi, pdf) = self.direction(g, rng, (material, n), absorption)?;
+        vertex.wi = wi;
+        vertex.pdf_sampled = pdf;
+        path.vertices.push(vertex);
+        self.wi = wi;
+        self.mirror = material.mirror;
+        self.pdf_dir = pdf;
+        Some(Query::Closest(view.spawn(&x, wi)))
+    }
+
+    /// [`Nee::Every`]: at a non-delta vertex a light point first (its shadow query comes
+    /// first), then absorption or a direction (its closest-hit query after); at a delta
+    /// vertex the mirror direction alone.
+    fn scatter_every(
+        &mut self,
+        g: &PathGenerator,
+        view: &SceneView,
+        rng: &mut Rng,
+        path: &mut PathVertices,
+        material: &Material,
+    ) -> Option<Query> {
+        let (x, wo) = (self.x, self.wo);
+        let n = brdf::facing_normal(x.ng, wo);
+        // Pushed first: the light point's contribution ends here whatever follows.
+        path.vertices.push(PathVertex {
+            point: x,
+            wo,
+            wi: Vec3::ZERO,
+            delta: material.mirror,
+            pdf_sampled: 1.0,
+        });
+        self.then = None;
+        let (shadow, absorption) = if material.mirror {
+            (None, 0.0)
+        } else {
+            let shadow = self.light_point(g, view, rng, (material, n));
+            let a = g.absorption_after_light(self.k, self.bounce, self.max_bounces);
+            (shadow, a)
+        };
+        if (uniform(rng) as f64) >= absorption {
+            if let Some((wi, pdf)) = self.direction(g, rng, (material, n), absorption) {
+                if let Some(v) = path.vertices.last_mut() {
+                    v.wi = wi;
+                    v.pdf_sampled = pdf;
+                }
+                self.wi = wi;
+                self.mirror = material.mirror;
+                self.pdf_dir = pdf;
+                self.then = Some(view.spawn(&x, wi));
+            }
+        }
+        match shadow {
+            Some(ray) => Some(Query::Shadow(ray)),
+            None => self.then.take().map(Query::Closest),
+        }
+    }
+
+    /// [`Nee::Every`]'s light point at the current (non-delta) vertex, normal `n`: its
+    /// contribution (solid angle at the vertex) becomes pending and its shadow ray is
+    /// returned; `None` where it can carry nothing.
+    fn light_point(
+        &mut self,
+        g: &PathGenerator,
+        view: &SceneView,
+        rng: &mut Rng,
+        (material, n): (&Material, Vec3),
+    ) -> Option<Ray> {
+        self.pending = None;
+        let scene = view.scene;
+        let u = [
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+        ];
+        let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
+        let y_point = SurfacePoint {
+            p: y.as_vec3(),
+            ng: scene.mesh.normals[prim as usize],
+            prim,
+        };
+        let x = self.x;
+        let d = y_point.p - x.p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let (cos_x, cos_y) = (n.dot(wi), -y_point.ng.dot(wi));
+        if !(cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0) {
+            return None;
+        }
+        let f = brdf::eval(material, n, self.wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
+        // Also false for a NaN.
+        let carries = f.max_element() > 0.0;
+        if !carries {
+            return None;
+        }
+        self.pending = Some(Contribution {
+            f: self.throughput * f * f64::from(cos_x),
+            len: self.bounce,
+            nee: true,
+            light: Some(Connection {
+                point: y,
+                prim,
+                wi,
+                area_to_solid_angle: f64::from(dist2) / f64::from(cos_y),
+                pdf_sampled: g.light.pdf_area(&scene.mesh, &scene.emitters, y, prim),
+            }),
+        });
+        Some(view.shadow_ray(&x, &y_point))
+    }
+
+    /// A direction out of the current vertex (normal `n`), where the path goes on with
+    /// probability `1 − absorption`: the mirror's, or one from the generator's step; the
+    /// throughput takes the BRDF × cos. Returns it with its density `(1 − a)·p` (1 for a
+    /// mirror); `None` where it carries nothing.
+    fn direction(
+        &mut self,
+        g: &PathGenerator,
+        rng: &mut Rng,
+        (material, n): (&Material, Vec3),
+        absorption: f64,
+    ) -> Option<(Vec3, f64)> {
+        let (x, wo) = (self.x, self.wo);
+        if material.mirror {
+            self.throughput *= material.mirror_reflectance(n.dot(wo)).as_dvec3();
+            return Some((brdf::reflect(wo, n).normalize(), 1.0));
+        }
+        let u = [
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+            uniform(rng) as f64,
+        ];
+        let (wi, pdf) = match &g.steps[self.k].sampler {
+            DirectionSampler::Brdf => {
+                let s = brdf::sample(material, n, wo, u)?;
+                (s.wi, s.pdf)
+            }
+            DirectionSampler::Anchor(a) => {
+                let wi = a.sample(x.p.as_dvec3(), u).as_vec3().normalize();
+                (wi, a.pdf(x.p.as_dvec3(), wi.as_dvec3()))
+            }
+            DirectionSampler::Patch(s) => {
+                let wi = s.sample(x.p.as_dvec3(), u).as_vec3().normalize();
+                (wi, s.pdf(x.p.as_dvec3(), wi.as_dvec3()))
+            }
+        };
+        let cos = n.dot(wi);
+        let f = brdf::eval(material, n, wo, wi);
+        if cos <= 0.0 || f.max_element() <= 0.0 {
+            return None;
+        }
+        self.throughput *= f.as_dvec3() * cos as f64;
+        self.k += 1;
+        Some((wi, (1.0 - absorption) * pdf))
+    }
+}
