@@ -42,6 +42,7 @@ fn furnace(rho: f32, max_bounces: u32) -> (f64, f64) {
         max_bounces,
         seed: 7,
         progress: false,
+        shard: Default::default(),
     };
     let film = PathTracing { max_bounces }.render(&view, &settings);
     let n = film.image.pixels.len() as f64;

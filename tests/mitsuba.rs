@@ -34,6 +34,7 @@ fn render(scene: &Scene) -> Film {
         max_bounces: scene.render.max_bounces,
         seed: 3,
         progress: false,
+        shard: Default::default(),
     };
     PathTracing {
         max_bounces: scene.render.max_bounces,
