@@ -22,8 +22,10 @@ enum Command {
     /// Render a scene to one or more images (format by extension: .exr, .png, …).
     Render(render::RenderArgs),
     /// Merge shards of one render (`render --shard K/N`, `reference --shard K/N`) into its
-    /// image: their per-pixel sums and sample counts added; any subset of the shards gives an
-    /// image with fewer samples (docs/shards.md).
+    /// image (docs/shards.md).
+    ///
+    /// Their per-pixel sums and sample counts are added; any subset of the shards gives an
+    /// image with fewer samples.
     Merge(merge::MergeArgs),
     /// Compare an image with a reference: relMSE, MSE, MAPE, fraction of NaN/Inf/negative pixels.
     Compare(compare::CompareArgs),

@@ -45,7 +45,6 @@ impl Identity {
     /// The identity of a render with `settings` (whose `seed` and `spp` are those of its
     /// first layer; `layer_seeds` the seeds of all) of the scene read from `files` with
     /// `defines`, traced with `accel`.
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         command: &str,
         user_seed: u64,
