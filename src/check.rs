@@ -247,6 +247,7 @@ fn render_every_method(
             max_bounces: config.max_bounces,
             seed: config.seed,
             progress: false,
+            shard: Default::default(),
         };
         let integrator = prepare(view, &methods, &settings)?;
         films.push((label, integrator.render(view, &settings)));

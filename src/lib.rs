@@ -14,3 +14,4 @@ pub mod progress;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod shard;

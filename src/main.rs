@@ -4,7 +4,7 @@
 mod cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use cli::{bench, check, compare, reference, render, settings, sweep};
+use cli::{bench, check, compare, merge, reference, render, settings, sweep};
 
 #[derive(Parser)]
 #[command(
@@ -21,6 +21,12 @@ struct Cli {
 enum Command {
     /// Render a scene to one or more images (format by extension: .exr, .png, …).
     Render(render::RenderArgs),
+    /// Merge shards of one render (`render --shard K/N`, `reference --shard K/N`) into its
+    /// image (docs/shards.md).
+    ///
+    /// Their per-pixel sums and sample counts are added; any subset of the shards gives an
+    /// image with fewer samples.
+    Merge(merge::MergeArgs),
     /// Compare an image with a reference: relMSE, MSE, MAPE, fraction of NaN/Inf/negative pixels.
     Compare(compare::CompareArgs),
     /// Render a long path-tracing reference in two independent halves, with its own noise
@@ -49,6 +55,7 @@ fn main() {
     let sub = matches.subcommand().map_or(&matches, |(_, m)| m);
     let result = match cli.command {
         Command::Render(args) => render::run_render(args, sub),
+        Command::Merge(args) => merge::run_merge(args),
         Command::Compare(args) => compare::run_compare(args),
         Command::Reference(args) => reference::run_reference(args, sub),
         Command::Sweep(args) => sweep::run_sweep(args, sub),

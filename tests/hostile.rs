@@ -212,6 +212,7 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         max_bounces,
         seed: 3,
         progress: false,
+        shard: Default::default(),
     };
     let srt = Mixture::new(
         vec![PathGenerator::srt(

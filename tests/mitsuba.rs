@@ -34,6 +34,7 @@ fn render(scene: &Scene) -> Film {
         max_bounces: scene.render.max_bounces,
         seed: 3,
         progress: false,
+        shard: Default::default(),
     };
     PathTracing {
         max_bounces: scene.render.max_bounces,
@@ -181,6 +182,13 @@ fn ply_ascii_binary_obj_and_serialized_give_the_same_triangles() {
             r#"<shape type="{plugin}"><string name="filename" value="{name}"/><transform name="to_world"><translate z="-0.2"/></transform></shape>"#
         );
         let scene = with_mesh(dir.path(), &shape);
+        // What a shard's scene hash covers: the XML file, then the mesh file it read.
+        let read: Vec<_> = scene
+            .files
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(read, ["s.xml", name], "{:?}", scene.files);
         let n = scene.mesh.triangles.len();
         // The quad is the last shape but the light: its two triangles come before the
         // light's.

@@ -147,6 +147,7 @@ fn generators_at_their_bounds_stay_finite() {
             max_bounces: 5,
             seed: 2,
             progress: false,
+            shard: Default::default(),
         };
         let integrator = MixtureIntegrator {
             mixture: mixture.clone(),

@@ -110,6 +110,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         max_bounces,
         seed,
         progress: false,
+        shard: Default::default(),
     };
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {

@@ -7,7 +7,7 @@ use genpath::accel::AccelKind;
 use genpath::genetic::plan::{GateConfig, PlanConfig};
 use genpath::genetic::GaConfig;
 use genpath::integrators::settings::{SpatialConfig, SrtConfig};
-use genpath::integrators::{Method, Settings};
+use genpath::integrators::{Method, Settings, Shard};
 use genpath::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
@@ -222,6 +222,40 @@ pub struct SpatialArgs {
     /// the image. Default: as many as fit in half of --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=12))]
     pub spatial_passes: Option<u32>,
+}
+
+/// `--shard K/N`, of `render` and `reference`.
+#[derive(Args)]
+pub struct ShardArgs {
+    /// Render shard K of N: of every pixel's samples, those s with s mod N = K, from the
+    /// same random streams as the whole render, and write their per-pixel sums to
+    /// `<FILE>.shard` beside the (first) output for `genpath merge` (docs/shards.md).
+    /// Methods pt, srt and mixture (the others learn in every render).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
+}
+
+impl ShardArgs {
+    /// Refuses a shard of a method that learns, before anything loads.
+    pub fn check_method(&self, method: Method) -> Result<()> {
+        if self.shard.is_some() && method.learns() {
+            return Err(genpath::integrators::PrepareError::ShardLearns(method).into());
+        }
+        Ok(())
+    }
+
+    /// The shard of a render with `spp` samples per pixel (`what`: the flag that sets it).
+    pub fn shard(&self, spp: u32, what: &str) -> Result<Shard> {
+        let shard = self.shard.unwrap_or(Shard::WHOLE);
+        if shard.count > spp {
+            bail!(
+                "--shard {shard}: {} shards of {spp} samples per pixel ({what}) leave some \
+                 shards without a sample",
+                shard.count
+            );
+        }
+        Ok(shard)
+    }
 }
 
 pub fn parse_probability(text: &str) -> Result<f64, String> {

@@ -215,6 +215,7 @@ fn thread_scaling(
         max_bounces: scene.render.max_bounces,
         seed: 1,
         progress: false,
+        shard: Default::default(),
     };
     let integrator = prepare(view, config, &settings)?;
     println!(

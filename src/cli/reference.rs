@@ -1,13 +1,15 @@
 //! `genpath reference`: a long render in two independent halves, with its own noise estimate.
 
-use super::args::{load_mixture, MethodArgs, SceneArgs};
+use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
-use super::session::{rays_json, write_stats, Session};
+use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
+use genpath::image::Image;
 use genpath::integrators::{prepare, RenderSettings};
 use genpath::path::SceneView;
 use genpath::sampling::{derive_seed, Stream};
+use genpath::shard::LayerSums;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -22,6 +24,8 @@ pub struct ReferenceArgs {
     pub spp: u32,
     /// The method (default `pt`) and its settings: each half prepares it anew, from its own
     /// seed.
+    #[command(flatten)]
+    pub shard: ShardArgs,
     #[command(flatten)]
     pub method: MethodArgs,
 }
@@ -40,6 +44,7 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     check_output(&args.output)?;
+    args.shard.check_method(args.method.method)?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
@@ -47,9 +52,11 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     let max_bounces = session.settings(&args.scene, method, 1).max_bounces;
     load_mixture(&mut config, &session.scene, max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let shard = args.shard.shard(args.spp / 2, "half of --spp, per half")?;
     let half = |seed: u64| -> Result<_> {
         let settings = RenderSettings {
             seed,
+            shard,
             ..session.settings(&args.scene, method, args.spp / 2)
         };
         session.pool.install(|| {
@@ -62,29 +69,37 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     // reference's and understate it).
     let seeds = [Stream::ReferenceFirst, Stream::ReferenceSecond]
         .map(|stream| derive_seed(args.scene.seed, stream.tag()));
-    let (a, b) = (half(seeds[0])?, half(seeds[1])?);
-    let Some(between) = genpath::image::metrics::compare(&a.image, &b.image) else {
-        unreachable!("both halves have the scene's size");
+    // Before the render, so that a shard that cannot say what it is part of fails early.
+    let identity = match args.shard.shard {
+        Some(_) => {
+            let settings = session.settings(&args.scene, method, args.spp / 2);
+            Some(session.identity("reference", &args.scene, &settings, seeds.to_vec(), &config)?)
+        }
+        None => None,
     };
-    let mut image = a.image.clone();
-    for (p, q) in image.pixels.iter_mut().zip(&b.image.pixels) {
-        *p = std::array::from_fn(|c| 0.5 * (p[c] + q[c]));
-    }
+    let (a, b) = (half(seeds[0])?, half(seeds[1])?);
+    let (image, reference) = average_halves(&a.image, &b.image, seeds, args.spp / 2);
     genpath::image::write(&args.output, &image)?;
+    let shard_json = match identity {
+        Some(identity) => {
+            let path = shard_path(&args.output);
+            let layers = [a.sums.clone(), b.sums.clone()].map(|s| LayerSums::of(&s));
+            session.write_shard(&path, identity.clone(), shard, &layers)?;
+            Some(serde_json::json!({
+                "shard": shard.to_string(),
+                "samples_per_pixel_per_half": a.spp,
+                "file": path,
+                "identity": identity,
+            }))
+        }
+        None => None,
+    };
     let settings = session.settings(&args.scene, method, args.spp / 2 * 2);
     let seconds = a.elapsed.as_secs_f64() + b.elapsed.as_secs_f64();
     let mut stats = session.stats(&settings);
-    stats.insert(
-        "reference".into(),
-        serde_json::json!({
-            "half_seeds": seeds,
-            "spp_per_half": args.spp / 2,
-            "relmse_between_halves": between.relmse,
-            "relmse_estimate": between.relmse / 4.0,
-            "mse_estimate": between.mse / 4.0,
-            "bad_fraction": between.bad_fraction,
-        }),
-    );
+    let estimate = reference["relmse_estimate"].as_f64().unwrap_or(f64::NAN);
+    stats.insert("reference".into(), reference);
+    stats.insert("shard".into(), serde_json::json!(shard_json));
     stats.insert(
         "times_s".into(),
         serde_json::json!({ "load": session.load_s, "accel_build": session.accel_s, "render": seconds }),
@@ -99,10 +114,36 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     if !args.scene.quiet {
         eprintln!(
             "genpath: reference {} spp in {seconds:.1} s, estimated relMSE {:.3e} → {}",
-            args.spp / 2 * 2,
-            between.relmse / 4.0,
+            a.spp * 2,
+            estimate,
             args.output.display()
         );
     }
     Ok(())
+}
+
+/// The reference, the pixel-wise average of its two halves, and what its JSON records of
+/// them: the halves' seeds and samples, and the noise estimate from their difference.
+pub fn average_halves(
+    a: &Image,
+    b: &Image,
+    seeds: [u64; 2],
+    spp_per_half: u32,
+) -> (Image, serde_json::Value) {
+    let Some(between) = genpath::image::metrics::compare(a, b) else {
+        unreachable!("both halves have the scene's size");
+    };
+    let mut image = a.clone();
+    for (p, q) in image.pixels.iter_mut().zip(&b.pixels) {
+        *p = std::array::from_fn(|c| 0.5 * (p[c] + q[c]));
+    }
+    let json = serde_json::json!({
+        "half_seeds": seeds,
+        "spp_per_half": spp_per_half,
+        "relmse_between_halves": between.relmse,
+        "relmse_estimate": between.relmse / 4.0,
+        "mse_estimate": between.mse / 4.0,
+        "bad_fraction": between.bad_fraction,
+    });
+    (image, json)
 }

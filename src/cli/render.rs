@@ -1,13 +1,14 @@
 //! `genpath render`: one image with any method, and its statistics as JSON.
 
-use super::args::{load_mixture, MethodArgs, SceneArgs};
+use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
-use super::session::{rays_json, write_stats, Session};
+use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
-use genpath::integrators::{prepare, Method, Settings};
+use genpath::integrators::{prepare, Film, Integrator, Method, RenderSettings, Settings};
 use genpath::path::SceneView;
+use genpath::shard::LayerSums;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -26,6 +27,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub explain: Option<PathBuf>,
     #[command(flatten)]
+    pub shard: ShardArgs,
+    #[command(flatten)]
     pub method: MethodArgs,
 }
 
@@ -39,21 +42,33 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         }
         check_output(explain)?;
     }
+    args.shard.check_method(args.method.method)?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
-    let settings = session.settings(&args.scene, args.method.method, spp);
+    let settings = RenderSettings {
+        shard: args.shard.shard(spp, "--spp")?,
+        ..session.settings(&args.scene, args.method.method, spp)
+    };
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
+    // Before the render, so that a shard that cannot say what it is part of fails early.
+    let identity = match args.shard.shard {
+        Some(_) => Some(session.identity(
+            "render",
+            &args.scene,
+            &settings,
+            vec![settings.seed],
+            &config,
+        )?),
+        None => None,
+    };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let prepared = session
         .pool
         .install(|| prepare(&view, &config, &settings))?;
     let plan = prepared.plan();
     let film = session.pool.install(|| prepared.render(&view, &settings));
-    let render_s = film.elapsed.as_secs_f64();
-    let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
-    let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
 
     let t_write = Instant::now();
     for output in &args.outputs {
@@ -63,14 +78,57 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
         genpath::image::write(file, &picture)?;
     }
+    let shard = match identity {
+        Some(identity) => {
+            let path = shard_path(&args.outputs[0]);
+            let layers = [LayerSums::of(&film.sums)];
+            session.write_shard(&path, identity.clone(), settings.shard, &layers)?;
+            Some(serde_json::json!({
+                "shard": settings.shard.to_string(),
+                "samples_per_pixel": film.spp,
+                "file": path,
+                "identity": identity,
+            }))
+        }
+        None => None,
+    };
     let write_s = t_write.elapsed().as_secs_f64();
 
-    let mut stats = session.stats(&settings);
+    let mut stats = render_stats(
+        &session,
+        &settings,
+        &config,
+        prepared.as_ref(),
+        &film,
+        write_s,
+    );
+    stats.insert("shard".into(), serde_json::json!(shard));
+    write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
+    if !args.scene.quiet {
+        report(&session, &settings, prepared.as_ref(), &film, &args.outputs);
+    }
+    Ok(())
+}
+
+/// The JSON statistics of a render.
+fn render_stats(
+    session: &Session,
+    settings: &RenderSettings,
+    config: &Settings,
+    prepared: &dyn Integrator,
+    film: &Film,
+    write_s: f64,
+) -> serde_json::Map<String, serde_json::Value> {
+    let plan = prepared.plan();
+    let render_s = film.elapsed.as_secs_f64();
+    let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
+    let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
+    let mut stats = session.stats(settings);
     stats.insert("method_settings".into(), serde_json::json!(config));
     stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
     stats.insert(
         "ga".into(),
-        serde_json::json!(plan.map(|p| ga_stats(p, &config))),
+        serde_json::json!(plan.map(|p| ga_stats(p, config))),
     );
     stats.insert(
         "times_s".into(),
@@ -94,35 +152,49 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         "rays_per_s".into(),
         serde_json::json!(film.rays.total() as f64 / render_s.max(1e-9)),
     );
-    write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
-    if !args.scene.quiet {
-        if let Some(plan) = plan {
-            let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
-            eprintln!(
-                "genpath: GA on {} pixels ({improved} improved on srt) in {plan_s:.2} s",
-                plan.pixels.len()
-            );
-        }
-        if let Some(s) = prepared.spatial() {
-            eprintln!(
-                "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
-                s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.spp, s.stats.seconds
-            );
-        }
+    stats
+}
+
+/// What a render tells on stderr.
+fn report(
+    session: &Session,
+    settings: &RenderSettings,
+    prepared: &dyn Integrator,
+    film: &Film,
+    outputs: &[PathBuf],
+) {
+    let render_s = film.elapsed.as_secs_f64();
+    if let Some(plan) = prepared.plan() {
+        let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
         eprintln!(
-            "genpath: {}×{} {} spp in {render_s:.2} s ({:.2} Mrays/s) → {}",
-            session.scene.camera.width,
-            session.scene.camera.height,
-            settings.spp,
-            film.rays.total() as f64 / render_s.max(1e-9) / 1e6,
-            args.outputs
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
+            "genpath: GA on {} pixels ({improved} improved on srt) in {:.2} s",
+            plan.pixels.len(),
+            plan.elapsed().as_secs_f64()
         );
     }
-    Ok(())
+    if let Some(s) = prepared.spatial() {
+        eprintln!(
+            "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
+            s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.spp, s.stats.seconds
+        );
+    }
+    let shard = if settings.shard.is_whole() {
+        String::new()
+    } else {
+        format!(" (shard {}: {} of them)", settings.shard, film.spp)
+    };
+    eprintln!(
+        "genpath: {}×{} {} spp{shard} in {render_s:.2} s ({:.2} Mrays/s) → {}",
+        session.scene.camera.width,
+        session.scene.camera.height,
+        settings.spp,
+        film.rays.total() as f64 / render_s.max(1e-9) / 1e6,
+        outputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
 }
 
 /// What the GA plan and the renderer left out for this scene, and why (design §8).

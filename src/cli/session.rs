@@ -3,7 +3,7 @@
 use super::args::SceneArgs;
 use anyhow::{Context, Result};
 use genpath::accel::{self, Accel};
-use genpath::integrators::{Method, RenderSettings};
+use genpath::integrators::{Method, RenderSettings, Settings, Shard};
 use genpath::path::RayCounts;
 use genpath::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -56,6 +56,7 @@ impl Session {
             max_bounces: args.max_bounces.unwrap_or(self.scene.render.max_bounces),
             seed: args.seed,
             progress: !args.quiet,
+            shard: Shard::WHOLE,
         }
     }
 
@@ -77,6 +78,61 @@ impl Session {
             _ => unreachable!("a JSON object literal"),
         }
     }
+}
+
+impl Session {
+    /// The identity of a shard of `command`'s render with `settings` and `layer_seeds`
+    /// ([`genpath::shard::Identity`]).
+    pub fn identity(
+        &self,
+        command: &str,
+        args: &SceneArgs,
+        settings: &RenderSettings,
+        layer_seeds: Vec<u64>,
+        config: &Settings,
+    ) -> Result<genpath::shard::Identity> {
+        let inputs = genpath::shard::SceneInputs {
+            files: self.scene.files.clone(),
+            defines: args.define.clone(),
+            width: self.scene.camera.width,
+            height: self.scene.camera.height,
+        };
+        let accel = self.accel.name();
+        Ok(genpath::shard::Identity::new(
+            command,
+            args.seed,
+            settings,
+            layer_seeds,
+            config,
+            &inputs,
+            accel,
+        )?)
+    }
+
+    /// Writes the shard file `path` of this render: `layers` with `identity`, `shard`.
+    pub fn write_shard(
+        &self,
+        path: &Path,
+        identity: genpath::shard::Identity,
+        shard: Shard,
+        layers: &[genpath::shard::LayerSums],
+    ) -> Result<()> {
+        let header = genpath::shard::Header {
+            shard,
+            identity,
+            scene_path: self.scene.path.clone(),
+            command_line: std::env::args().collect(),
+        };
+        genpath::shard::file::write(path, &header, layers)?;
+        Ok(())
+    }
+}
+
+/// `<output>.shard`, where a shard of a render to `output` keeps its sums.
+pub fn shard_path(output: &Path) -> PathBuf {
+    let mut path = output.as_os_str().to_owned();
+    path.push(".shard");
+    PathBuf::from(path)
 }
 
 pub fn rays_json(rays: RayCounts) -> serde_json::Value {

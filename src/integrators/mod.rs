@@ -31,7 +31,7 @@ use crate::path::{RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
 pub use settings::Settings;
-pub use tiles::{Film, PixelSums};
+pub use tiles::{Film, PixelSums, Shard};
 
 /// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
 /// variant (its documentation is its help text) and the function that prepares it.
@@ -51,6 +51,9 @@ macro_rules! methods {
             settings: &RenderSettings,
         ) -> Result<Box<dyn Integrator>, PrepareError> {
             let context = Context { view, config, settings };
+            if !settings.shard.is_whole() && settings.method.learns() {
+                return Err(PrepareError::ShardLearns(settings.method));
+            }
             match settings.method {
                 $($(#[cfg($cfg)])? Method::$variant => $prepare(&context),)*
             }
@@ -85,6 +88,21 @@ methods! {
     NeeOnly => test_method::prepare,
 }
 
+impl Method {
+    /// Whether preparing the method learns from the scene (a GA plan, a spatial guide), so
+    /// that two renders of it with different sample shares would learn differently.
+    pub fn learns(self) -> bool {
+        matches!(self, Method::Ga | Method::GaPt | Method::Pg)
+    }
+
+    /// The method's `--method` name.
+    pub fn name(self) -> String {
+        use clap::ValueEnum;
+        self.to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    }
+}
+
 /// What one render needs besides the scene.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RenderSettings {
@@ -95,6 +113,9 @@ pub struct RenderSettings {
     /// Show a progress bar on stderr.
     #[serde(skip)]
     pub progress: bool,
+    /// Which of every pixel's `spp` samples this render takes (all by default).
+    #[serde(skip_serializing_if = "Shard::is_whole")]
+    pub shard: Shard,
 }
 
 /// Why a method cannot be prepared.
@@ -106,6 +127,14 @@ pub enum PrepareError {
     Settings(#[from] settings::SettingsError),
     #[error("--method mixture needs --generators FILE")]
     NoMixture,
+    #[error(
+        "--shard: --method {} learns in every render (its GA plan or spatial guide), so shards \
+         of it would not be parts of one render: the learned state must be trained once and \
+         shared with every shard first, which genpath does not do yet; shard pt, srt or \
+         mixture",
+        .0.name()
+    )]
+    ShardLearns(Method),
     #[error(
         "--spatial-passes {passes} trains on {needs} samples per pixel, more than --spp {spp} \
          (pass i takes 2^i)"

@@ -25,6 +25,8 @@ pub struct Film {
     pub spp: u32,
     pub rays: RayCounts,
     pub elapsed: Duration,
+    /// Per pixel, the sums the image is the mean of (what a shard file keeps).
+    pub sums: PixelSums,
 }
 
 /// Per pixel, the sums of the samples taken so far, which a render adds its own to.
@@ -51,6 +53,77 @@ impl PixelSums {
         (self.sum[i], self.sum_sq[i])
     }
 }
+
+/// Which of every pixel's samples a render takes: sample `s` belongs to shard `s mod count`
+/// (design §13), so the shards of one render share no random stream, together are that
+/// render, and any subset of them is an unbiased render with fewer samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    /// `K` of `K/N`: `0 ≤ index < count`.
+    pub index: u32,
+    /// `N` of `K/N`.
+    pub count: u32,
+}
+
+impl Shard {
+    /// Every sample: the render on one machine.
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    pub fn is_whole(&self) -> bool {
+        self.count == 1
+    }
+
+    /// The indices of this shard's samples among a pixel's `spp`.
+    pub fn samples(&self, spp: u32) -> std::iter::StepBy<std::ops::Range<u32>> {
+        (self.index.min(spp)..spp).step_by(self.count as usize)
+    }
+
+    /// How many of a pixel's `spp` samples are this shard's.
+    pub fn samples_of(&self, spp: u32) -> u32 {
+        spp.saturating_sub(self.index).div_ceil(self.count)
+    }
+}
+
+impl Default for Shard {
+    fn default() -> Self {
+        Self::WHOLE
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// `K/N` with `0 ≤ K < N`.
+    fn from_str(text: &str) -> Result<Self, String> {
+        let not = || format!("`{text}` is not K/N (shard K of N, 0 ≤ K < N, e.g. 0/4)");
+        let (k, n) = text.split_once('/').ok_or_else(not)?;
+        let index: u32 = k.trim().parse().map_err(|_| not())?;
+        let count: u32 = n.trim().parse().map_err(|_| not())?;
+        if count == 0 {
+            return Err(format!(
+                "`{text}`: the number of shards N must be at least 1"
+            ));
+        }
+        if count > MAX_SHARDS {
+            return Err(format!("`{text}`: at most {MAX_SHARDS} shards"));
+        }
+        if index >= count {
+            return Err(format!(
+                "`{text}`: shard K must be below N (shards are numbered 0 to N − 1)"
+            ));
+        }
+        Ok(Self { index, count })
+    }
+}
+
+/// The most shards a render can be split into (the most samples per pixel).
+pub const MAX_SHARDS: u32 = 1 << 24;
 
 /// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
 pub struct Tile {
@@ -111,36 +184,47 @@ pub fn render<I: PixelIntegrator + ?Sized>(
 
     let mut image = Image::new(width, height);
     let mut variance_of_mean = vec![[0.0; 3]; (width * height) as usize];
+    let mut sums = PixelSums::zero((width * height) as usize);
     let mut rays = RayCounts::default();
-    let mut spp = settings.spp;
+    let mut spp = settings.shard.samples_of(settings.spp);
     for result in &results {
         spp = result.spp;
-        let n = result.spp.max(1) as f64;
         for &(i, sum, sum_sq) in &result.sums {
-            let m = sum / n;
-            // Unbiased sample variance, divided by spp for the variance of the mean.
-            let var = if result.spp > 1 {
-                sample_variance(sum, sum_sq, n) / n
-            } else {
-                DVec3::ZERO
-            };
-            image.pixels[i] = m.as_vec3().to_array();
-            variance_of_mean[i] = var.max(DVec3::ZERO).to_array();
+            (image.pixels[i], variance_of_mean[i]) = pixel_estimate(sum, sum_sq, result.spp);
+            sums.sum[i] = sum;
+            sums.sum_sq[i] = sum_sq;
         }
         rays.add(result.rays);
     }
+    sums.spp = spp;
     Film {
         image,
         variance_of_mean,
         spp,
         rays,
         elapsed: start.elapsed(),
+        sums,
     }
 }
 
-/// Renders `settings.spp` samples of each pixel of `tile` with `estimator`, started at each
-/// pixel in turn, onto the sums in `taken` (none: from zero). Sample `s` of pixel `p` draws
-/// from the stream `(settings.seed, p, s)`, its camera ray first.
+/// A pixel's value, the mean of its `spp` samples, and the estimated variance of that mean,
+/// from their sum and sum of squares: what a render and a merge of shards both write.
+pub fn pixel_estimate(sum: DVec3, sum_sq: DVec3, spp: u32) -> ([f32; 3], [f64; 3]) {
+    let n = spp.max(1) as f64;
+    let m = sum / n;
+    // Unbiased sample variance, divided by spp for the variance of the mean.
+    let var = if spp > 1 {
+        sample_variance(sum, sum_sq, n) / n
+    } else {
+        DVec3::ZERO
+    };
+    (m.as_vec3().to_array(), var.max(DVec3::ZERO).to_array())
+}
+
+/// Renders `settings.spp` samples of each pixel of `tile` with `estimator` (those of them
+/// that are `settings.shard`'s), started at each pixel in turn, onto the sums in `taken`
+/// (none: from zero). Sample `s` of pixel `p` draws from the stream `(settings.seed, p, s)`,
+/// its camera ray first, in increasing `s`.
 pub fn render_tile<E: PixelEstimator>(
     view: &SceneView,
     settings: &RenderSettings,
@@ -160,7 +244,7 @@ pub fn render_tile<E: PixelEstimator>(
                 Some(t) => t.at(pixel as usize),
                 None => (DVec3::ZERO, DVec3::ZERO),
             };
-            for s in 0..settings.spp {
+            for s in settings.shard.samples(settings.spp) {
                 let mut rng = sample_rng(settings.seed, pixel, s as u64);
                 let ray = camera_ray(camera, (x, y), &mut rng);
                 let value = estimator.sample(view, &ray, &mut rng, &mut rays);
@@ -172,7 +256,7 @@ pub fn render_tile<E: PixelEstimator>(
     }
     TileResult {
         sums,
-        spp: taken.map_or(0, |t| t.spp) + settings.spp,
+        spp: taken.map_or(0, |t| t.spp) + settings.shard.samples_of(settings.spp),
         rays,
     }
 }

@@ -216,6 +216,9 @@ pub struct Scene {
     pub extent: f32,
     /// Non-fatal problems found while loading (ignored MTL statements, dropped triangles).
     pub warnings: Vec<String>,
+    /// Every file the scene was read from, the scene file first, in the order read (what a
+    /// shard's scene hash covers).
+    pub files: Vec<PathBuf>,
 }
 
 /// What a scene contains, for deciding what it does not need (design §8).
@@ -304,7 +307,8 @@ impl Scene {
         let dir = path.parent().unwrap_or(Path::new("."));
         let obj_path = dir.join(&file.mesh);
         let mut warnings = Vec::new();
-        let (mesh, materials, material_of) = load_mesh(&obj_path, &mut warnings)?;
+        let mut files = vec![path.to_path_buf(), obj_path.clone()];
+        let (mesh, materials, material_of) = load_mesh(&obj_path, &mut warnings, &mut files)?;
         let emitters = Emitters::new(&mesh, |prim| {
             materials[material_of[prim as usize] as usize].is_emitter()
         });
@@ -325,6 +329,7 @@ impl Scene {
             render: file.render,
             extent,
             warnings,
+            files,
         })
     }
 }
@@ -447,7 +452,12 @@ fn material(
 
 type LoadedMesh = (TriangleMesh, Vec<Material>, Vec<u32>);
 
-fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, SceneError> {
+/// The OBJ at `obj_path` with its materials; the MTL files it reads are added to `files`.
+fn load_mesh(
+    obj_path: &Path,
+    warnings: &mut Vec<String>,
+    files: &mut Vec<PathBuf>,
+) -> Result<LoadedMesh, SceneError> {
     let obj_text = read(obj_path)?;
     let summary = validate::check_obj(obj_path, &obj_text, warnings)?;
     let obj_dir = obj_path.parent().unwrap_or(Path::new("."));
@@ -455,6 +465,7 @@ fn load_mesh(obj_path: &Path, warnings: &mut Vec<String>) -> Result<LoadedMesh, 
     for lib in &summary.mtllibs {
         let mtl_path = obj_dir.join(lib);
         let text = read(&mtl_path)?;
+        files.push(mtl_path.clone());
         defined.extend(validate::check_mtl(&mtl_path, &text, warnings)?);
     }
     if let Some(missing) = summary

@@ -1,7 +1,8 @@
 //! The command line on good and bad input: clear errors, non-zero exit, no panic, no output
 //! file; and determinism across thread counts. This file holds the helpers; the tests are in
 //! `bad_input.rs` (malformed scenes and flags), `methods.rs` (each method's renders) and
-//! `commands.rs` (reference, sweep, bench, check, settings and the test-only method).
+//! `commands.rs` (reference, sweep, bench, check, settings and the test-only method) and
+//! `shards.rs` (`--shard` and `merge`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -9,6 +10,7 @@ mod common;
 mod bad_input;
 mod commands;
 mod methods;
+mod shards;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

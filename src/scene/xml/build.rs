@@ -15,7 +15,7 @@ use crate::scene::{
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Geometry and materials gathered from the shapes.
 #[derive(Default)]
@@ -27,6 +27,8 @@ struct Geometry {
     /// Material index of each (BSDF object, emitter object) pair already made.
     made: HashMap<(Option<usize>, Option<usize>), u32>,
     degenerate: usize,
+    /// The mesh files the shapes were read from.
+    files: Vec<PathBuf>,
 }
 
 pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
@@ -73,6 +75,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         triangles,
         material_of,
         materials,
+        files,
         ..
     } = geometry;
     if triangles.is_empty() {
@@ -102,6 +105,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         render: RenderDefaults { max_bounces, spp },
         extent,
         warnings,
+        files: doc.files.iter().cloned().chain(files).collect(),
     })
 }
 
@@ -122,7 +126,7 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
         flip_normals: p.bool("flip_normals", false)?,
         face_normals: p.bool("face_normals", false)?,
     };
-    let raw = shapes::load(p)?;
+    let raw = shapes::load(p, &mut g.files)?;
     raw.check_indices(&p.what()).map_err(|m| p.error(m))?;
     let bsdfs = p.children_of("bsdf");
     let emitters = p.children_of("emitter");

@@ -40,10 +40,11 @@ impl RawMesh {
     }
 }
 
-/// The triangles of shape `p` in object space.
-pub fn load(p: &Props) -> Result<RawMesh, SceneError> {
+/// The triangles of shape `p` in object space; the file it reads them from is added to
+/// `files`.
+pub fn load(p: &Props, files: &mut Vec<std::path::PathBuf>) -> Result<RawMesh, SceneError> {
     let plugin = p.object().plugin.as_str();
-    let file = |p: &Props| -> Result<std::path::PathBuf, SceneError> {
+    let mut file = |p: &Props| -> Result<std::path::PathBuf, SceneError> {
         let name = p
             .string("filename")?
             .ok_or_else(|| p.error("needs a `filename`"))?;
@@ -51,6 +52,7 @@ pub fn load(p: &Props) -> Result<RawMesh, SceneError> {
         if !path.is_file() {
             return Err(p.error(format!("file `{}` not found", path.display())));
         }
+        files.push(path.clone());
         Ok(path)
     };
     let mesh = match plugin {

@@ -1,0 +1,188 @@
+//! Adding shards' sums: the shards must be of one render ([`Identity`]) and hold no sample
+//! twice; any set of them is a render with the samples they hold.
+//!
+//! The sums are added in the order of the shards' `(N, K)`, whatever the order of the files,
+//! starting from the first shard's own sums: pixel `p`'s merged sum of 4 shards is
+//! `((S₀ + S₁) + S₂) + S₃` with `S_K = Σ_{s mod 4 = K} x_s` added in increasing `s`. A
+//! render on one machine adds `x₀ + x₁ + x₂ + …` in increasing `s`, so the two `f64` sums
+//! may differ in their last bits (a relative difference below `spp · 2⁻⁵³`); the image's
+//! `f32` pixels are equal unless a mean falls that close to the midpoint between two `f32`s.
+
+use super::{file, Header, Identity, LayerSums, ShardError};
+use crate::integrators::Shard;
+use std::path::{Path, PathBuf};
+
+/// The most missing shards a [`Coverage::Missing`] lists.
+pub const LISTED: usize = 32;
+
+/// Shards added together.
+#[derive(Debug)]
+pub struct Merged {
+    /// The first shard's header (its identity is every shard's).
+    pub header: Header,
+    /// The shards merged, in the order their sums were added.
+    pub shards: Vec<(PathBuf, Shard)>,
+    /// The summed layers.
+    pub layers: Vec<LayerSums>,
+    pub coverage: Coverage,
+}
+
+/// How many of the render's samples the merged shards hold.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Coverage {
+    /// Every sample: the merge is the whole render.
+    Complete,
+    /// Of `n` shards, `missing` are not there; `first` lists the first of them (at most
+    /// [`LISTED`]).
+    Missing {
+        n: u32,
+        missing: u32,
+        first: Vec<u32>,
+    },
+    /// Shards of different `N`: the samples per pixel they hold, of the render's.
+    Partial { spp: u32, of: u32 },
+}
+
+impl Merged {
+    pub fn identity(&self) -> &Identity {
+        &self.header.identity
+    }
+}
+
+/// Reads the shard files at `paths` and adds their sums; refuses files that are not
+/// complete, uncorrupted shards of one render, and shards that share samples.
+pub fn merge(paths: &[PathBuf]) -> Result<Merged, ShardError> {
+    let mut headers = paths
+        .iter()
+        .map(|p| Ok((p.clone(), file::read_header(p)?)))
+        .collect::<Result<Vec<_>, ShardError>>()?;
+    let Some((first_path, first)) = headers.first().cloned() else {
+        return Err(ShardError::Empty);
+    };
+    for (path, header) in &headers[1..] {
+        if let Some((what, a_value, b_value)) = first.identity.difference(&header.identity) {
+            return Err(ShardError::Mismatch {
+                a: first_path.clone(),
+                b: path.clone(),
+                what,
+                a_value,
+                b_value,
+            });
+        }
+    }
+    headers.sort_by_key(|(_, h)| (h.shard.count, h.shard.index));
+    check_disjoint(&headers)?;
+
+    let pixels = first.pixels() as usize;
+    let mut layers = vec![LayerSums::zero(pixels); first.layers()];
+    for (path, header) in &headers {
+        let (read, sums) = file::read(path)?;
+        if read.shard != header.shard || read.identity != first.identity {
+            return Err(ShardError::Inconsistent {
+                path: path.clone(),
+                message: "the file changed while it was merged".into(),
+            });
+        }
+        for (total, layer) in layers.iter_mut().zip(&sums) {
+            add(total, layer, path)?;
+        }
+    }
+    let coverage = coverage(&headers, &layers, first.identity.spp);
+    Ok(Merged {
+        header: first,
+        shards: headers.into_iter().map(|(p, h)| (p, h.shard)).collect(),
+        layers,
+        coverage,
+    })
+}
+
+/// Refuses two shards that hold a common sample: `s mod N = K` and `s mod M = L` share
+/// samples exactly when `K ≡ L (mod gcd(N, M))`.
+fn check_disjoint(headers: &[(PathBuf, Header)]) -> Result<(), ShardError> {
+    for (i, (a, ha)) in headers.iter().enumerate() {
+        for (b, hb) in &headers[i + 1..] {
+            let (x, y) = (ha.shard, hb.shard);
+            if x == y {
+                return Err(ShardError::Duplicate {
+                    a: a.clone(),
+                    b: b.clone(),
+                    shard: x,
+                });
+            }
+            let g = gcd(x.count, y.count);
+            if x.index % g == y.index % g {
+                let modulus = u64::from(x.count) / u64::from(g) * u64::from(y.count);
+                // The common residue (Chinese remainder theorem), found by stepping through x's.
+                let residue = (0..u64::from(y.count / g))
+                    .map(|t| u64::from(x.index) + t * u64::from(x.count))
+                    .find(|s| s % u64::from(y.count) == u64::from(y.index))
+                    .unwrap_or(u64::from(x.index));
+                return Err(ShardError::Overlap {
+                    a: a.clone(),
+                    b: b.clone(),
+                    a_shard: x,
+                    b_shard: y,
+                    modulus,
+                    residue,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Adds `layer`'s sums to `total`'s, pixel by pixel.
+fn add(total: &mut LayerSums, layer: &LayerSums, path: &Path) -> Result<(), ShardError> {
+    for i in 0..total.counts.len() {
+        total.counts[i] = total.counts[i]
+            .checked_add(layer.counts[i])
+            .ok_or_else(|| ShardError::Inconsistent {
+                path: path.to_path_buf(),
+                message: format!("pixel {i}'s sample count overflows"),
+            })?;
+        total.sum[i] += layer.sum[i];
+        total.sum_sq[i] += layer.sum_sq[i];
+    }
+    Ok(())
+}
+
+fn coverage(headers: &[(PathBuf, Header)], layers: &[LayerSums], spp: u32) -> Coverage {
+    let held = layers
+        .iter()
+        .flat_map(|l| l.counts.iter().copied())
+        .min()
+        .unwrap_or(0);
+    if held == spp {
+        return Coverage::Complete;
+    }
+    let n = headers[0].1.shard.count;
+    if headers.iter().all(|(_, h)| h.shard.count == n) {
+        // The headers are sorted by index.
+        let mut present = headers.iter().map(|(_, h)| h.shard.index).peekable();
+        let absent = (0..n).filter(|&k| {
+            if present.peek() == Some(&k) {
+                present.next();
+                false
+            } else {
+                true
+            }
+        });
+        let first = absent.take(LISTED).collect();
+        Coverage::Missing {
+            n,
+            missing: n - headers.len() as u32,
+            first,
+        }
+    } else {
+        Coverage::Partial { spp: held, of: spp }
+    }
+}
+
+fn gcd(a: u32, b: u32) -> u32 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
+}
