@@ -248,6 +248,7 @@ fn render_every_method(
             seed: config.seed,
             progress: false,
             shard: Default::default(),
+            control: Default::default(),
         };
         let integrator = prepare(view, &methods, &settings)?;
         films.push((label, integrator.render(view, &settings)));

@@ -64,6 +64,10 @@ fn main() {
         Command::Settings(args) => settings::run_settings(args),
     };
     if let Err(error) = result {
+        if let Some(stopped) = error.downcast_ref::<cli::resume::Interrupted>() {
+            eprintln!("genpath: {stopped}");
+            std::process::exit(stopped.exit_code());
+        }
         eprintln!("genpath: error: {error:#}");
         std::process::exit(1);
     }

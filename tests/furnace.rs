@@ -56,6 +56,7 @@ fn furnace(rho: f32, max_bounces: u32, (method, nee, spp): (Method, Nee, u32)) -
         seed: 7,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     // A small GA without the gate: every pixel renders with evolved mixtures.
     let mut config = Settings::default();

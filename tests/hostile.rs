@@ -213,6 +213,7 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         seed: 3,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     let srt = Mixture::new(
         vec![PathGenerator::srt(

@@ -35,6 +35,7 @@ fn render(scene: &Scene) -> Film {
         seed: 3,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     PathTracing {
         max_bounces: scene.render.max_bounces,

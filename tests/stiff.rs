@@ -148,6 +148,7 @@ fn generators_at_their_bounds_stay_finite() {
             seed: 2,
             progress: false,
             shard: Default::default(),
+            control: Default::default(),
         };
         let integrator = MixtureIntegrator {
             mixture: mixture.clone(),

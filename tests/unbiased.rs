@@ -111,6 +111,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         seed,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {

@@ -233,13 +233,41 @@ pub struct ShardArgs {
     /// Methods pt, srt and mixture (the others learn in every render).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
+    /// Continue the render from FILE, the shard file it wrote when a signal (SIGINT,
+    /// SIGTERM) stopped it or at a checkpoint, to the image an uninterrupted render makes:
+    /// the same command, with this flag added. Methods pt, srt and mixture.
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Write the shard file `<FILE>.shard` (as a stopped render does) every SECONDS while
+    /// rendering, so that a render killed outright loses at most that much work: continue
+    /// it with --resume. Methods pt, srt and mixture.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub checkpoint: Option<f64>,
 }
 
 impl ShardArgs {
-    /// Refuses a shard of a method that learns, before anything loads.
+    /// Refuses a shard, a resume or a checkpoint of a method that learns, before anything
+    /// loads.
     pub fn check_method(&self, method: Method) -> Result<()> {
         if self.shard.is_some() && method.learns() {
             return Err(genpath::integrators::PrepareError::ShardLearns(method).into());
+        }
+        for (flag, given) in [
+            ("--resume", self.resume.is_some()),
+            ("--checkpoint", self.checkpoint.is_some()),
+        ] {
+            if given && method.learns() {
+                bail!(
+                    "{flag}: --method {} learns in every render (its GA plan or spatial \
+                     guide), which a resumed render would learn anew; resume pt, srt or mixture",
+                    method.name()
+                );
+            }
+        }
+        if let Some(file) = &self.resume {
+            if !file.is_file() {
+                bail!("--resume {}: no such file", file.display());
+            }
         }
         Ok(())
     }
@@ -255,6 +283,16 @@ impl ShardArgs {
             );
         }
         Ok(shard)
+    }
+}
+
+/// A checkpoint interval: a finite number of seconds, at least 0.
+pub fn parse_seconds(text: &str) -> Result<f64, String> {
+    let t: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..1e9).contains(&t) {
+        Ok(t)
+    } else {
+        Err("must be a number of seconds, at least 0".into())
     }
 }
 

@@ -216,6 +216,7 @@ fn thread_scaling(
         seed: 1,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     let integrator = prepare(view, config, &settings)?;
     println!(

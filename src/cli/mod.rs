@@ -7,6 +7,7 @@ pub mod compare;
 pub mod merge;
 pub mod reference;
 pub mod render;
+pub mod resume;
 pub mod session;
 pub mod settings;
 pub mod sweep;

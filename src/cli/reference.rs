@@ -2,14 +2,14 @@
 
 use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
+use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::image::Image;
-use genpath::integrators::{prepare, RenderSettings};
+use genpath::integrators::{prepare, Control, Film, LayerSums, RenderSettings};
 use genpath::path::SceneView;
 use genpath::sampling::{derive_seed, Stream};
-use genpath::shard::LayerSums;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -53,10 +53,34 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
     load_mixture(&mut config, &session.scene, max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let shard = args.shard.shard(args.spp / 2, "half of --spp, per half")?;
-    let half = |seed: u64| -> Result<_> {
+    // The halves use seeds derived from the given one, so neither shares random numbers with
+    // a render made with the same `--seed` (that would correlate its error with the
+    // reference's and understate it).
+    let seeds = [Stream::ReferenceFirst, Stream::ReferenceSecond]
+        .map(|stream| derive_seed(args.scene.seed, stream.tag()));
+    let identity = || {
+        let settings = session.settings(&args.scene, method, args.spp / 2);
+        session.identity("reference", &args.scene, &settings, seeds.to_vec(), &config)
+    };
+    let file = shard_path(&args.output);
+    let continuation = Continuation::new(&args.shard, method, shard, file, identity)?;
+    let pixels = (session.scene.camera.width * session.scene.camera.height) as usize;
+    // Half `i`, resumed from its layer of `--resume`, its checkpoints holding `other` as the
+    // other half's layer.
+    let half = |i: usize, other: LayerSums| -> Result<Film> {
+        let layers = move |sums: &LayerSums| {
+            let mut layers = vec![sums.clone(), other.clone()];
+            layers.swap(0, i);
+            layers
+        };
         let settings = RenderSettings {
-            seed,
+            seed: seeds[i],
             shard,
+            control: Control {
+                stop: continuation.stop.clone(),
+                resume: continuation.resumed(i),
+                checkpoint: continuation.checkpoint(&session, layers),
+            },
             ..session.settings(&args.scene, method, args.spp / 2)
         };
         session.pool.install(|| {
@@ -64,36 +88,28 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
             Ok(integrator.render(&view, &settings))
         })
     };
-    // The halves use seeds derived from the given one, so neither shares random numbers with
-    // a render made with the same `--seed` (that would correlate its error with the
-    // reference's and understate it).
-    let seeds = [Stream::ReferenceFirst, Stream::ReferenceSecond]
-        .map(|stream| derive_seed(args.scene.seed, stream.tag()));
-    // Before the render, so that a shard that cannot say what it is part of fails early.
-    let identity = match args.shard.shard {
-        Some(_) => {
-            let settings = session.settings(&args.scene, method, args.spp / 2);
-            Some(session.identity("reference", &args.scene, &settings, seeds.to_vec(), &config)?)
-        }
-        None => None,
+    let second_resumed = || {
+        continuation
+            .resumed(1)
+            .map_or_else(|| LayerSums::zero(pixels), |l| l.as_ref().clone())
     };
-    let (a, b) = (half(seeds[0])?, half(seeds[1])?);
+    let a = half(0, second_resumed())?;
+    let b = match continuation.stop.requested() {
+        None => Some(half(1, a.sums.clone())?),
+        Some(_) => None,
+    };
+    let second = b.as_ref().map_or_else(second_resumed, |b| b.sums.clone());
+    let layers = [a.sums.clone(), second];
+    let of = shard.samples_of(args.spp / 2);
+    continuation.check_stopped(&session, &layers, of, identity)?;
+    let Some(b) = b else {
+        unreachable!("the second half ran, since no signal stopped the first");
+    };
     let (image, reference) = average_halves(&a.image, &b.image, seeds, args.spp / 2);
     genpath::image::write(&args.output, &image)?;
-    let shard_json = match identity {
-        Some(identity) => {
-            let path = shard_path(&args.output);
-            let layers = [a.sums.clone(), b.sums.clone()].map(|s| LayerSums::of(&s));
-            session.write_shard(&path, identity.clone(), shard, &layers)?;
-            Some(serde_json::json!({
-                "shard": shard.to_string(),
-                "samples_per_pixel_per_half": a.spp,
-                "file": path,
-                "identity": identity,
-            }))
-        }
-        None => None,
-    };
+    let resume = args.shard.resume.as_deref();
+    let spp_key = "samples_per_pixel_per_half";
+    let shard_json = continuation.finish(&session, &layers, spp_key, a.spp, resume)?;
     let settings = session.settings(&args.scene, method, args.spp / 2 * 2);
     let seconds = a.elapsed.as_secs_f64() + b.elapsed.as_secs_f64();
     let mut stats = session.stats(&settings);

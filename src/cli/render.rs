@@ -2,13 +2,13 @@
 
 use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
+use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
-use genpath::integrators::{prepare, Film, Integrator, Method, RenderSettings, Settings};
+use genpath::integrators::{prepare, Control, Film, Integrator, Method, RenderSettings, Settings};
 use genpath::path::SceneView;
-use genpath::shard::LayerSums;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -52,16 +52,19 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         ..session.settings(&args.scene, args.method.method, spp)
     };
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
-    // Before the render, so that a shard that cannot say what it is part of fails early.
-    let identity = match args.shard.shard {
-        Some(_) => Some(session.identity(
-            "render",
-            &args.scene,
-            &settings,
-            vec![settings.seed],
-            &config,
-        )?),
-        None => None,
+    let plain = settings.clone();
+    let identity = || session.identity("render", &args.scene, &plain, vec![plain.seed], &config);
+    let file = shard_path(&args.outputs[0]);
+    let continuation =
+        Continuation::new(&args.shard, settings.method, settings.shard, file, identity)?;
+    let control = Control {
+        stop: continuation.stop.clone(),
+        resume: continuation.resumed(0),
+        checkpoint: continuation.checkpoint(&session, |sums| vec![sums.clone()]),
+    };
+    let settings = RenderSettings {
+        control,
+        ..settings
     };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let prepared = session
@@ -69,6 +72,9 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         .install(|| prepare(&view, &config, &settings))?;
     let plan = prepared.plan();
     let film = session.pool.install(|| prepared.render(&view, &settings));
+    let of = settings.shard.samples_of(settings.spp);
+    let layers = [film.sums.clone()];
+    continuation.check_stopped(&session, &layers, of, identity)?;
 
     let t_write = Instant::now();
     for output in &args.outputs {
@@ -78,20 +84,8 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
         genpath::image::write(file, &picture)?;
     }
-    let shard = match identity {
-        Some(identity) => {
-            let path = shard_path(&args.outputs[0]);
-            let layers = [LayerSums::of(&film.sums)];
-            session.write_shard(&path, identity.clone(), settings.shard, &layers)?;
-            Some(serde_json::json!({
-                "shard": settings.shard.to_string(),
-                "samples_per_pixel": film.spp,
-                "file": path,
-                "identity": identity,
-            }))
-        }
-        None => None,
-    };
+    let resume = args.shard.resume.as_deref();
+    let shard = continuation.finish(&session, &layers, "samples_per_pixel", film.spp, resume)?;
     let write_s = t_write.elapsed().as_secs_f64();
 
     let mut stats = render_stats(

@@ -57,6 +57,7 @@ impl Session {
             seed: args.seed,
             progress: !args.quiet,
             shard: Shard::WHOLE,
+            control: Default::default(),
         }
     }
 
@@ -117,12 +118,7 @@ impl Session {
         shard: Shard,
         layers: &[genpath::shard::LayerSums],
     ) -> Result<()> {
-        let header = genpath::shard::Header {
-            shard,
-            identity,
-            scene_path: self.scene.path.clone(),
-            command_line: std::env::args().collect(),
-        };
+        let header = super::resume::header(self, identity, shard);
         genpath::shard::file::write(path, &header, layers)?;
         Ok(())
     }

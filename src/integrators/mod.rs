@@ -31,7 +31,7 @@ use crate::path::{RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
 pub use settings::Settings;
-pub use tiles::{Film, PixelSums, Shard};
+pub use tiles::{Checkpoint, Control, Film, LayerSums, PixelSums, Shard, Stop};
 
 /// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
 /// variant (its documentation is its help text) and the function that prepares it.
@@ -116,6 +116,10 @@ pub struct RenderSettings {
     /// Which of every pixel's `spp` samples this render takes (all by default).
     #[serde(skip_serializing_if = "Shard::is_whole")]
     pub shard: Shard,
+    /// How the render may be stopped, resumed and checkpointed (only methods that do not
+    /// learn: see [`Method::learns`]).
+    #[serde(skip)]
+    pub control: Control,
 }
 
 /// Why a method cannot be prepared.

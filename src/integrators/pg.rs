@@ -222,6 +222,17 @@ impl TrainingSchedule {
     }
 }
 
+/// The settings of training pass `pass` (`2^pass` samples per pixel from its own stream) of
+/// a render with `settings`; nothing stops, resumes or checkpoints it.
+fn training_pass(settings: &RenderSettings, pass: u32) -> RenderSettings {
+    RenderSettings {
+        spp: 1 << pass,
+        seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
+        control: Default::default(),
+        ..settings.clone()
+    }
+}
+
 /// A spatial guide trained by passes of path tracing (`schedule`): the first unguided
 /// beyond `plan`'s levels (`ga-pt --spatial-guide`; `None` for `pg`), each later one guided
 /// by the guide learned from the pass before it, every pass rendered as the final image is
@@ -267,11 +278,7 @@ pub fn train_spatial(
         if trial {
             training.plan_guides = PlanGuides::OutsideControl;
         }
-        let pass_settings = RenderSettings {
-            spp: 1 << pass,
-            seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
-            ..settings.clone()
-        };
+        let pass_settings = training_pass(settings, pass);
         bar.set_length(u64::from(training.samples.spp + pass_settings.spp));
         // The pass records its first `recorded` samples per pixel: records take memory.
         let recorded =
@@ -299,7 +306,8 @@ pub fn train_spatial(
         let mut arms = TrialArms::new();
         for (recorder, sums) in per_tile {
             records.add_recorded(recorder);
-            for (i, sum, sum_sq) in sums {
+            for pixel in sums {
+                let (i, sum, sum_sq) = (pixel.index, pixel.sum, pixel.sum_sq);
                 if let (true, Some(plan)) = (trial, open_plan) {
                     let before = training.samples.at(i);
                     let n = pass_settings.spp;

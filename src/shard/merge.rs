@@ -40,7 +40,8 @@ pub enum Coverage {
         missing: u32,
         first: Vec<u32>,
     },
-    /// Shards of different `N`: the samples per pixel they hold, of the render's.
+    /// Shards of different `N`, or shards of a stopped render: the samples per pixel of
+    /// the pixel that holds fewest, of the render's.
     Partial { spp: u32, of: u32 },
 }
 
@@ -157,7 +158,8 @@ fn coverage(headers: &[(PathBuf, Header)], layers: &[LayerSums], spp: u32) -> Co
         return Coverage::Complete;
     }
     let n = headers[0].1.shard.count;
-    if headers.iter().all(|(_, h)| h.shard.count == n) {
+    let every_shard = headers.len() == n as usize;
+    if !every_shard && headers.iter().all(|(_, h)| h.shard.count == n) {
         // The headers are sorted by index.
         let mut present = headers.iter().map(|(_, h)| h.shard.index).peekable();
         let absent = (0..n).filter(|&k| {

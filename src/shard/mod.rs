@@ -8,6 +8,7 @@
 pub mod file;
 pub mod merge;
 
+pub use crate::integrators::LayerSums;
 use crate::integrators::{RenderSettings, Settings, Shard};
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
@@ -140,49 +141,6 @@ impl Header {
 
     pub fn layers(&self) -> usize {
         self.identity.layer_seeds.len()
-    }
-}
-
-/// One layer's per-pixel sums: a render has one, a reference one per half.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LayerSums {
-    /// Samples in each pixel's sums.
-    pub counts: Vec<u32>,
-    pub sum: Vec<glam::DVec3>,
-    pub sum_sq: Vec<glam::DVec3>,
-}
-
-impl LayerSums {
-    /// The sums of a render's film, every pixel with its `spp` samples.
-    pub fn of(sums: &crate::integrators::PixelSums) -> Self {
-        Self {
-            counts: vec![sums.spp; sums.sum.len()],
-            sum: sums.sum.clone(),
-            sum_sq: sums.sum_sq.clone(),
-        }
-    }
-
-    /// No samples at `pixels` pixels.
-    pub fn zero(pixels: usize) -> Self {
-        Self {
-            counts: vec![0; pixels],
-            sum: vec![glam::DVec3::ZERO; pixels],
-            sum_sq: vec![glam::DVec3::ZERO; pixels],
-        }
-    }
-
-    /// The image (the mean of each pixel's samples), as a render computes it.
-    pub fn image(&self, width: u32, height: u32) -> crate::image::Image {
-        let mut image = crate::image::Image::new(width, height);
-        for (i, pixel) in image.pixels.iter_mut().enumerate() {
-            let (value, _) = crate::integrators::tiles::pixel_estimate(
-                self.sum[i],
-                self.sum_sq[i],
-                self.counts[i],
-            );
-            *pixel = value;
-        }
-        image
     }
 }
 

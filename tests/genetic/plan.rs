@@ -158,6 +158,7 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         seed: 9,
         progress: false,
         shard: Default::default(),
+        control: Default::default(),
     };
     let schedule = TrainingSchedule::Passes(5);
     let trial_of = |plan: &Plan| {

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# CI's test of the Slurm pipeline (issue 27), as root on Debian: starts a one-node Slurm
+# cluster on this machine (local-cluster.sh), submits a 4-shard `pt` render of a small fig5
+# through submit.sh, requeues one array task mid-render with `scontrol requeue` (it resumes
+# from its checkpoint), and checks that the merged image equals the render on one machine
+# bit for bit, and that a truncated shard is refused by the merge. Stops the daemons it
+# started, whatever happens.
+#
+#   bash scripts/slurm/ci.sh [GENPATH]   # GENPATH: a built binary [target/release/genpath]
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+genpath=${1:-$repo/target/release/genpath}
+[[ -x $genpath ]] || { echo "ci.sh: build genpath first (cargo build --release)" >&2; exit 2; }
+work=$(mktemp -d /tmp/genpath-slurm-ci.XXXXXX)
+export GENPATH_SLURM_DIR=$work/cluster
+trap 'bash "$repo/scripts/slurm/local-cluster.sh" stop; rm -rf "$work"' EXIT
+bash "$repo/scripts/slurm/local-cluster.sh" start
+export SLURM_CONF=$GENPATH_SLURM_DIR/slurm.conf
+
+scene=$repo/scenes/fig5/scene.toml
+flags=(--method pt --width 64 --height 64 --spp 4096 --seed 3)
+fail() { echo "ci.sh: FAILED: $*" >&2; for f in "$work"/out/slurm-*.out; do [[ -f $f ]] && { echo "--- $f" >&2; cat "$f" >&2; }; done; exit 1; }
+
+echo "== the render on one machine"
+"$genpath" render "$scene" "${flags[@]}" --quiet -o "$work/single.exr"
+
+echo "== the pipeline: 4 shards and a merge"
+submitted_at=$SECONDS
+submitted=$(bash "$repo/scripts/slurm/submit.sh" --shards 4 --checkpoint 0.2 --genpath "$genpath" \
+    "$scene" "$work/out" -- "${flags[@]}")
+echo "$submitted"
+array=$(sed -n 's/^shards: job \([0-9]*\) .*/\1/p' <<<"$submitted")
+merge=$(sed -n 's/.*merge: job \([0-9]*\) .*/\1/p' <<<"$submitted")
+[[ -n $array && -n $merge ]] || fail "no job ids in: $submitted"
+
+echo "== requeue task 1 once it has written a checkpoint"
+for ((i = 0; i < 600; i++)); do
+    [[ -f $work/out/part-1.exr.shard ]] && break
+    sleep 0.1
+done
+[[ -f $work/out/part-1.exr.shard ]] || fail "task 1 wrote no checkpoint within 60 s"
+[[ -f $work/out/part-1.exr ]] && fail "task 1 finished before it could be requeued"
+scontrol requeue "${array}_1"
+
+echo "== wait for the merge (at most 300 s)"
+for ((i = 0; i < 300; i++)); do
+    state=$(scontrol show job "$merge" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
+    case $state in
+    COMPLETED) break ;;
+    FAILED | CANCELLED | TIMEOUT | OUT_OF_MEMORY | NODE_FAIL) fail "merge job $merge: $state" ;;
+    esac
+    sleep 1
+done
+[[ $state == COMPLETED ]] || fail "the merge job did not complete within 300 s (state ${state:-unknown})"
+restarts=$(scontrol show job "${array}_1" | sed -n 's/.*Restarts=\([0-9]*\).*/\1/p')
+((restarts >= 1)) || fail "task 1 was not requeued (Restarts=${restarts:-?})"
+grep -q "resuming from" "$work"/out/slurm-"${array}"_1.out || fail "task 1 did not resume from its shard file"
+echo "task 1 ran $((restarts + 1)) times and resumed from its shard file; the pipeline took $((SECONDS - submitted_at)) s"
+scontrol show job "${array}_1" | grep -o "SubmitTime=[^ ]*\|EligibleTime=[^ ]*\|StartTime=[^ ]*\|EndTime=[^ ]*" | tr "\n" " "; echo
+
+echo "== the merged image is the render on one machine"
+"$genpath" compare --bits "$work/out/merged.exr" "$work/single.exr" || fail "merged ≠ single"
+
+echo "== a truncated shard is refused"
+head -c -100 "$work/out/part-2.exr.shard" >"$work/part-2-cut.shard"
+if "$genpath" merge "$work"/out/part-{0,1,3}.exr.shard "$work/part-2-cut.shard" -o "$work/bad.exr" 2>"$work/bad.err"; then
+    fail "a truncated shard was merged"
+fi
+grep -q "truncated" "$work/bad.err" || fail "the refusal does not say truncated: $(cat "$work/bad.err")"
+[[ -e $work/bad.exr ]] && fail "a refused merge wrote an image"
+cat "$work/bad.err"
+echo "Slurm pipeline: ok"
