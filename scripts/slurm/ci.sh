@@ -13,7 +13,11 @@ genpath=${1:-$repo/target/release/genpath}
 [[ -x $genpath ]] || { echo "ci.sh: build genpath first (cargo build --release)" >&2; exit 2; }
 work=$(mktemp -d /tmp/genpath-slurm-ci.XXXXXX)
 export GENPATH_SLURM_DIR=$work/cluster
-trap 'bash "$repo/scripts/slurm/local-cluster.sh" stop; rm -rf "$work"' EXIT
+trap 'bash "$repo/scripts/slurm/local-cluster.sh" stop || true; rm -rf "$work" || true' EXIT
+# A copy, so that a build during the run cannot change the binary under the tasks (their
+# shards would then be of another build, which a resume and a merge rightly refuse).
+cp "$genpath" "$work/genpath"
+genpath=$work/genpath
 bash "$repo/scripts/slurm/local-cluster.sh" start
 export SLURM_CONF=$GENPATH_SLURM_DIR/slurm.conf
 
@@ -41,6 +45,12 @@ done
 [[ -f $work/out/part-1.exr.shard ]] || fail "task 1 wrote no checkpoint within 60 s"
 [[ -f $work/out/part-1.exr ]] && fail "task 1 finished before it could be requeued"
 scontrol requeue "${array}_1"
+# Slurm holds a requeued job back for a while (about 2 minutes here); let it run now.
+for ((i = 0; i < 100; i++)); do
+    scontrol show job "${array}_1" | grep -q "JobState=PENDING" && break
+    sleep 0.1
+done
+scontrol update JobId="${array}_1" StartTime=now || true
 
 echo "== wait for the merge (at most 300 s)"
 for ((i = 0; i < 300; i++)); do

@@ -88,9 +88,15 @@ start() {
 }
 
 stop() {
-    local f
+    local f pids=() i
     for f in "$dir/slurmd.pid" "$dir/slurmctld.pid"; do
-        [[ -f $f ]] && kill "$(cat "$f")" 2>/dev/null || true
+        [[ -f $f ]] && pids+=("$(cat "$f")")
+    done
+    ((${#pids[@]})) && kill "${pids[@]}" 2>/dev/null
+    # Wait for them to save their state and exit, so that their directory can be removed.
+    for ((i = 0; i < 100; i++)); do
+        kill -0 "${pids[@]}" 2>/dev/null || break
+        sleep 0.1
     done
     if [[ -f $dir/munged.ours ]]; then
         pkill -x munged 2>/dev/null || true

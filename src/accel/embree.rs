@@ -4,7 +4,7 @@
 //! the padding its SIMD loads need). The scene is built robust (watertight along shared edges,
 //! which a renderer needs more than the last few percent of speed) and with high quality.
 
-use super::{Accel, AccelError, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use super::{Accel, AccelError, Coherence, EmbreeIsa, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use embree4_sys as sys;
 use std::mem::size_of;
 
@@ -19,6 +19,8 @@ pub struct EmbreeAccel {
     /// internally at a cost: cbox camera rays, one thread, AVX2, `genpath bench`: 19.6–20.2
     /// Mray/s in `rtcIntersect16` calls against 21.9–22.3 in pairs of `rtcIntersect8` calls.
     lanes: usize,
+    /// The instruction set the device was created for (`None` where Embree chose).
+    isa: Option<EmbreeIsa>,
 }
 
 // SAFETY: Embree devices and committed scenes may be used from any thread, and
@@ -33,7 +35,12 @@ impl EmbreeAccel {
     /// so primitive ids equal indices into `mesh.triangles`. Packets go to Embree in the CPU's
     /// native width ([`Accel::packet_lanes`]).
     pub fn new(mesh: &TriangleMesh) -> Result<Self, AccelError> {
-        Self::build(mesh, None)
+        Self::build(mesh, None, None)
+    }
+
+    /// [`EmbreeAccel::new`] with kernels for `isa` (`None`: the best this CPU runs).
+    pub fn with_isa(mesh: &TriangleMesh, isa: Option<EmbreeIsa>) -> Result<Self, AccelError> {
+        Self::build(mesh, None, isa)
     }
 
     /// [`EmbreeAccel::new`], with packets handed to Embree `lanes` (8 or 16) rays at a time
@@ -44,12 +51,25 @@ impl EmbreeAccel {
                 "packets of {lanes} lanes are not supported (8 or {PACKET_SIZE})"
             )));
         }
-        Self::build(mesh, Some(lanes))
+        Self::build(mesh, Some(lanes), None)
     }
 
-    fn build(mesh: &TriangleMesh, lanes: Option<usize>) -> Result<Self, AccelError> {
-        // SAFETY: a null config string asks for the default device.
-        let device = unsafe { sys::rtcNewDevice(std::ptr::null()) };
+    fn build(
+        mesh: &TriangleMesh,
+        lanes: Option<usize>,
+        isa: Option<EmbreeIsa>,
+    ) -> Result<Self, AccelError> {
+        let isa = match isa {
+            Some(isa) if !isa.runs_here() => return Err(AccelError::IsaUnsupported(isa)),
+            Some(isa) => Some(isa),
+            None => EmbreeIsa::best_here(),
+        };
+        let config = isa.map(|isa| format!("isa={}", isa.name()));
+        let config = std::ffi::CString::new(config.unwrap_or_default())
+            .map_err(|e| AccelError::Embree(e.to_string()))?;
+        // SAFETY: `config` is a NUL-terminated string that outlives the call; Embree copies
+        // what it needs of it.
+        let device = unsafe { sys::rtcNewDevice(config.as_ptr()) };
         if device.is_null() {
             // SAFETY: with a null device this reads the thread's last device-creation error.
             let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
@@ -76,6 +96,7 @@ impl EmbreeAccel {
             scene: std::ptr::null_mut(),
             normals: mesh.normals.clone(),
             lanes: lanes.unwrap_or(native),
+            isa,
         };
         accel.build_scene(mesh)?;
         Ok(accel)
@@ -380,6 +401,13 @@ impl Accel for EmbreeAccel {
 
     fn name(&self) -> &'static str {
         "embree"
+    }
+
+    fn kernels(&self) -> String {
+        match self.isa {
+            Some(isa) => format!("embree ({} kernels)", isa.name()),
+            None => "embree (kernels of its own choice)".to_string(),
+        }
     }
 
     fn packet_lanes(&self) -> usize {

@@ -134,6 +134,12 @@ pub trait Accel: Send + Sync {
     fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], coherence: Coherence);
     /// Back-end name for logs and stats.
     fn name(&self) -> &'static str;
+    /// What decides this back-end's answers to the last bit: its name, and for Embree the
+    /// instruction set of the kernels it traces with (a shard's identity records it, since
+    /// kernels for other instruction sets may round differently).
+    fn kernels(&self) -> String {
+        self.name().to_string()
+    }
     /// Rays per traversal call inside a packet query: Embree's packet width, 1 for a back-end
     /// that answers a packet ray by ray.
     fn packet_lanes(&self) -> usize;
@@ -162,8 +168,89 @@ impl AccelKind {
     }
 }
 
+/// The instruction sets Embree has kernels for (its `isa=` device setting). genpath always
+/// names one when it creates the device (the best the CPU runs unless `--embree-isa` pins
+/// another), so that the kernels are known, and neither Embree's own choice nor an
+/// `.embree3` file can change them unseen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum)]
+pub enum EmbreeIsa {
+    #[value(name = "sse2")]
+    Sse2,
+    #[value(name = "sse4.2")]
+    Sse42,
+    #[value(name = "avx")]
+    Avx,
+    #[value(name = "avx2")]
+    Avx2,
+    #[value(name = "avx512")]
+    Avx512,
+}
+
+impl EmbreeIsa {
+    /// Embree's name of the instruction set.
+    pub fn name(self) -> &'static str {
+        match self {
+            EmbreeIsa::Sse2 => "sse2",
+            EmbreeIsa::Sse42 => "sse4.2",
+            EmbreeIsa::Avx => "avx",
+            EmbreeIsa::Avx2 => "avx2",
+            EmbreeIsa::Avx512 => "avx512",
+        }
+    }
+
+    /// Whether this CPU (and its operating system) runs the instruction set, with the
+    /// features Embree's kernels for it need (Embree's `getCPUFeatures` groups).
+    pub fn runs_here(self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            match self {
+                EmbreeIsa::Sse2 => has!("sse2"),
+                EmbreeIsa::Sse42 => has!("sse4.2") && has!("popcnt"),
+                EmbreeIsa::Avx => EmbreeIsa::Sse42.runs_here() && has!("avx"),
+                EmbreeIsa::Avx2 => {
+                    EmbreeIsa::Avx.runs_here()
+                        && has!("avx2")
+                        && has!("fma")
+                        && has!("bmi1")
+                        && has!("bmi2")
+                        && has!("lzcnt")
+                        && has!("f16c")
+                }
+                EmbreeIsa::Avx512 => {
+                    EmbreeIsa::Avx2.runs_here()
+                        && has!("avx512f")
+                        && has!("avx512cd")
+                        && has!("avx512dq")
+                        && has!("avx512bw")
+                        && has!("avx512vl")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
+    /// The best instruction set this CPU runs, `None` on a CPU that is not x86-64 (where
+    /// Embree chooses).
+    pub fn best_here() -> Option<Self> {
+        use clap::ValueEnum;
+        Self::value_variants()
+            .iter()
+            .rev()
+            .copied()
+            .find(|isa| isa.runs_here())
+    }
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum AccelError {
+    #[error("--embree-isa {}: this CPU does not run it (it runs {})", .0.name(), EmbreeIsa::best_here().map_or("none of Embree's x86-64 kernels", |b| b.name()))]
+    IsaUnsupported(EmbreeIsa),
+    #[error("--embree-isa {}: the ray-tracing back-end is not Embree (--accel embree)", .0.name())]
+    IsaWithoutEmbree(EmbreeIsa),
     #[error("the {0} back-end is not built into this binary (rebuild with `--features {1}`)")]
     NotBuilt(&'static str, &'static str),
     #[error("Embree: {0}")]
@@ -172,9 +259,21 @@ pub enum AccelError {
 
 /// Builds the chosen back-end over `mesh`.
 pub fn build(kind: AccelKind, mesh: &TriangleMesh) -> Result<Box<dyn Accel>, AccelError> {
+    build_with(kind, mesh, None)
+}
+
+/// [`build`], with Embree's kernels pinned to `isa` (`None`: the best this CPU runs).
+pub fn build_with(
+    kind: AccelKind,
+    mesh: &TriangleMesh,
+    isa: Option<EmbreeIsa>,
+) -> Result<Box<dyn Accel>, AccelError> {
+    if let (Some(isa), AccelKind::Bvh) = (isa, kind) {
+        return Err(AccelError::IsaWithoutEmbree(isa));
+    }
     match kind {
         #[cfg(feature = "embree")]
-        AccelKind::Embree => Ok(Box::new(EmbreeAccel::new(mesh)?)),
+        AccelKind::Embree => Ok(Box::new(EmbreeAccel::with_isa(mesh, isa)?)),
         #[cfg(not(feature = "embree"))]
         AccelKind::Embree => Err(AccelError::NotBuilt("embree", "embree")),
         #[cfg(feature = "obvhs")]

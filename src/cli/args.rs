@@ -3,7 +3,7 @@
 use anyhow::{bail, Context, Result};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
-use genpath::accel::AccelKind;
+use genpath::accel::{AccelKind, EmbreeIsa};
 use genpath::genetic::plan::{GateConfig, PlanConfig};
 use genpath::genetic::GaConfig;
 use genpath::integrators::settings::{SpatialConfig, SrtConfig};
@@ -33,6 +33,11 @@ pub struct SceneArgs {
     /// Ray-tracing back-end.
     #[arg(long, value_enum, default_value_t = AccelKind::default_available())]
     pub accel: AccelKind,
+    /// Embree's kernels: the instruction set they use [default: the best this CPU runs].
+    /// Kernels for different instruction sets may round a hit differently, so shards to be
+    /// merged must use the same (their identity records it): pin it when the nodes differ.
+    #[arg(long, value_enum, value_name = "ISA")]
+    pub embree_isa: Option<EmbreeIsa>,
     /// Override the scene's image width (the horizontal field of view is kept).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     pub width: Option<u32>,

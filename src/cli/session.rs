@@ -39,7 +39,7 @@ impl Session {
             .build()
             .context("cannot start the worker threads")?;
         let t_accel = Instant::now();
-        let accel = accel::build(args.accel, &scene.mesh)?;
+        let accel = accel::build_with(args.accel, &scene.mesh, args.embree_isa)?;
         Ok(Self {
             scene,
             accel,
@@ -70,6 +70,7 @@ impl Session {
             "settings": settings,
             "threads": self.pool.current_num_threads(),
             "accel": self.accel.name(),
+            "accel_kernels": self.accel.kernels(),
             "width": self.scene.camera.width,
             "height": self.scene.camera.height,
             "warnings": self.scene.warnings,
@@ -98,7 +99,7 @@ impl Session {
             width: self.scene.camera.width,
             height: self.scene.camera.height,
         };
-        let accel = self.accel.name();
+        let accel = self.accel.kernels();
         Ok(genpath::shard::Identity::new(
             command,
             args.seed,
@@ -106,7 +107,7 @@ impl Session {
             layer_seeds,
             config,
             &inputs,
-            accel,
+            &accel,
         )?)
     }
 
