@@ -159,6 +159,43 @@ fn glass_xml_has_mitsubas_indices() {
     assert_eq!(thin.transmittance, Vec3::new(0.9, 0.95, 0.7));
 }
 
+/// Every method (`pt`, `srt` and `ga` with either estimator, `ga-pt` with and without the
+/// spatial guide, `pg`, the test-only `nee-only`, and `srt` as a loaded `mixture`) renders
+/// `glass.xml` at 32² without a NaN, infinite or negative pixel, with every sampled density
+/// finite and positive and the image mean of `pt` (`genpath::check`); the same check with
+/// the mixture's density 50 % off must fail.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_glass_as_pt_does_and_a_wrong_density_is_seen() {
+    use genpath::check::{check, CheckConfig};
+    use genpath::path::mixture_file;
+    let mut scene = Scene::load(&scene_path("glass.xml")).unwrap();
+    scene.resize(32, 32);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let bounces = scene.render.max_bounces;
+    let mut config = CheckConfig::new(64, bounces, 1);
+    let srt = mixture_file::srt(&scene, bounces, config.methods.srt.srt_absorption);
+    config.methods.loaded_mixture = Some(srt.clone());
+    let report = check(&view, &config).unwrap();
+    for m in &report.methods {
+        eprintln!(
+            "{:<18} bad pixels {}  |z| vs pt {:.2}",
+            m.method, m.bad_pixels, m.z_vs_pt
+        );
+        assert_eq!(m.bad_pixels, 0, "{}", m.method);
+    }
+    assert!(report.methods.len() >= 10 && report.pdf_samples > 1000);
+    assert!(report.passed(), "{}", report.failures.join("; "));
+    config.methods.loaded_mixture = Some(srt.with_pdf_error(0, 1.5));
+    let wrong = check(&view, &config).unwrap();
+    assert!(
+        wrong.failures.iter().any(|f| f.starts_with("mixture:")),
+        "a density 50 % off went unnoticed: {:?}",
+        wrong.failures
+    );
+}
+
 /// The scene of `box.xml` with the cube replaced by the shape `shape`.
 fn with_mesh(dir: &Path, shape: &str) -> Scene {
     let text = std::fs::read_to_string(scene_path("box.xml")).unwrap();
