@@ -1,29 +1,63 @@
-"""Renders the Mitsuba references of the XML agreement test (tests/mitsuba.rs) with Mitsuba 3
+"""Renders the Mitsuba references of the XML agreement tests (tests/mitsuba.rs) with Mitsuba 3
 itself. Run by hand, never by the build or CI:
 
     pip install mitsuba==3.9.1
-    python3 scripts/mitsuba_reference.py [SPP] [RES]    # defaults 16384 spp (64 × the test's), 64²
+    python3 scripts/mitsuba_reference.py [NAME ...] [--spp N] [--res N] [--seed S] [--out FILE]
 
-Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for every scenes/mitsuba/*.xml, rendered
-with the `scalar_rgb` variant (the box filter and independent sampler the scenes name), and
-prints each render's time.
+Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for each named scene (default: every
+scenes/mitsuba/*.xml), rendered with the `scalar_rgb` variant (the box filter and independent
+sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
+(box: 16384 spp at 64², glass: 16384 spp at 128², the tests' 256 spp).
+--spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
+e.g. Mitsuba's own render at the test's samples, to compare genpath's error with.
+--variant llvm_ad_rgb (with `apt-get install libllvm19`) is much faster; it renders in
+passes of at most 256 spp (seeds seed·1000 + pass) and averages them, to bound its memory.
+Prints each render's time.
 """
+import argparse
 import glob
 import os
-import sys
 import time
 
 import mitsuba as mi
 
-mi.set_variant("scalar_rgb")
-spp = int(sys.argv[1]) if len(sys.argv) > 1 else 16384
-res = int(sys.argv[2]) if len(sys.argv) > 2 else 64
+# (spp, res) of each scene's reference: 64 × its test's samples, at the test's size.
+REFERENCES = {"box": (16384, 64), "glass": (16384, 128)}
+
+parser = argparse.ArgumentParser()
+parser.add_argument("names", nargs="*")
+parser.add_argument("--spp", type=int)
+parser.add_argument("--res", type=int)
+parser.add_argument("--seed", type=int, default=1)
+parser.add_argument("--out")
+parser.add_argument("--variant", default="scalar_rgb")
+args = parser.parse_args()
+
+mi.set_variant(args.variant)
 here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "mitsuba")
-for path in sorted(glob.glob(os.path.join(here, "*.xml"))):
-    scene = mi.load_file(path, spp=spp, res=res)
+names = args.names or [os.path.basename(p)[:-4] for p in sorted(glob.glob(os.path.join(here, "*.xml")))]
+if args.out and len(names) != 1:
+    parser.error("--out takes one scene")
+for name in names:
+    path = os.path.join(here, name + ".xml")
+    spp, res = REFERENCES.get(name, (16384, 64))
+    spp, res = args.spp or spp, args.res or res
     start = time.time()
-    image = mi.render(scene, seed=1)
+    if args.variant.startswith("scalar"):
+        scene = mi.load_file(path, spp=spp, res=res)
+        image = mi.render(scene, seed=args.seed)
+    else:
+        per_pass = min(spp, 256)
+        if spp % per_pass:
+            parser.error(f"{spp} spp is not a multiple of {per_pass}")
+        scene = mi.load_file(path, spp=per_pass, res=res)
+        passes = spp // per_pass
+        image = None
+        for i in range(passes):
+            img = mi.render(scene, seed=args.seed * 1000 + i)
+            image = img if image is None else image + img
+        image = image / passes
     seconds = time.time() - start
-    out = path[:-4] + ".ref.exr"
+    out = args.out or path[:-4] + ".ref.exr"
     mi.Bitmap(image).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False).write(out)
-    print(f"{os.path.basename(path)}: {spp} spp at {res}² in {seconds:.1f} s -> {out}")
+    print(f"{name}.xml: {spp} spp at {res}², seed {args.seed}, in {seconds:.1f} s -> {out}")

@@ -1,9 +1,11 @@
 //! Mitsuba 3 XML scenes: genpath's `pt` against Mitsuba 3's own render of the same file
 //! (`scenes/mitsuba/*.ref.exr`, rendered by `scripts/mitsuba_reference.py` at 64 × this
 //! test's samples), per block of pixels inside a 99.9 % interval (Šidák-corrected), with a
-//! must-reject twin: the same render mirrored left-right (a camera frame with +x to the
-//! right instead of Mitsuba's left). And the mesh formats: ASCII and binary PLY and
-//! Mitsuba's serialized format give the same triangles.
+//! must-reject twin: for `box.xml` the same render mirrored left-right (a camera frame with
+//! +x to the right instead of Mitsuba's left), for `glass.xml` (a `dielectric` cube and a
+//! `thindielectric` pane) a render with the cube's index of refraction 3 % off. And the
+//! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
+//! triangles; and the glass's indices as Mitsuba reads them.
 
 use flate2::write::ZlibEncoder;
 use genpath::accel::{self, AccelKind};
@@ -12,6 +14,7 @@ use genpath::integrators::pt::PathTracing;
 use genpath::integrators::{Film, Integrator, Method, RenderSettings};
 use genpath::path::SceneView;
 use genpath::scene::Scene;
+use glam::Vec3;
 use statrs::distribution::{ContinuousCDF, Normal};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,12 +28,12 @@ fn scene_path(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn render(scene: &Scene) -> Film {
+fn render(scene: &Scene, spp: u32) -> Film {
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(scene, accel.as_ref());
     let settings = RenderSettings {
         method: Method::Pt,
-        spp: SPP,
+        spp,
         max_bounces: scene.render.max_bounces,
         seed: 3,
         progress: false,
@@ -92,7 +95,7 @@ fn pt_agrees_with_mitsuba_and_a_mirrored_camera_does_not() {
         (scene.camera.width, scene.camera.height),
         (reference.width, reference.height)
     );
-    let film = render(&scene);
+    let film = render(&scene, SPP);
     let (z, n) = max_z(&film, &reference, false);
     let critical = z_critical(n);
     assert!(z < critical, "box.xml: max |z| {z:.2} ≥ {critical:.2}");
@@ -100,6 +103,97 @@ fn pt_agrees_with_mitsuba_and_a_mirrored_camera_does_not() {
     assert!(
         z_mirrored > critical,
         "box.xml mirrored: max |z| {z_mirrored:.2} < {critical:.2}, the test cannot see a mirrored camera"
+    );
+}
+
+/// The samples of the glass test (its reference has 64 × as many).
+const GLASS_SPP: u32 = 256;
+
+#[test]
+fn pt_agrees_with_mitsuba_through_glass_and_an_index_3_percent_off_does_not() {
+    let path = scene_path("glass.xml");
+    let reference = genpath::image::read(&scene_path("glass.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, GLASS_SPP);
+    assert!(film
+        .image
+        .pixels
+        .iter()
+        .flatten()
+        .all(|v| v.is_finite() && *v >= 0.0));
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "glass.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let off = Scene::load_with(&path, &[("ior".into(), "1.545".into())]).unwrap();
+    let (z_off, _) = max_z(&render(&off, GLASS_SPP), &reference, false);
+    eprintln!(
+        "glass.xml: max |z| {z:.2}, with the index 3 % off {z_off:.2} (critical {critical:.2})"
+    );
+    assert!(
+        z_off > critical,
+        "glass.xml with the index 3 % off: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
+    );
+}
+
+/// The glass of `glass.xml` as Mitsuba reads it: η = int_ior / ext_ior in single precision,
+/// with Mitsuba's named indices (bk7 1.5046, air 1.000277), both sides scattering.
+#[test]
+fn glass_xml_has_mitsubas_indices() {
+    let scene = Scene::load(&scene_path("glass.xml")).unwrap();
+    let glass: Vec<_> = scene
+        .materials
+        .iter()
+        .filter_map(|m| m.dielectric.map(|d| (m, d)))
+        .collect();
+    assert_eq!(glass.len(), 2);
+    let (cube, smooth) = glass[0];
+    assert!(!smooth.thin && cube.mirror && cube.two_sided);
+    assert_eq!(smooth.eta, 1.5f32 / 1.000277f32);
+    assert_eq!((cube.ks, smooth.transmittance), (Vec3::ONE, Vec3::ONE));
+    let (pane, thin) = glass[1];
+    assert!(thin.thin && pane.mirror && pane.two_sided);
+    assert_eq!(thin.eta, 1.5046f32 / 1.000277f32);
+    assert_eq!(thin.transmittance, Vec3::new(0.9, 0.95, 0.7));
+}
+
+/// Every method (`pt`, `srt` and `ga` with either estimator, `ga-pt` with and without the
+/// spatial guide, `pg`, the test-only `nee-only`, and `srt` as a loaded `mixture`) renders
+/// `glass.xml` at 32² without a NaN, infinite or negative pixel, with every sampled density
+/// finite and positive and the image mean of `pt` (`genpath::check`); the same check with
+/// the mixture's density 50 % off must fail.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_glass_as_pt_does_and_a_wrong_density_is_seen() {
+    use genpath::check::{check, CheckConfig};
+    use genpath::path::mixture_file;
+    let mut scene = Scene::load(&scene_path("glass.xml")).unwrap();
+    scene.resize(32, 32);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let bounces = scene.render.max_bounces;
+    let mut config = CheckConfig::new(64, bounces, 1);
+    let srt = mixture_file::srt(&scene, bounces, config.methods.srt.srt_absorption);
+    config.methods.loaded_mixture = Some(srt.clone());
+    let report = check(&view, &config).unwrap();
+    for m in &report.methods {
+        eprintln!(
+            "{:<18} bad pixels {}  |z| vs pt {:.2}",
+            m.method, m.bad_pixels, m.z_vs_pt
+        );
+        assert_eq!(m.bad_pixels, 0, "{}", m.method);
+    }
+    assert!(report.methods.len() >= 10 && report.pdf_samples > 1000);
+    assert!(report.passed(), "{}", report.failures.join("; "));
+    config.methods.loaded_mixture = Some(srt.with_pdf_error(0, 1.5));
+    let wrong = check(&view, &config).unwrap();
+    assert!(
+        wrong.failures.iter().any(|f| f.starts_with("mixture:")),
+        "a density 50 % off went unnoticed: {:?}",
+        wrong.failures
     );
 }
 

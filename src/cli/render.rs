@@ -202,7 +202,7 @@ fn left_out(
         out.push("Phong-lobe evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
     }
     if analysis.mirror_triangles == 0 {
-        out.push("delta (mirror) vertices: no mirror material".to_string());
+        out.push("delta vertices: no mirror, conductor or dielectric material".to_string());
     }
     let s = &plan.stats;
     out.push(format!(

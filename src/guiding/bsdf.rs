@@ -125,6 +125,7 @@ mod tests {
             ke: Vec3::ZERO,
             two_sided: true,
             conductor: None,
+            dielectric: None,
         }
     }
 
@@ -188,6 +189,7 @@ mod tests {
                 material: &m,
                 n: N,
                 wo: wo(),
+                ng: N,
             };
             let mut cases = vec![
                 (GuidedBsdf::new(bsdf, None), 1.0),
@@ -233,6 +235,7 @@ mod tests {
                 material: &m,
                 n: N,
                 wo: wo(),
+                ng: N,
             };
             for k in 0..3 {
                 let v = guide.vertex(k, Vec3::ZERO, bsdf, false);

@@ -210,6 +210,7 @@ mod tests {
             ke: Vec3::ZERO,
             two_sided: true,
             conductor: None,
+            dielectric: None,
         }
     }
 

@@ -10,7 +10,7 @@ use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::path::pt::LightPoint;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
-use crate::sampling::{brdf, uniform, Rng};
+use crate::sampling::{brdf, specular, uniform, Rng};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
@@ -81,7 +81,12 @@ impl PixelEstimator for NeeOnly {
                 radiance += beta * light_sample(view, (&x, n, wo), material, rng, counts);
             }
             let u = [0; 3].map(|_| f64::from(uniform(rng)));
-            let Some(s) = brdf::sample(material, n, wo, u) else {
+            let s = if material.mirror {
+                specular::sample(material, x.ng, wo, u[0])
+            } else {
+                brdf::sample(material, n, wo, u)
+            };
+            let Some(s) = s else {
                 break;
             };
             count_emission = s.delta;

@@ -3,8 +3,9 @@
 //! A [`PathGenerator`] is a sequence of (directional sampler, absorption) pairs plus a
 //! light-point sampler. It samples an eye path vertex by vertex, as a [`Walk`] (a state
 //! machine that stops at each ray it needs traced, so that one implementation serves single
-//! rays, [`PathGenerator::sample_path`], and packets). Mirror (delta) vertices consume no
-//! sampler and never absorb. Where the estimator does next-event estimation is its [`Nee`]:
+//! rays, [`PathGenerator::sample_path`], and packets). Delta vertices (mirrors, glass:
+//! [`crate::sampling::specular`]) consume no sampler and never absorb; glass's choice
+//! between reflection and refraction is the material's, left out of every density. Where the estimator does next-event estimation is its [`Nee`]:
 //!
 //! * [`Nee::End`], the paper's: at the k-th non-delta vertex the path absorbs with
 //!   probability `a_k`, then draws a point on a light and traces one shadow ray, or samples a
@@ -99,7 +100,8 @@ pub struct PathVertex {
     pub wo: Vec3,
     /// Unit direction sampled out of this vertex (zero at the path's end).
     pub wi: Vec3,
-    /// A mirror vertex: its direction was determined, not sampled.
+    /// A delta vertex (a mirror, glass): its direction was determined by the material (or
+    /// chosen by it, for glass), not sampled by a generator.
     pub delta: bool,
     /// Density with which the sampling generator continued here: `(1 − a)·p(wi)`; 1 at a
     /// delta vertex. Kept to check [`PathGenerator::pdf_path`] against.

@@ -1,6 +1,7 @@
 //! `pt`: unidirectional path tracing with next-event estimation at every vertex and BSDF
 //! sampling, combined by the power heuristic (Veach & Guibas 1995), Russian roulette from
-//! depth 5. The baseline users compare genpath against.
+//! depth 5 (on the throughput with glass's radiance scale undone, as Mitsuba's `eta`). The
+//! baseline users compare genpath against.
 //!
 //! With a guide (`--method ga-pt`, `pg`: `guiding::Guide`), directions out of
 //! non-delta vertices come from the guide's per-vertex mixture of BRDF and anchor samplers
@@ -26,6 +27,7 @@
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, BrdfSample};
+use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
 use crate::scene::Material;
 use glam::Vec3;
@@ -52,12 +54,15 @@ pub trait VertexBsdf {
 }
 
 /// The BSDF of `material` at a vertex whose normal `n` faces `wo` ([`brdf::facing_normal`]):
-/// [`brdf`]'s evaluation, density and sampling.
+/// [`brdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
 #[derive(Clone, Copy)]
 pub struct Bsdf<'a> {
     pub material: &'a Material,
     pub n: Vec3,
     pub wo: Vec3,
+    /// The geometric normal as stored (`n` or `−n`): a dielectric tells its sides apart by
+    /// it.
+    pub ng: Vec3,
 }
 
 impl VertexBsdf for Bsdf<'_> {
@@ -69,14 +74,19 @@ impl VertexBsdf for Bsdf<'_> {
         brdf::pdf(self.material, self.n, self.wo, wi)
     }
 
-    /// [`brdf::sample`] from three uniform numbers.
+    /// [`brdf::sample`] from three uniform numbers ([`specular::sample`] from the first of
+    /// them for a delta BSDF).
     fn sample(&self, rng: &mut Rng) -> Option<BrdfSample> {
         let u = [
             uniform(rng) as f64,
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
-        brdf::sample(self.material, self.n, self.wo, u)
+        if self.material.mirror {
+            specular::sample(self.material, self.ng, self.wo, u[0])
+        } else {
+            brdf::sample(self.material, self.n, self.wo, u)
+        }
     }
 }
 
@@ -319,6 +329,9 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
     let mut wo = -ray.dir;
     let mut radiance = emitted(view.material(x.prim), &x, wo);
     let mut beta = Vec3::ONE;
+    // What Russian roulette multiplies `beta` by: the radiance scale of the interfaces
+    // crossed so far undone (1 where no glass was crossed).
+    let mut unscale = 1.0f32;
     // Non-delta vertices so far: the guide's level.
     let mut k = 0;
     for bounce in 1..=max_bounces {
@@ -331,12 +344,22 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         // At a diffuse vertex the spatial guide's records leave out the direct light, which
         // next-event estimation samples well there (see `guiding::field`).
         let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
-        let GuidedVertex { light_share, bsdf } =
-            guide.vertex(k, x.p, Bsdf { material, n, wo }, last);
+        let GuidedVertex { light_share, bsdf } = guide.vertex(
+            k,
+            x.p,
+            Bsdf {
+                material,
+                n,
+                wo,
+                ng: x.ng,
+            },
+            last,
+        );
         // The light sample's and the sampled direction's densities.
         counts.densities += 2 * bsdf.samplers() as u64;
 
-        // Next-event estimation (impossible through a mirror's delta), where it runs.
+        // Next-event estimation (impossible through a delta BSDF: a mirror, or glass, which
+        // blocks shadow rays as in Mitsuba), where it runs.
         if !material.mirror && (light_share >= 1.0 || f64::from(uniform(rng)) < light_share) {
             let hit = next_event(view, (&x, n), &bsdf, light_share, rng, counts);
             if let Some(h) = &hit {
@@ -359,6 +382,9 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         }
         beta *= bs.weight;
         let wi = bs.wi;
+        if material.dielectric.is_some() {
+            unscale /= specular::radiance_scale(material, x.ng, wo, wi);
+        }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
             let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;
             r.sampled(x.p, n, wi, cos_over_pdf, beta, radiance);
@@ -377,7 +403,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             }
         }
         if bounce >= RR_START {
-            let q = (1.0 - beta.max_element()).max(0.05);
+            let q = (1.0 - beta.max_element() * unscale).max(0.05);
             if uniform(rng) < q {
                 break;
             }

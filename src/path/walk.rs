@@ -7,7 +7,7 @@ use super::generator::{
 };
 use super::{emitted, SceneView, SurfacePoint};
 use crate::accel::Ray;
-use crate::sampling::brdf;
+use crate::sampling::{brdf, specular};
 use crate::sampling::{uniform, Rng};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
@@ -44,8 +44,8 @@ pub struct Walk {
     bounce: usize,
     max_bounces: u32,
     estimator: Nee,
-    /// Direction of the pending closest-hit query, whether it leaves a mirror, and the
-    /// density it was sampled with (`(1 − a)·p`).
+    /// Direction of the pending closest-hit query, whether it leaves a delta vertex (a
+    /// mirror, glass), and the density it was sampled with (`(1 − a)·p`).
     wi: Vec3,
     mirror: bool,
     pdf_dir: f64,
@@ -361,9 +361,11 @@ impl Walk {
     }
 
     /// A direction out of the current vertex (normal `n`), where the path goes on with
-    /// probability `1 − absorption`: the mirror's, or one from the generator's step; the
-    /// throughput takes the BRDF × cos. Returns it with its density `(1 − a)·p` (1 for a
-    /// mirror); `None` where it carries nothing.
+    /// probability `1 − absorption`: the delta BSDF's (a mirror's, or a dielectric's
+    /// reflection or transmission, chosen by one more uniform number), or one from the
+    /// generator's step; the throughput takes the BRDF × cos (a delta's weight). Returns it
+    /// with its density `(1 − a)·p` (1 for a delta: see [`specular`]); `None` where it
+    /// carries nothing.
     fn direction(
         &mut self,
         g: &PathGenerator,
@@ -373,8 +375,14 @@ impl Walk {
     ) -> Option<(Vec3, f64)> {
         let (x, wo) = (self.x, self.wo);
         if material.mirror {
-            self.throughput *= material.mirror_reflectance(n.dot(wo)).as_dvec3();
-            return Some((brdf::reflect(wo, n).normalize(), 1.0));
+            // Only a dielectric draws its choice: mirrors keep their random streams.
+            let u = match material.dielectric {
+                Some(_) => f64::from(uniform(rng)),
+                None => 0.0,
+            };
+            let s = specular::sample(material, x.ng, wo, u)?;
+            self.throughput *= s.weight.as_dvec3();
+            return Some((s.wi, s.pdf));
         }
         let u = [
             uniform(rng) as f64,

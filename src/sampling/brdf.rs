@@ -1,10 +1,12 @@
 //! The BRDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
-//! normalised modified-Phong lobe (chosen by albedo), or an ideal mirror (a delta).
+//! normalised modified-Phong lobe (chosen by albedo), or a delta BSDF (an ideal mirror or
+//! conductor here; dielectrics, which tell their sides apart, in [`super::specular`]).
 //!
 //! Directions are unit vectors pointing away from the surface; `n` is the geometric normal
 //! turned to the side of `wo` ([`facing_normal`]). Densities are solid-angle densities over
 //! the full sphere (zero below the surface for the Lambertian lobe), in `f64`.
 
+use super::specular;
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
@@ -121,16 +123,14 @@ pub fn sample_direction(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<
 }
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
-/// (below the surface, or a black material).
+/// (below the surface, or a black material), and for a dielectric, whose sampling needs the
+/// geometric normal's side: [`specular::sample`] samples every delta BSDF.
 pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
     if m.mirror {
-        let wi = reflect(wo, n).normalize();
-        return (m.ks.max_element() > 0.0).then_some(BrdfSample {
-            wi,
-            pdf: 1.0,
-            weight: m.mirror_reflectance(n.dot(wo)),
-            delta: true,
-        });
+        return match m.dielectric {
+            Some(_) => None,
+            None => specular::sample(m, n, wo, u[0]),
+        };
     }
     let wi = sample_direction(m, n, wo, u)?;
     let pdf = pdf(m, n, wo, wi);

@@ -8,6 +8,7 @@ pub mod anchor;
 pub mod brdf;
 pub mod light_point;
 pub mod patch;
+pub mod specular;
 
 use crate::accel::Ray;
 use crate::scene::Camera;

@@ -41,7 +41,8 @@ pub enum SceneError {
 }
 
 /// A surface material (design §3): a two-sided Lambertian lobe plus a normalised
-/// modified-Phong lobe, or an ideal mirror; and a one-sided emission.
+/// modified-Phong lobe, or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or
+/// thin dielectric); and a one-sided emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -51,7 +52,10 @@ pub struct Material {
     pub ks: Vec3,
     /// Phong exponent (`Ns`).
     pub ns: f32,
-    /// Ideal mirror (`illum 3`): a delta BRDF of reflectance `ks`.
+    /// A delta BSDF: an ideal mirror (`illum 3`) of reflectance `ks`, or, with
+    /// [`Self::dielectric`], a dielectric interface. Transport treats every such vertex
+    /// alike: no next-event estimation there, no sampler of a generator or guide, and the
+    /// emission its direction finds counted in full.
     pub mirror: bool,
     /// Radiance emitted on the normal side (`Ke`).
     pub ke: Vec3,
@@ -61,6 +65,23 @@ pub struct Material {
     /// A smooth conductor's complex index of refraction (η, k) per channel: the mirror's
     /// reflectance is then `ks` times its Fresnel reflectance (Mitsuba's `conductor`).
     pub conductor: Option<[Vec3; 2]>,
+    /// A smooth (or thin) dielectric (Mitsuba's `dielectric`, `thindielectric`): with
+    /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
+    /// [`crate::sampling::specular`]).
+    pub dielectric: Option<Dielectric>,
+}
+
+/// A dielectric interface: its relative index of refraction and what it transmits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dielectric {
+    /// η = interior / exterior index of refraction; the exterior is on the side of the
+    /// geometric normal.
+    pub eta: f32,
+    /// What transmission passes (Mitsuba's `specular_transmittance`).
+    pub transmittance: Vec3,
+    /// A thin sheet (`thindielectric`): light passes straight through, and reflection
+    /// includes the sheet's internal reflections.
+    pub thin: bool,
 }
 
 /// What a one-sided material is seen from behind: it neither scatters nor emits.
@@ -73,6 +94,7 @@ pub static BLACK: Material = Material {
     ke: Vec3::ZERO,
     two_sided: true,
     conductor: None,
+    dielectric: None,
 };
 
 impl Material {
@@ -98,6 +120,9 @@ impl Material {
     pub fn scatters(&self) -> bool {
         if self.mirror {
             self.ks.max_element() > 0.0
+                || self
+                    .dielectric
+                    .is_some_and(|d| d.transmittance.max_element() > 0.0)
         } else {
             self.kd.max_element() > 0.0 || self.ks.max_element() > 0.0
         }
@@ -225,7 +250,8 @@ pub struct Scene {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SceneAnalysis {
     pub triangles: usize,
-    /// Triangles by material kind: Lambertian only, with a Phong lobe, mirrors, emitters.
+    /// Triangles by material kind: Lambertian only, with a Phong lobe, delta BSDFs (mirrors,
+    /// conductors, dielectrics), emitters.
     pub diffuse_triangles: usize,
     pub glossy_triangles: usize,
     pub mirror_triangles: usize,
@@ -447,6 +473,7 @@ fn material(
         ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
         two_sided: true,
         conductor: None,
+        dielectric: None,
     })
 }
 

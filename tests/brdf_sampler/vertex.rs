@@ -35,6 +35,7 @@ pub(crate) fn material(kd: Vec3, ks: Vec3, ns: f32) -> Material {
         ke: Vec3::ZERO,
         two_sided: true,
         conductor: None,
+        dielectric: None,
     }
 }
 

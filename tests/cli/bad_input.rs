@@ -237,7 +237,12 @@ fn hostile_xml_scenes_fail_clearly() {
         ("text in a float", "<shape type=\"cube\"><transform name=\"to_world\"><scale value=\"big\"/></transform></shape>", &["s.xml:", "big"]),
         ("unknown parameter", "<shape type=\"cube\"><float name=\"radius\" value=\"2\"/></shape>", &["s.xml:", "radius"]),
         ("analytic sphere", "<shape type=\"sphere\"/>", &["s.xml:", "sphere"]),
-        ("dielectric", "<shape type=\"cube\"><bsdf type=\"dielectric\"/></shape>", &["s.xml:", "dielectric"]),
+        ("rough glass", "<shape type=\"cube\"><bsdf type=\"roughdielectric\"/></shape>", &["s.xml:", "roughdielectric"]),
+        ("unknown index of refraction", "<shape type=\"cube\"><bsdf type=\"dielectric\"><string name=\"int_ior\" value=\"unobtainium\"/></bsdf></shape>", &["s.xml:", "unobtainium", "bk7"]),
+        ("negative index of refraction", "<shape type=\"cube\"><bsdf type=\"thindielectric\"><float name=\"ext_ior\" value=\"-1\"/></bsdf></shape>", &["s.xml:", "ext_ior"]),
+        ("textured glass", "<shape type=\"cube\"><bsdf type=\"dielectric\"><texture name=\"specular_transmittance\" type=\"checkerboard\"/></bsdf></shape>", &["s.xml:", "specular_transmittance", "texture"]),
+        ("glass in twosided", "<shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"dielectric\"/></bsdf></shape>", &["s.xml:", "transmission"]),
+        ("glass that creates energy", "<shape type=\"cube\"><bsdf type=\"dielectric\"><rgb name=\"specular_reflectance\" value=\"1.5\"/></bsdf></shape>", &["s.xml:", "specular_reflectance"]),
         ("undefined parameter", "<shape type=\"cube\"><boolean name=\"flip_normals\" value=\"$flip\"/></shape>", &["s.xml:", "$flip"]),
     ];
     for (what, shapes, needles) in cases {

@@ -10,7 +10,7 @@ use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
 use crate::accel::TriangleMesh;
 use crate::scene::{
-    triangle_area, Camera, Emitters, Material, RenderDefaults, Scene, SceneError,
+    triangle_area, Camera, Dielectric, Emitters, Material, RenderDefaults, Scene, SceneError,
     MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
 };
 use glam::{DMat3, DVec3, Vec3};
@@ -176,6 +176,7 @@ fn diffuse(kd: DVec3, name: String) -> Material {
         ke: Vec3::ZERO,
         two_sided: false,
         conductor: None,
+        dielectric: None,
     }
 }
 
@@ -200,8 +201,11 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
                 return Err(p.error("genpath's twosided takes exactly one nested BSDF (different front and back BSDFs are not supported)"));
             };
             let q = Props::new(p.doc, only);
-            if q.object().plugin == "twosided" {
-                return Err(q.error("a twosided BSDF inside a twosided BSDF"));
+            match q.object().plugin.as_str() {
+                "twosided" => return Err(q.error("a twosided BSDF inside a twosided BSDF")),
+                // As Mitsuba's twosided refuses them.
+                "dielectric" | "thindielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
+                _ => {}
             }
             let mut m = bsdf(&q, warnings)?;
             m.two_sided = true;
@@ -209,10 +213,9 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
             m
         }
         "conductor" => conductor(p, name, warnings)?,
-        "dielectric" | "thindielectric" => {
-            return Err(p.error("smooth dielectrics are not supported yet (refraction is not implemented in genpath's transport)"))
-        }
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor)"))),
+        "dielectric" => dielectric(p, name, false, warnings)?,
+        "thindielectric" => dielectric(p, name, true, warnings)?,
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, dielectric, thindielectric)"))),
     };
     p.finish()?;
     Ok(m)
@@ -260,6 +263,50 @@ fn conductor(p: &Props, name: String, warnings: &mut Vec<String>) -> Result<Mate
         ke: Vec3::ZERO,
         two_sided: false,
         conductor: Some([eta.as_vec3(), k.as_vec3()]),
+        dielectric: None,
+    })
+}
+
+/// Mitsuba's smooth `dielectric` (or, `thin`, its `thindielectric`): a two-sided delta BSDF
+/// of η = `int_ior` / `ext_ior` (numbers or Mitsuba's names; bk7 in air by default) that
+/// reflects with `specular_reflectance` and transmits with `specular_transmittance` (both 1
+/// by default; constants only).
+fn dielectric(
+    p: &Props,
+    name: String,
+    thin: bool,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let int_ior = super::ior::read(p, "int_ior", "bk7")?;
+    let ext_ior = super::ior::read(p, "ext_ior", "air")?;
+    let mut colour = |what: &str| -> Result<DVec3, SceneError> {
+        let c = p
+            .color(what, ColorUse::Reflectance, warnings)?
+            .unwrap_or(DVec3::ONE);
+        if c.max_element() > 1.0 || c.min_element() < 0.0 {
+            return Err(p.error(format!(
+                "`{what}` {c} is outside [0, 1] (it would create energy)"
+            )));
+        }
+        Ok(c)
+    };
+    let reflectance = colour("specular_reflectance")?;
+    let transmittance = colour("specular_transmittance")?;
+    Ok(Material {
+        name,
+        kd: Vec3::ZERO,
+        ks: reflectance.as_vec3(),
+        ns: 1.0,
+        mirror: true,
+        ke: Vec3::ZERO,
+        two_sided: true,
+        conductor: None,
+        dielectric: Some(Dielectric {
+            // In single precision, as Mitsuba computes it.
+            eta: int_ior / ext_ior,
+            transmittance: transmittance.as_vec3(),
+            thin,
+        }),
     })
 }
 

@@ -1,0 +1,168 @@
+//! Delta BSDFs (Mitsuba 3's smooth `conductor`, `dielectric` and `thindielectric`, and the
+//! ideal mirror): the dielectric Fresnel equations, refraction, and the one sampler of every
+//! delta vertex, [`sample`], in Mitsuba's radiance mode.
+//!
+//! A dielectric reflects with probability `F` (its Fresnel reflectance; 1 under total
+//! internal reflection) and refracts otherwise; the sample's weight is then
+//! `specular_reflectance`, or `specular_transmittance · η_ti²` for radiance crossing the
+//! interface (`η_ti` the index of refraction on `wo`'s side over that on `wi`'s: Mitsuba's
+//! `eta_ti`, whose `si.wi` is genpath's `wo`). A thin dielectric reflects with
+//! `R' = 2R / (1 + R)` (its internal reflections, `R + T²R / (1 − R²)`) and otherwise lets
+//! the light through unbent, weighted by its transmittance.
+//!
+//! # Densities
+//!
+//! The delta's direction has no density, and its discrete choice (reflect or refract, with
+//! `F` or `1 − F`) is the material's, the same for every path generator, technique and
+//! guide that reaches the vertex: like the delta itself, it is left out of every density
+//! (the sampled `pdf` is 1, and `pdf_path` skips delta vertices) and out of the weight, from
+//! which `F` cancels. Densities stay consistent between sampling and evaluation, and the
+//! ratios that multiple importance sampling and the genetic algorithm's fitness take are
+//! those of the full densities.
+
+use super::brdf::{facing_normal, reflect, BrdfSample};
+use crate::scene::{Dielectric, Material};
+use glam::{DVec3, Vec3};
+
+/// The dielectric Fresnel reflectance for `cos_theta_i` (against the normal on the
+/// exterior's side; negative from inside) at an interface of relative index `eta`
+/// (interior / exterior): `(r, cos_theta_t, eta_it, eta_ti)`, Mitsuba's `fresnel`. `r` is 1
+/// under total internal reflection; `cos_theta_t` has the sign opposite to `cos_theta_i`;
+/// `eta_it` is the transmitted side's index over the incident side's, `eta_ti` its inverse.
+pub fn fresnel_dielectric(cos_theta_i: f64, eta: f64) -> (f64, f64, f64, f64) {
+    let outside = cos_theta_i >= 0.0;
+    let (eta_it, eta_ti) = if outside {
+        (eta, eta.recip())
+    } else {
+        (eta.recip(), eta)
+    };
+    let cos_t_sqr = 1.0 - (1.0 - cos_theta_i * cos_theta_i) * eta_ti * eta_ti;
+    let cos_i = cos_theta_i.abs();
+    let cos_t = cos_t_sqr.max(0.0).sqrt();
+    let r = if eta == 1.0 {
+        0.0
+    } else if cos_i == 0.0 {
+        1.0
+    } else {
+        let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
+        let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
+        0.5 * (a_s * a_s + a_p * a_p)
+    };
+    let cos_theta_t = if outside { -cos_t } else { cos_t };
+    (r, cos_theta_t, eta_it, eta_ti)
+}
+
+/// The probability that `d` reflects light arriving at `cos_theta_i` against its geometric
+/// normal (negative from inside): the Fresnel reflectance, with a thin sheet's internal
+/// reflections.
+pub fn reflect_probability(d: &Dielectric, cos_theta_i: f64) -> f64 {
+    let eta = f64::from(d.eta);
+    if d.thin {
+        let r = fresnel_dielectric(cos_theta_i.abs(), eta).0;
+        2.0 * r / (1.0 + r)
+    } else {
+        fresnel_dielectric(cos_theta_i, eta).0
+    }
+}
+
+/// The direction a dielectric `d` sends light into when it does not reflect: refracted
+/// through the interface (normal `ng`, unit `wo`), or straight through a thin sheet; with
+/// the weight's factor `η_ti²` (1 for a thin sheet).
+fn transmitted(d: &Dielectric, ng: DVec3, wo: DVec3) -> (DVec3, f64) {
+    if d.thin {
+        return (-wo, 1.0);
+    }
+    let cos_i = ng.dot(wo);
+    let (_, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, f64::from(d.eta));
+    let wi = -eta_ti * wo + (eta_ti * cos_i + cos_t) * ng;
+    (wi.normalize(), eta_ti * eta_ti)
+}
+
+/// The factor `η_ti²` by which `m`'s weight scales radiance that crossed its interface
+/// from `wi` to `wo` (geometric normal `ng`): for a smooth dielectric's refraction, 1
+/// otherwise. A path tracer's Russian roulette undoes it (as Mitsuba's does with its
+/// `eta`), so that a path inside glass is not ended for the compression alone.
+pub fn radiance_scale(m: &Material, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    match &m.dielectric {
+        Some(d) if !d.thin && ng.dot(wo) * ng.dot(wi) < 0.0 => {
+            let eta_ti = if ng.dot(wo) >= 0.0 {
+                d.eta.recip()
+            } else {
+                d.eta
+            };
+            eta_ti * eta_ti
+        }
+        _ => 1.0,
+    }
+}
+
+/// Samples the delta BSDF of `m` (a mirror: [`Material::mirror`]) at a vertex of geometric
+/// normal `ng` (as stored, either orientation for a mirror; a dielectric tells its sides
+/// apart by it) seen from unit `wo`. `u` (uniform in [0, 1)) picks a dielectric's
+/// reflection (`u < F`) or transmission; a mirror does not use it. The sample's `pdf` is 1
+/// (see the module documentation); `None` where it carries nothing.
+pub fn sample(m: &Material, ng: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
+    let n = facing_normal(ng, wo);
+    let Some(d) = &m.dielectric else {
+        return (m.ks.max_element() > 0.0).then(|| BrdfSample {
+            wi: reflect(wo, n).normalize(),
+            pdf: 1.0,
+            weight: m.mirror_reflectance(n.dot(wo)),
+            delta: true,
+        });
+    };
+    let (ng64, wo64) = (ng.as_dvec3().normalize(), wo.as_dvec3().normalize());
+    let (wi, weight) = if u < reflect_probability(d, ng64.dot(wo64)) {
+        (reflect(wo, n).normalize(), m.ks)
+    } else {
+        let (wi, scale) = transmitted(d, ng64, wo64);
+        (wi.as_vec3(), d.transmittance * scale as f32)
+    };
+    (weight.max_element() > 0.0).then_some(BrdfSample {
+        wi,
+        pdf: 1.0,
+        weight,
+        delta: true,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_at_normal_incidence_and_beyond_the_critical_angle() {
+        let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(1.0, 1.5);
+        assert!((r - 0.04).abs() < 1e-12, "{r}");
+        assert!((cos_t + 1.0).abs() < 1e-12 && eta_it == 1.5 && eta_ti == 1.0 / 1.5);
+        // From inside, beyond asin(1 / 1.5) ≈ 41.8°: total internal reflection.
+        let c = 45f64.to_radians().cos();
+        assert_eq!(fresnel_dielectric(-c, 1.5).0, 1.0);
+        assert!(fresnel_dielectric(c, 1.5).0 < 0.1);
+        assert_eq!(fresnel_dielectric(0.3, 1.0).0, 0.0);
+    }
+
+    #[test]
+    fn refraction_obeys_snell_and_crosses_the_surface() {
+        let d = Dielectric {
+            eta: 1.5,
+            transmittance: Vec3::ONE,
+            thin: false,
+        };
+        let ng = DVec3::Z;
+        for (wo, inside) in [
+            (DVec3::new(0.6, 0.0, 0.8), false),
+            (DVec3::new(0.3, 0.1, -0.9).normalize(), true),
+        ] {
+            let (wi, scale) = transmitted(&d, ng, wo);
+            assert!((wi.length() - 1.0).abs() < 1e-12);
+            assert!(wi.z * wo.z < 0.0, "it leaves on the other side");
+            let (sin_o, sin_i) = (wo.truncate().length(), wi.truncate().length());
+            let (eta_o, eta_i) = if inside { (1.5, 1.0) } else { (1.0, 1.5) };
+            assert!((eta_o * sin_o - eta_i * sin_i).abs() < 1e-12);
+            // The tangential parts point opposite ways.
+            assert!(wi.truncate().dot(wo.truncate()) < 0.0);
+            assert!((scale - (eta_o / eta_i) * (eta_o / eta_i)).abs() < 1e-12);
+        }
+    }
+}
