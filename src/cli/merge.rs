@@ -11,7 +11,9 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct MergeArgs {
     /// Shard files (`<image>.shard`, written by `render --shard` or `reference --shard`) of
-    /// one render: all of its shards, or any of them for an image with fewer samples.
+    /// one render: all of its shards, or any of them for an image with fewer samples. Or
+    /// the parts of one sweep (`PREFIX.csv`, written by `sweep --shard`), merged into one
+    /// `-o PREFIX`.
     #[arg(required = true, value_name = "SHARD")]
     pub shards: Vec<PathBuf>,
     /// Output image; repeat for several formats (a reference's must be EXR). A
@@ -27,6 +29,16 @@ pub struct MergeArgs {
 }
 
 pub fn run_merge(args: MergeArgs) -> Result<()> {
+    let is_csv = |p: &PathBuf| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if args.shards.iter().any(is_csv) {
+        if !args.shards.iter().all(is_csv) {
+            bail!("shards of a render (.shard) and parts of a sweep (.csv) do not merge together");
+        }
+        let [prefix] = &args.outputs[..] else {
+            bail!("parts of a sweep merge into one -o PREFIX (PREFIX.csv and PREFIX.svg)");
+        };
+        return super::sweep::merge_parts(&args.shards, prefix, args.complete, args.quiet);
+    }
     for output in &args.outputs {
         check_output(output)?;
     }

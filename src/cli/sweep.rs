@@ -3,11 +3,11 @@
 use super::args::{load_mixture, SceneArgs, SettingsArgs};
 use super::check_dir;
 use super::session::Session;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{ArgMatches, Args};
-use genpath::integrators::Method;
+use genpath::integrators::{Method, Shard};
 use genpath::path::SceneView;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args)]
 pub struct SweepArgs {
@@ -34,12 +34,18 @@ pub struct SweepArgs {
     /// Writes PREFIX.csv and PREFIX.svg.
     #[arg(short, long = "output", value_name = "PREFIX")]
     pub output: PathBuf,
+    /// Run part K of N of the sweep: of its runs (every method at one budget of one
+    /// repetition), run j = repetition × budgets + budget index when j mod N = K; writes
+    /// PREFIX.csv with those rows and PREFIX.csv.json with what the sweep is, for
+    /// `genpath merge PARTS.csv -o PREFIX` (docs/shards.md).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }
 
 pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
-    use genpath::report::{self, Budgets, MethodSpec, Sweep};
+    use genpath::report::{Budgets, MethodSpec, Sweep};
     let with_ext = |ext: &str| {
         let mut p = args.output.clone().into_os_string();
         p.push(ext);
@@ -89,6 +95,14 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
         .parent()
         .and_then(|d| d.file_name())
         .map_or_else(|| "scene".to_string(), |n| n.to_string_lossy().into_owned());
+    let runs = args.reps as usize * args.budgets.len();
+    let part = args.shard.unwrap_or(Shard::WHOLE);
+    if part.count as usize > runs {
+        bail!(
+            "--shard {part}: the sweep has {runs} runs (repetitions × budgets), fewer than {} parts",
+            part.count
+        );
+    }
     let sweep = Sweep {
         scene_name: scene_name.clone(),
         reference: &reference,
@@ -97,7 +111,18 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
         reps: args.reps,
         settings,
         progress: !args.scene.quiet,
+        part,
     };
+    let title = format!(
+        "{scene_name}: relMSE against time ({}×{}, max bounces {})",
+        session.scene.camera.width, session.scene.camera.height, sweep.settings.max_bounces
+    );
+    if let Some(part) = args.shard {
+        let id = identity(&args, &session, &sweep, &base)?;
+        let json = serde_json::json!({ "part": part.to_string(), "title": title, "sweep": id });
+        let text = serde_json::to_string_pretty(&json)?;
+        genpath::image::write_bytes_atomic(&with_ext(".csv.json"), text.as_bytes())?;
+    }
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let quiet = args.scene.quiet;
     let rows = session.pool.install(|| {
@@ -110,13 +135,161 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
             }
         })
     })?;
-    genpath::image::write_bytes_atomic(&csv_path, report::csv(&rows).as_bytes())?;
-    let title = format!(
-        "{scene_name}: relMSE against time ({}×{}, max bounces {})",
-        session.scene.camera.width, session.scene.camera.height, sweep.settings.max_bounces
-    );
-    let svg = report::plot::svg(&title, &rows).map_err(|e| anyhow::anyhow!(e))?;
-    genpath::image::write_bytes_atomic(&svg_path, svg.as_bytes())?;
-    println!("{}", report::summary(&rows));
+    write_sweep(&args.output, &title, &rows)
+}
+
+/// Writes PREFIX.csv and PREFIX.svg of `rows`, and prints their summary.
+fn write_sweep(prefix: &Path, title: &str, rows: &[genpath::report::Row]) -> Result<()> {
+    use genpath::report;
+    let with_ext = |ext: &str| {
+        let mut p = prefix.as_os_str().to_owned();
+        p.push(ext);
+        PathBuf::from(p)
+    };
+    genpath::image::write_bytes_atomic(&with_ext(".csv"), report::csv(rows).as_bytes())?;
+    let svg = report::plot::svg(title, rows).map_err(|e| anyhow::anyhow!(e))?;
+    genpath::image::write_bytes_atomic(&with_ext(".svg"), svg.as_bytes())?;
+    println!("{}", report::summary(rows));
     Ok(())
+}
+
+/// What makes parts of one sweep: the build, the scene and reference files, the size, the
+/// back-end, and every setting of the sweep but its part.
+fn identity(
+    args: &SweepArgs,
+    session: &Session,
+    sweep: &genpath::report::Sweep,
+    base: &genpath::integrators::Settings,
+) -> Result<serde_json::Value> {
+    use genpath::shard::{build_hash, hash_files};
+    let hex = |h: u64| format!("{h:016x}");
+    Ok(serde_json::json!({
+        "genpath_version": env!("CARGO_PKG_VERSION"),
+        "build": hex(build_hash()?),
+        "scene": hex(hash_files(&session.scene.files, &args.scene.define)?),
+        "reference": hex(hash_files(std::slice::from_ref(&args.reference), &[])?),
+        "width": session.scene.camera.width,
+        "height": session.scene.camera.height,
+        "accel": session.accel.kernels(),
+        "max_bounces": sweep.settings.max_bounces,
+        "seed": sweep.settings.seed,
+        "methods": sweep.methods.iter().map(|m| m.label.clone()).collect::<Vec<_>>(),
+        "budgets": args.budgets,
+        "time": args.time,
+        "reps": args.reps,
+        "settings": base,
+    }))
+}
+
+/// One part of a sweep as its files hold it.
+struct Part {
+    csv: PathBuf,
+    part: Shard,
+    title: String,
+    sweep: serde_json::Value,
+    rows: Vec<genpath::report::Row>,
+}
+
+fn read_part(csv: &Path) -> Result<Part> {
+    let text = std::fs::read_to_string(csv).with_context(|| csv.display().to_string())?;
+    let rows = genpath::report::parse_csv(&text).map_err(|e| anyhow!("{}: {e}", csv.display()))?;
+    let mut json_path = csv.as_os_str().to_owned();
+    json_path.push(".json");
+    let json_path = PathBuf::from(json_path);
+    let json: serde_json::Value = std::fs::read_to_string(&json_path)
+        .map_err(|e| {
+            anyhow!(
+                "{}: {e}: a part of a sweep has its description there (sweep --shard writes it)",
+                json_path.display()
+            )
+        })
+        .and_then(|t| {
+            serde_json::from_str(&t).map_err(|e| anyhow!("{}: {e}", json_path.display()))
+        })?;
+    let field = |k: &str| {
+        json.get(k)
+            .cloned()
+            .ok_or_else(|| anyhow!("{}: no `{k}`", json_path.display()))
+    };
+    let part: Shard = field("part")?
+        .as_str()
+        .unwrap_or_default()
+        .parse()
+        .map_err(|e| anyhow!("{}: part: {e}", json_path.display()))?;
+    let title = field("title")?.as_str().unwrap_or_default().to_string();
+    Ok(Part {
+        csv: csv.to_path_buf(),
+        part,
+        title,
+        sweep: field("sweep")?,
+        rows,
+    })
+}
+
+/// `genpath merge PARTS.csv -o PREFIX`: the parts of one sweep (`sweep --shard K/N`) as the
+/// sweep's CSV, plot and summary, their rows in the order one sweep writes them.
+pub fn merge_parts(parts: &[PathBuf], prefix: &Path, complete: bool, quiet: bool) -> Result<()> {
+    let parts = parts
+        .iter()
+        .map(|p| read_part(p))
+        .collect::<Result<Vec<_>>>()?;
+    let first = &parts[0];
+    for p in &parts[1..] {
+        if let Some((what, a, b)) =
+            genpath::shard::first_difference(&first.sweep, &p.sweep, String::new())
+        {
+            bail!("{} and {} are not parts of one sweep: {what} differs ({a} in the first, {b} in the second)", first.csv.display(), p.csv.display());
+        }
+        if p.part.count != first.part.count {
+            bail!(
+                "{} is part {} and {} part {}: parts of one split have the same N",
+                first.csv.display(),
+                first.part,
+                p.csv.display(),
+                p.part
+            );
+        }
+    }
+    let n = first.part.count;
+    let mut seen = vec![None::<&Path>; n as usize];
+    for p in &parts {
+        if let Some(other) = seen[p.part.index as usize].replace(&p.csv) {
+            bail!(
+                "{} and {} are both part {}",
+                other.display(),
+                p.csv.display(),
+                p.part
+            );
+        }
+    }
+    let missing: Vec<String> = (0..n)
+        .filter(|&k| seen[k as usize].is_none())
+        .map(|k| format!("{k}/{n}"))
+        .collect();
+    if !missing.is_empty() {
+        let text = format!(
+            "{} of {n} parts missing ({})",
+            missing.len(),
+            missing.join(", ")
+        );
+        if complete {
+            bail!("--complete: {text}");
+        }
+        if !quiet {
+            eprintln!("genpath: warning: {text}");
+        }
+    }
+    let list = |k: &str| first.sweep[k].as_array().cloned().unwrap_or_default();
+    let (methods, budgets) = (list("methods"), list("budgets"));
+    let seed0 = first.sweep["seed"].as_u64().unwrap_or(0);
+    let mut rows: Vec<_> = parts.iter().flat_map(|p| p.rows.iter().cloned()).collect();
+    let key = |r: &genpath::report::Row| {
+        let b = budgets.iter().position(|v| v.as_f64() == Some(r.budget));
+        let m = methods
+            .iter()
+            .position(|v| v.as_str() == Some(r.method.as_str()));
+        (r.seed.wrapping_sub(seed0), b, m)
+    };
+    rows.sort_by_key(key);
+    write_sweep(prefix, &first.title, &rows)
 }

@@ -9,7 +9,9 @@ pub mod bench;
 pub mod plot;
 
 use crate::image::{metrics, Image};
-use crate::integrators::{prepare, Integrator, Method, PrepareError, RenderSettings, Settings};
+use crate::integrators::{
+    prepare, Integrator, Method, PrepareError, RenderSettings, Settings, Shard,
+};
 use crate::path::SceneView;
 use crate::progress::progress_bar;
 use std::fmt::Write as _;
@@ -144,6 +146,44 @@ pub fn csv(rows: &[Row]) -> String {
     out
 }
 
+/// The rows of a CSV that [`csv`] wrote (its `efficiency` column, which follows from the
+/// others, is not read); an error names the line.
+pub fn parse_csv(text: &str) -> Result<Vec<Row>, String> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, header)) if header.trim() == CSV_HEADER => {}
+        _ => return Err(format!("line 1: not the header `{CSV_HEADER}`")),
+    }
+    let mut rows = Vec::new();
+    for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = |what: &str| format!("line {}: {what}", i + 1);
+        if f.len() != 10 {
+            return Err(bad(&format!("{} fields, not 10", f.len())));
+        }
+        let num = |k: usize| {
+            f[k].parse::<f64>()
+                .map_err(|_| bad(&format!("`{}` is not a number", f[k])))
+        };
+        let int = |k: usize| {
+            f[k].parse::<u64>()
+                .map_err(|_| bad(&format!("`{}` is not a whole number", f[k])))
+        };
+        rows.push(Row {
+            scene: f[0].to_string(),
+            method: f[1].to_string(),
+            spp: u32::try_from(int(2)?).map_err(|_| bad("spp out of range"))?,
+            seconds: num(3)?,
+            ga_seconds: num(4)?,
+            relmse: num(5)?,
+            mse: num(6)?,
+            seed: int(7)?,
+            budget: num(9)?,
+        });
+    }
+    Ok(rows)
+}
+
 /// Everything a sweep needs besides the scene.
 pub struct Sweep<'a> {
     pub scene_name: String,
@@ -155,6 +195,9 @@ pub struct Sweep<'a> {
     /// `spp` and `method` are set per row; `seed` is the first repetition's.
     pub settings: RenderSettings,
     pub progress: bool,
+    /// Which of the sweep's runs this one makes (`sweep --shard K/N`): run `j = rep ×
+    /// budgets + b` (every method at budget `b` of repetition `rep`) is part `j mod N`'s.
+    pub part: Shard,
 }
 
 /// Why a sweep cannot run.
@@ -222,7 +265,10 @@ impl Sweep<'_> {
                 image: (camera.width, camera.height),
             });
         }
-        let total = self.methods.len() * self.reps as usize * self.budgets.len();
+        let runs = (0..self.reps as usize * self.budgets.len())
+            .filter(|j| j % self.part.count as usize == self.part.index as usize)
+            .count();
+        let total = self.methods.len() * runs;
         let bar = progress_bar(total as u64, "sweep", self.progress);
         let mut rows = Vec::with_capacity(total);
         // Each budget prepares its method anew: with budgets in seconds, a GA plan gets its
@@ -237,7 +283,11 @@ impl Sweep<'_> {
         // in turn: renders to be compared at equal time then run minutes closer together,
         // so that a shared machine's slow spells weigh on them more alike.
         for rep in 0..self.reps {
-            for &(seconds, spp) in &plans {
+            for (b, &(seconds, spp)) in plans.iter().enumerate() {
+                let run = rep as usize * plans.len() + b;
+                if run % self.part.count as usize != self.part.index as usize {
+                    continue;
+                }
                 for spec in &self.methods {
                     let settings = RenderSettings {
                         method: spec.method,

@@ -202,7 +202,7 @@ pub enum ShardError {
 }
 
 /// The first leaf where `a` and `b` differ, with its path (`settings.ga.test_paths`).
-fn first_difference(
+pub fn first_difference(
     a: &serde_json::Value,
     b: &serde_json::Value,
     path: String,

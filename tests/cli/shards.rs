@@ -429,3 +429,107 @@ fn shards_of_different_embree_kernels_are_refused() {
         &["--embree-isa sse2", "not Embree"],
     );
 }
+
+/// `sweep --shard K/N` runs part of a sweep's runs; `merge PARTS.csv -o PREFIX` puts the
+/// parts' rows in the order of the whole sweep, whose rows (but their timings) they equal.
+/// A missing part is reported (and refused with `--complete`); a part given twice, parts of
+/// another sweep (other budgets) and a mix of sweep parts and render shards are refused.
+#[test]
+fn sweep_parts_merge_to_the_whole_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let size = ["--width", "16", "--height", "12", "--quiet"];
+    let reference = d.join("ref.exr");
+    let scene = fig5();
+    let scene = scene.to_str().unwrap();
+    let r = [
+        &["reference", scene, "--spp", "64", "-o"][..],
+        &[reference.to_str().unwrap()],
+        &size,
+    ]
+    .concat();
+    assert!(genpath(&r).status.success());
+    let sweep = |prefix: &str, budgets: &str, extra: &[&str]| {
+        let out = d.join(prefix);
+        let args = [
+            &[
+                "sweep",
+                scene,
+                "--ref",
+                reference.to_str().unwrap(),
+                "--methods",
+                "pt,srt,ga:m=300:pop=4:gen=2:grid=8",
+            ][..],
+            &[
+                "--budgets",
+                budgets,
+                "--reps",
+                "2",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            &size,
+            extra,
+        ]
+        .concat();
+        let output = genpath(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        d.join(format!("{prefix}.csv"))
+    };
+    // Everything but the timings (seconds, ga_seconds, efficiency).
+    let rows = |csv: &Path| -> Vec<String> {
+        std::fs::read_to_string(csv)
+            .unwrap()
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                [f[0], f[1], f[2], f[5], f[6], f[7], f[9]].join(",")
+            })
+            .collect()
+    };
+    let whole = sweep("whole", "1,4", &[]);
+    let parts: Vec<PathBuf> = (0..3)
+        .map(|k| sweep(&format!("part{k}"), "1,4", &["--shard", &format!("{k}/3")]))
+        .collect();
+    let merged = d.join("merged");
+    let out = merge(&parts, &merged, &["-q"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let merged_csv = d.join("merged.csv");
+    assert_eq!(rows(&merged_csv), rows(&whole));
+    assert_eq!(rows(&whole).len(), 1 + 3 * 2 * 2);
+    assert!(d.join("merged.svg").exists());
+
+    // Two of three parts: reported, and refused with --complete.
+    let out = merge(&parts[..2], &d.join("two"), &[]);
+    assert!(
+        out.status.success() && stderr(&out).contains("1 of 3 parts missing (2/3)"),
+        "{}",
+        stderr(&out)
+    );
+    assert_merge_fails(
+        &parts[..2],
+        &d.join("none"),
+        &["--complete"],
+        &["--complete", "1 of 3 parts missing"],
+    );
+    assert_merge_fails(
+        &[parts[0].clone(), parts[0].clone()],
+        &d.join("none"),
+        &[],
+        &["both part 0/3"],
+    );
+    let other = sweep("other", "1,8", &["--shard", "1/3"]);
+    assert_merge_fails(
+        &[parts[0].clone(), other],
+        &d.join("none"),
+        &[],
+        &["not parts of one sweep", "budgets"],
+    );
+    let shard = shard_of(&render_in(d, "s.exr", None, &["--shard", "0/2"]));
+    assert_merge_fails(
+        &[parts[0].clone(), shard],
+        &d.join("none"),
+        &[],
+        &["do not merge together"],
+    );
+}
