@@ -27,19 +27,14 @@ impl Camera {
         let forward = (target - origin).normalize();
         let right = forward.cross(up).normalize();
         let true_up = right.cross(forward);
-        let half_w = (0.5 * fov_x).tan();
-        let half_h = half_w * height as f32 / width as f32;
-        Self {
+        let clip = (0.0, f32::INFINITY);
+        Self::with_frame(
             origin,
+            [forward, right, true_up],
             fov_x,
-            width,
-            height,
-            forward,
-            right: right * half_w,
-            up: true_up * half_h,
-            near: 0.0,
-            far: f32::INFINITY,
-        }
+            (width, height),
+            clip,
+        )
     }
 
     /// A camera looking along unit `forward` whose image right is unit `right` and image up

@@ -94,17 +94,7 @@ fn check_glossy(ns: f32, seed: u64) {
             by_max,
         );
         if ns <= 100.0 {
-            let brdf_norm = Model {
-                norm: right.exponent + 2.0,
-                ..right
-            };
-            reject_model(
-                &format!("{name} with (ns+2)/(2π) in the pdf"),
-                &v,
-                &outcomes,
-                &hist,
-                brdf_norm,
-            );
+            reject_brdf_normalisation(&name, &v, &outcomes, &hist, right);
         } else {
             let e = 1.05 * right.exponent;
             let wider = Model {
@@ -146,18 +136,7 @@ fn brdf_pure_phong_ns_100() {
     assert_model_is_the_pdf(&v);
     let name = "pure Phong ns=100 at grazing incidence";
     let (outcomes, hist) = check_brdf(name, &v, lobe_bins(v.lobe_axis(), 100.0), 48);
-    let right = Model::of(&v.m);
-    let brdf_norm = Model {
-        norm: right.exponent + 2.0,
-        ..right
-    };
-    reject_model(
-        &format!("{name} with (ns+2)/(2π) in the pdf"),
-        &v,
-        &outcomes,
-        &hist,
-        brdf_norm,
-    );
+    reject_brdf_normalisation(name, &v, &outcomes, &hist, Model::of(&v.m));
     // The rejected mass is part of the test: a pdf that dropped it (the lobe renormalised to
     // the upper hemisphere) must fail too.
     let below: f64 = (0..BELOW_RINGS * BELOW_SECTORS)

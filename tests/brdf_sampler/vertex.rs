@@ -228,6 +228,23 @@ pub(crate) fn check_brdf(
     (outcomes, hist)
 }
 
+/// [`reject_model`] with `right`'s normalisation that of the BRDF, `(ns + 2)/(2π)`, in
+/// place of the sampled lobe's `(ns + 1)/(2π)`.
+pub(crate) fn reject_brdf_normalisation(
+    name: &str,
+    v: &Vertex,
+    outcomes: &Outcomes,
+    hist: &Histogram,
+    right: Model,
+) {
+    let brdf_norm = Model {
+        norm: right.exponent + 2.0,
+        ..right
+    };
+    let name = format!("{name} with (ns+2)/(2π) in the pdf");
+    reject_model(&name, v, outcomes, hist, brdf_norm);
+}
+
 pub(crate) fn reject_model(
     name: &str,
     v: &Vertex,

@@ -13,19 +13,14 @@ use super::*;
 fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     let (scene, accel) = fig5_sized(AccelKind::default_available(), 64);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = small_guide_ga();
-    let config = PlanConfig {
-        grid: 8,
-        time_limit: Some(0.0),
-        ..PlanConfig::default()
-    };
-    let plan = Plan::build(
+    let plan = guide_plan(
         &view,
-        &PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES),
-        5,
-        false,
-    )
-    .expect("plan");
+        PlanConfig {
+            grid: 8,
+            time_limit: Some(0.0),
+            ..PlanConfig::default()
+        },
+    );
     let stats = &plan.stats;
     eprintln!(
         "{} GA pixels, {} late, {} pt points, {} low-variance cells",
@@ -135,18 +130,13 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
 fn training_passes_keep_the_plans_guides_only_where_they_help() {
     let (scene, accel) = fig5_sized(AccelKind::default_available(), 96);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = small_guide_ga();
-    let config = PlanConfig {
-        grid: 12,
-        ..PlanConfig::default()
-    };
-    let plan = Plan::build(
+    let plan = guide_plan(
         &view,
-        &PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES),
-        5,
-        false,
-    )
-    .expect("plan");
+        PlanConfig {
+            grid: 12,
+            ..PlanConfig::default()
+        },
+    );
     assert!(
         !plan.is_closed(),
         "the pilot must pay on fig5 for this test"
@@ -197,4 +187,11 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         "{astray:?}"
     );
     assert_eq!(levels, PlanGuides::Nowhere);
+}
+
+/// A `ga-pt` plan (guides) of `view` with [`small_guide_ga`] and `config`, seed 5.
+fn guide_plan(view: &SceneView, config: PlanConfig) -> Plan {
+    let ga = small_guide_ga();
+    let inputs = PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES);
+    Plan::build(view, &inputs, 5, false).expect("plan")
 }
