@@ -4,7 +4,7 @@
 mod cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use cli::{bench, check, compare, merge, reference, render, settings, sweep};
+use cli::{bench, check, compare, learn, merge, reference, render, settings, sweep};
 
 #[derive(Parser)]
 #[command(
@@ -21,6 +21,12 @@ struct Cli {
 enum Command {
     /// Render a scene to one or more images (format by extension: .exr, .png, …).
     Render(render::RenderArgs),
+    /// Learn a method's state (pg, ga, ga-pt: the GA plan, the spatial guide) once, as
+    /// `render` would, and save it in a plan file for `render --plan` (docs/shards.md).
+    ///
+    /// Takes the scene and method flags and --spp of the render it is for; a render with
+    /// --plan and other settings, scene, size, seed or build is refused.
+    Learn(learn::LearnArgs),
     /// Merge shards of one render (`render --shard K/N`, `reference --shard K/N`) into its
     /// image (docs/shards.md).
     ///
@@ -55,6 +61,7 @@ fn main() {
     let sub = matches.subcommand().map_or(&matches, |(_, m)| m);
     let result = match cli.command {
         Command::Render(args) => render::run_render(args, sub),
+        Command::Learn(args) => learn::run_learn(args, sub),
         Command::Merge(args) => merge::run_merge(args),
         Command::Compare(args) => compare::run_compare(args),
         Command::Reference(args) => reference::run_reference(args, sub),

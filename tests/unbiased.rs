@@ -207,6 +207,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             plan,
             training,
             max_bounces,
+            keeps_taken: true,
         }),
         (Some(plan), _, None) if guided => Box::new(GaPt { plan, max_bounces }),
         (Some(plan), _, None) => Box::new(Ga { plan, max_bounces }),

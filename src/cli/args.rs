@@ -235,36 +235,39 @@ pub struct ShardArgs {
     /// Render shard K of N: of every pixel's samples, those s with s mod N = K, from the
     /// same random streams as the whole render, and write their per-pixel sums to
     /// `<FILE>.shard` beside the (first) output for `genpath merge` (docs/shards.md).
-    /// Methods pt, srt and mixture (the others learn in every render).
+    /// Methods that learn (pg, ga, ga-pt) shard with --plan only.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
     /// Continue the render from FILE, the shard file it wrote when a signal (SIGINT,
     /// SIGTERM) stopped it or at a checkpoint, to the image an uninterrupted render makes:
-    /// the same command, with this flag added. Methods pt, srt and mixture.
+    /// the same command, with this flag added. Methods that learn: with --plan only.
     #[arg(long, value_name = "FILE")]
     pub resume: Option<PathBuf>,
     /// Write the shard file `<FILE>.shard` (as a stopped render does) every SECONDS while
     /// rendering, so that a render killed outright loses at most that much work: continue
-    /// it with --resume. Methods pt, srt and mixture.
+    /// it with --resume. Methods that learn: with --plan only.
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub checkpoint: Option<f64>,
 }
 
 impl ShardArgs {
-    /// Refuses a shard, a resume or a checkpoint of a method that learns, before anything
-    /// loads.
-    pub fn check_method(&self, method: Method) -> Result<()> {
-        if self.shard.is_some() && method.learns() {
+    /// Refuses a shard, a resume or a checkpoint of a method that learns, unless its learned
+    /// state comes from a plan file (`plan`), before anything loads.
+    pub fn check_method(&self, method: Method, plan: bool) -> Result<()> {
+        let learns = method.learns() && !plan;
+        if self.shard.is_some() && learns {
             return Err(genpath::integrators::PrepareError::ShardLearns(method).into());
         }
         for (flag, given) in [
             ("--resume", self.resume.is_some()),
             ("--checkpoint", self.checkpoint.is_some()),
         ] {
-            if given && method.learns() {
+            if given && learns {
                 bail!(
                     "{flag}: --method {} learns in every render (its GA plan or spatial \
-                     guide), which a resumed render would learn anew; resume pt, srt or mixture",
+                     guide), which a resumed render would learn anew: learn once with \
+                     `genpath learn … -o plan.bin` and render with --plan plan.bin, or resume \
+                     pt, srt or mixture",
                     method.name()
                 );
             }

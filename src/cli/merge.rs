@@ -11,16 +11,17 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct MergeArgs {
     /// Shard files (`<image>.shard`, written by `render --shard` or `reference --shard`) of
-    /// one render: all of its shards, or any of them for an image with fewer samples. Or
-    /// the parts of one sweep (`PREFIX.csv`, written by `sweep --shard`), merged into one
-    /// `-o PREFIX`.
+    /// one render: all of its shards, or any of them for an image with fewer samples. A
+    /// render with `--plan` whose training took samples (pg, ga-pt) also needs the learn
+    /// job's training shard, `<plan>.shard`. Or the parts of one sweep (`PREFIX.csv`,
+    /// written by `sweep --shard`), merged into one `-o PREFIX`.
     #[arg(required = true, value_name = "SHARD")]
     pub shards: Vec<PathBuf>,
     /// Output image; repeat for several formats (a reference's must be EXR). A
     /// `<FILE>.json` with what was merged is written beside each.
     #[arg(short, long = "output", value_name = "FILE", required = true)]
     pub outputs: Vec<PathBuf>,
-    /// Fail, writing nothing, when shards are missing.
+    /// Fail, writing nothing, when shards (or the training shard) are missing.
     #[arg(long)]
     pub complete: bool,
     /// No report on stderr.
@@ -83,10 +84,11 @@ pub fn run_merge(args: MergeArgs) -> Result<()> {
             "shards": merged.shards.iter().map(|(file, shard)| {
                 serde_json::json!({ "file": file, "shard": shard.to_string() })
             }).collect::<Vec<_>>(),
+            "training": merged.training,
             "coverage": merged.coverage,
             "samples_per_pixel": spp,
             "of": id.spp,
-            "summation": "per pixel, each shard's sum in increasing sample index, then the shards' sums in increasing (N, K)",
+            "summation": "per pixel, each shard's sum in increasing sample index, then the training shard's sums (if any), then the shards' sums in increasing (N, K)",
         },
         "reference": reference_json,
     });
@@ -96,8 +98,13 @@ pub fn run_merge(args: MergeArgs) -> Result<()> {
             eprintln!("genpath: warning: {missing}");
         }
         let halves = if reference { " per half" } else { "" };
+        let training = if merged.training.is_some() {
+            " and the training shard"
+        } else {
+            ""
+        };
         eprintln!(
-            "genpath: merged {} shards: {spp} of {} spp{halves} → {}",
+            "genpath: merged {} shards{training}: {spp} of {} spp{halves} → {}",
             merged.shards.len(),
             id.spp,
             args.outputs
@@ -143,6 +150,10 @@ fn missing_text(merged: &Merged) -> Option<String> {
         }
         Coverage::Partial { spp, of } => Some(format!(
             "the shards hold {spp} of the render's {of} samples per pixel"
+        )),
+        Coverage::NoTraining { training, spp, of } => Some(format!(
+            "the learn job's training shard (`<plan>.shard`, with {training} training samples \
+             per pixel) is missing: the image has {spp} of {of} samples per pixel"
         )),
     }
 }

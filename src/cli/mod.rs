@@ -4,6 +4,7 @@ pub mod args;
 pub mod bench;
 pub mod check;
 pub mod compare;
+pub mod learn;
 pub mod merge;
 pub mod reference;
 pub mod render;

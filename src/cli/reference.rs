@@ -10,6 +10,7 @@ use genpath::image::Image;
 use genpath::integrators::{prepare, Control, Film, LayerSums, RenderSettings};
 use genpath::path::SceneView;
 use genpath::sampling::{derive_seed, Stream};
+use genpath::shard::Part;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -44,7 +45,7 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     check_output(&args.output)?;
-    args.shard.check_method(args.method.method)?;
+    args.shard.check_method(args.method.method, false)?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
@@ -63,7 +64,8 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
         session.identity("reference", &args.scene, &settings, seeds.to_vec(), &config)
     };
     let file = shard_path(&args.output);
-    let continuation = Continuation::new(&args.shard, method, shard, file, identity)?;
+    let what = ((method, false), (shard, Part::Samples));
+    let continuation = Continuation::new(&args.shard, what.0, what.1, file, identity)?;
     let pixels = (session.scene.camera.width * session.scene.camera.height) as usize;
     // Half `i`, resumed from its layer of `--resume`, its checkpoints holding `other` as the
     // other half's layer.

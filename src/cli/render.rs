@@ -2,13 +2,17 @@
 
 use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
+use super::learn::{read_plan, SavedPlan};
 use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
-use genpath::integrators::{prepare, Control, Film, Integrator, Method, RenderSettings, Settings};
+use genpath::integrators::{
+    prepare, prepare_learned, Control, Film, Integrator, Method, RenderSettings, Settings,
+};
 use genpath::path::SceneView;
+use genpath::shard::{Identity, Part};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -28,6 +32,13 @@ pub struct RenderArgs {
     pub explain: Option<PathBuf>,
     #[command(flatten)]
     pub shard: ShardArgs,
+    /// Render with the learned state in FILE (`genpath learn`, with the same scene and
+    /// flags) instead of learning it: the image is the one the render that learns makes,
+    /// bit for bit, and methods that learn (pg, ga, ga-pt) may then be sharded (merge the
+    /// shards with the learn job's training shard, `<FILE>.shard`), resumed and
+    /// checkpointed (docs/shards.md).
+    #[arg(long, value_name = "FILE")]
+    pub plan: Option<PathBuf>,
     #[command(flatten)]
     pub method: MethodArgs,
 }
@@ -42,7 +53,15 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         }
         check_output(explain)?;
     }
-    args.shard.check_method(args.method.method)?;
+    if let (Some(plan), false) = (&args.plan, args.method.method.learns()) {
+        bail!(
+            "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
+            plan.display(),
+            args.method.method.name()
+        );
+    }
+    args.shard
+        .check_method(args.method.method, args.plan.is_some())?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
@@ -54,9 +73,26 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
     let plain = settings.clone();
     let identity = || session.identity("render", &args.scene, &plain, vec![plain.seed], &config);
+    let mut saved = match &args.plan {
+        Some(path) => Some(read_plan(path, &identity()?, settings.shard)?),
+        None => None,
+    };
+    let (part, of) = part_and_share(saved.as_ref(), &settings);
+    let plan_ref = saved.as_ref().map(SavedPlan::reference);
+    let identity = || {
+        Ok(Identity {
+            plan: plan_ref.clone(),
+            ..identity()?
+        })
+    };
     let file = shard_path(&args.outputs[0]);
-    let continuation =
-        Continuation::new(&args.shard, settings.method, settings.shard, file, identity)?;
+    let continuation = Continuation::new(
+        &args.shard,
+        (settings.method, saved.is_some()),
+        (settings.shard, part),
+        file,
+        identity,
+    )?;
     let control = Control {
         stop: continuation.stop.clone(),
         resume: continuation.resumed(0),
@@ -67,12 +103,13 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         ..settings
     };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
-    let prepared = session
-        .pool
-        .install(|| prepare(&view, &config, &settings))?;
+    let learned = saved.as_mut().and_then(|s| s.learned.take());
+    let prepared = session.pool.install(|| match learned {
+        Some(learned) => prepare_learned(&view, &config, &settings, learned),
+        None => prepare(&view, &config, &settings),
+    })?;
     let plan = prepared.plan();
     let film = session.pool.install(|| prepared.render(&view, &settings));
-    let of = settings.shard.samples_of(settings.spp);
     let layers = [film.sums.clone()];
     continuation.check_stopped(&session, &layers, of, identity)?;
 
@@ -90,11 +127,11 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
 
     let mut stats = render_stats(
         &session,
-        &settings,
-        &config,
+        (&settings, &config),
         prepared.as_ref(),
         &film,
         write_s,
+        saved.as_ref(),
     );
     stats.insert("shard".into(), serde_json::json!(shard));
     write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
@@ -104,14 +141,31 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     Ok(())
 }
 
-/// The JSON statistics of a render.
+/// What of the render's samples a render with `saved` keeps in its shard file, and how
+/// many samples per pixel that file holds when the render is whole: a shard with a plan
+/// takes its share of the samples after the training's (the training shard has those).
+fn part_and_share(saved: Option<&SavedPlan>, settings: &RenderSettings) -> (Part, u32) {
+    let training = saved.map_or(0, |s| s.training_spp);
+    if settings.shard.is_whole() {
+        let part = match training {
+            0 => Part::Samples,
+            _ => Part::WithTraining,
+        };
+        (part, settings.spp)
+    } else {
+        let after = settings.spp.saturating_sub(training);
+        (Part::Samples, settings.shard.samples_of(after))
+    }
+}
+
+/// The JSON statistics of a render (`saved`: the plan file it rendered with).
 fn render_stats(
     session: &Session,
-    settings: &RenderSettings,
-    config: &Settings,
+    (settings, config): (&RenderSettings, &Settings),
     prepared: &dyn Integrator,
     film: &Film,
     write_s: f64,
+    saved: Option<&SavedPlan>,
 ) -> serde_json::Map<String, serde_json::Value> {
     let plan = prepared.plan();
     let render_s = film.elapsed.as_secs_f64();
@@ -120,10 +174,12 @@ fn render_stats(
     let mut stats = session.stats(settings);
     stats.insert("method_settings".into(), serde_json::json!(config));
     stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
+    let plan_file = saved.map(|s| s.json());
     stats.insert(
         "ga".into(),
-        serde_json::json!(plan.map(|p| ga_stats(p, config))),
+        serde_json::json!(plan.map(|p| ga_stats(p, config, plan_file.is_some()))),
     );
+    stats.insert("plan_file".into(), serde_json::json!(plan_file));
     stats.insert(
         "times_s".into(),
         serde_json::json!({
@@ -243,8 +299,10 @@ fn left_out(
 }
 
 /// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
-/// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list.
-fn ga_stats(plan: &Plan, settings: &Settings) -> serde_json::Value {
+/// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list;
+/// of a plan read from a plan file (`from_file`), a summary without the pixels and curves
+/// (the file has them).
+fn ga_stats(plan: &Plan, settings: &Settings, from_file: bool) -> serde_json::Value {
     const CURVES: usize = 8;
     let n = plan.pixels.len();
     let curves: Vec<_> = (0..n.min(CURVES))
@@ -269,6 +327,12 @@ fn ga_stats(plan: &Plan, settings: &Settings) -> serde_json::Value {
         .collect();
     let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
     let analysis = plan.analysis.clone();
+    let (curves, pixels) = if from_file {
+        let there = serde_json::json!("in the plan file (see plan_file)");
+        (there.clone(), there)
+    } else {
+        (serde_json::json!(curves), serde_json::json!(pixels))
+    };
     serde_json::json!({
         "config": settings.ga,
         "plan": settings.plan,

@@ -8,7 +8,7 @@ use super::args::ShardArgs;
 use super::session::Session;
 use anyhow::{bail, Context, Result};
 use genpath::integrators::{Checkpoint, LayerSums, Method, Shard, Stop};
-use genpath::shard::{Header, Identity};
+use genpath::shard::{Header, Identity, Part};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
@@ -82,6 +82,8 @@ pub struct Continuation {
     /// `<output>.shard`.
     pub file: PathBuf,
     pub shard: Shard,
+    /// What of the render's samples the file holds besides `shard`'s.
+    pub part: Part,
     /// The layers of `--resume FILE`.
     pub resumed: Option<Vec<LayerSums>>,
     pub stop: Stop,
@@ -89,24 +91,26 @@ pub struct Continuation {
 }
 
 impl Continuation {
-    /// The continuation of `session`'s render of `method`, shard `shard`, with `args`,
-    /// writing `file`; `identity` computes the render's identity.
+    /// The continuation of `session`'s render of `method`, shard `shard` (and `part`), with
+    /// `args`, writing `file`; `identity` computes the render's identity. `learned`: the
+    /// method's learned state comes from a plan file (`--plan`).
     pub fn new(
         args: &ShardArgs,
-        method: Method,
-        shard: Shard,
+        (method, learned): (Method, bool),
+        (shard, part): (Shard, Part),
         file: PathBuf,
         identity: impl Fn() -> Result<Identity>,
     ) -> Result<Self> {
         let keeps = args.shard.is_some() || args.resume.is_some() || args.checkpoint.is_some();
         let identity = if keeps { Some(identity()?) } else { None };
         let resumed = match (&args.resume, &identity) {
-            (Some(path), Some(identity)) => Some(read_resume(path, identity, shard)?),
+            (Some(path), Some(identity)) => Some(read_resume(path, identity, shard, part)?),
             _ => None,
         };
-        // A method that learns (a GA plan, a spatial guide) would learn anew when resumed:
-        // a signal ends it as it ends any process.
-        let stop = if method.learns() {
+        // A method that learns (a GA plan, a spatial guide) would learn anew when resumed,
+        // unless its learned state is read from a plan file: a signal ends it as it ends
+        // any process.
+        let stop = if method.learns() && !learned {
             Stop::default()
         } else {
             stop_on_signals()?
@@ -115,6 +119,7 @@ impl Continuation {
             identity,
             file,
             shard,
+            part,
             resumed,
             stop,
             every: args.checkpoint,
@@ -137,7 +142,7 @@ impl Continuation {
         layers: impl Fn(&LayerSums) -> Vec<LayerSums> + Send + Sync + 'static,
     ) -> Option<Checkpoint> {
         let every = Duration::from_secs_f64(self.every?);
-        let header = header(session, self.identity.clone()?, self.shard);
+        let header = header(session, self.identity.clone()?, (self.shard, self.part));
         let path = self.file.clone();
         let write = move |sums: &LayerSums| {
             if let Err(e) = genpath::shard::file::write(&path, &header, &layers(sums)) {
@@ -166,7 +171,7 @@ impl Continuation {
             Some(identity) => identity.clone(),
             None => identity()?,
         };
-        session.write_shard(&self.file, identity, self.shard, layers)?;
+        session.write_shard(&self.file, identity, (self.shard, self.part), layers)?;
         Err(Interrupted::new(signal, self.file.clone(), layers, of).into())
     }
 
@@ -183,7 +188,12 @@ impl Continuation {
         let Some(identity) = &self.identity else {
             return Ok(serde_json::Value::Null);
         };
-        session.write_shard(&self.file, identity.clone(), self.shard, layers)?;
+        session.write_shard(
+            &self.file,
+            identity.clone(),
+            (self.shard, self.part),
+            layers,
+        )?;
         Ok(serde_json::json!({
             "shard": self.shard.to_string(),
             spp_key: spp,
@@ -195,7 +205,12 @@ impl Continuation {
 }
 
 /// `--resume FILE`: its layers, after checking that it is a shard of this very render.
-fn read_resume(path: &Path, identity: &Identity, shard: Shard) -> Result<Vec<LayerSums>> {
+fn read_resume(
+    path: &Path,
+    identity: &Identity,
+    shard: Shard,
+    part: Part,
+) -> Result<Vec<LayerSums>> {
     let (header, layers) =
         genpath::shard::file::read(path).with_context(|| format!("--resume {}", path.display()))?;
     if let Some((what, theirs, ours)) = header.identity.difference(identity) {
@@ -213,15 +228,23 @@ fn read_resume(path: &Path, identity: &Identity, shard: Shard) -> Result<Vec<Lay
             header.shard
         );
     }
+    if header.part != part {
+        bail!(
+            "--resume {}: it holds the {:?} part of the render, and this renders the {part:?} part",
+            path.display(),
+            header.part
+        );
+    }
     Ok(layers)
 }
 
 /// The header of the shard file that `session`'s render with `identity` writes.
-pub fn header(session: &Session, identity: Identity, shard: Shard) -> Header {
+pub fn header(session: &Session, identity: Identity, (shard, part): (Shard, Part)) -> Header {
     Header {
         shard,
         identity,
         scene_path: session.scene.path.clone(),
         command_line: std::env::args().collect(),
+        part,
     }
 }

@@ -111,12 +111,13 @@ impl Session {
         )?)
     }
 
-    /// Writes the shard file `path` of this render: `layers` with `identity`, `shard`.
+    /// Writes the shard file `path` of this render: `layers` with `identity`, `shard` and
+    /// its part.
     pub fn write_shard(
         &self,
         path: &Path,
         identity: genpath::shard::Identity,
-        shard: Shard,
+        shard: (Shard, genpath::shard::Part),
         layers: &[genpath::shard::LayerSums],
     ) -> Result<()> {
         let header = super::resume::header(self, identity, shard);

@@ -12,7 +12,7 @@ use crate::sampling::Rng;
 use rand::Rng as _;
 
 /// Best and mean `V` (eq. 10) of one generation; the mean over the finite values.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GenerationStats {
     pub best: f64,
     pub mean: f64,

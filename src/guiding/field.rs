@@ -81,14 +81,15 @@ pub(super) const DARK: u32 = 1 << 31;
 /// quadrant's probability given the node, and its child node (0: the quadrant is a leaf,
 /// uniform inside). 32 bytes, two to a cache line: a guide of fig1 at 1024 samples per
 /// pixel has 125 000 of them, and lookups wander over all.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct QuadNode {
     pub(super) prob: [f32; 4],
     pub(super) child: [u32; 4],
 }
 
-/// The trained guide: a spatial kd-tree whose leaves hold directional quadtrees.
-#[derive(Clone, Debug)]
+/// The trained guide: a spatial kd-tree whose leaves hold directional quadtrees (it
+/// serialises exactly, for a plan file).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SpatialField {
     pub stats: FieldStats,
     pub(super) lattice: Lattice,
@@ -106,6 +107,25 @@ impl SpatialField {
         let mut all = SampleStorage::new(lo, hi);
         all.add(records);
         all.field()
+    }
+
+    /// Checks what a lookup relies on, for a guide read from a file: a region per lattice
+    /// cell and facing, and every quadtree root and child a node.
+    pub fn check(&self) -> Result<(), String> {
+        let cells = self.lattice.cells() * super::lattice::FACINGS;
+        if self.regions.len() != cells || self.lattice.res.contains(&0) {
+            return Err(format!(
+                "a spatial guide of {} regions for {cells} lattice cells",
+                self.regions.len()
+            ));
+        }
+        let nodes = self.quads.len();
+        let roots = self.regions.iter().map(|r| (r & !DARK) as usize);
+        let children = self.quads.iter().flat_map(|q| q.child.map(|c| c as usize));
+        if roots.chain(children).any(|i| i >= nodes) {
+            return Err(format!("a spatial guide pointing past its {nodes} nodes"));
+        }
+        Ok(())
     }
 
     #[cfg(any(test, feature = "testing"))]

@@ -33,13 +33,13 @@ pub const FACINGS: usize = 6;
 /// The regular lattice over the scene's box that spatial lookups go through: the kd-tree's
 /// cuts halve boxes down to a lattice cell at the finest, so that every lattice cell lies in
 /// one leaf, and a lookup is one table read instead of a descent.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Lattice {
     lo: Vec3,
     /// A cell's size along each axis, and its inverse.
     pub(super) cell: Vec3,
     inv: Vec3,
-    res: [u32; 3],
+    pub(super) res: [u32; 3],
 }
 
 impl Lattice {

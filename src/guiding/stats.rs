@@ -9,7 +9,7 @@
 //! [`SpatialField`]: super::SpatialField
 
 /// What training a spatial guide (a [`SpatialField`](super::SpatialField)) did.
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct FieldStats {
     /// Training passes (pass `i`: `2^i` path-traced samples per pixel), and their samples
     /// per pixel in all (part of the image).
@@ -37,7 +37,7 @@ pub struct FieldStats {
 /// mean relative variance of a sample (variance over `mean² + 0.01`, as relMSE weighs
 /// errors) over the pixels the plan guides, against that over the control arm, the one
 /// pixel in sixteen that the pass leaves to this guide alone.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GuidesTrial {
     /// The training pass that ran the trial.
     pub pass: u32,

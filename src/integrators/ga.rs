@@ -1,7 +1,7 @@
 //! `ga`: genetic path generation (paper §4–5). Each pixel renders eq. 8 with the mixture its
 //! neighbouring GA pixels evolved, or with `pt` where the plan has none for it.
 
-use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, Learned, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanFor, PlanInputs};
 use crate::path::mixture::{Mixture, MixtureScratch};
@@ -64,6 +64,12 @@ impl PixelIntegrator for Ga {
     }
     fn plan(&self) -> Option<&Plan> {
         Some(&self.plan)
+    }
+    fn learned(&self) -> Option<Learned> {
+        Some(Learned {
+            plan: Some(self.plan.clone()),
+            spatial: None,
+        })
     }
 }
 

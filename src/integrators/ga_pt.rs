@@ -100,6 +100,12 @@ impl PixelIntegrator for GaPt {
     fn plan(&self) -> Option<&Plan> {
         Some(&self.plan)
     }
+    fn learned(&self) -> Option<super::Learned> {
+        Some(super::Learned {
+            plan: Some(self.plan.clone()),
+            spatial: None,
+        })
+    }
 }
 
 impl PixelEstimator for GuideEstimator<'_> {

@@ -14,6 +14,7 @@
 
 pub mod ga;
 pub mod ga_pt;
+pub mod learned;
 pub mod mixture;
 pub mod pg;
 pub mod pt;
@@ -30,6 +31,7 @@ use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
+pub use learned::{prepare_learned, Learned};
 pub use settings::Settings;
 pub use tiles::{Checkpoint, Control, Film, LayerSums, PixelSums, Shard, Stop};
 
@@ -134,11 +136,13 @@ pub enum PrepareError {
     #[error(
         "--shard: --method {} learns in every render (its GA plan or spatial guide), so shards \
          of it would not be parts of one render: the learned state must be trained once and \
-         shared with every shard first, which genpath does not do yet; shard pt, srt or \
-         mixture",
+         shared with every shard: `genpath learn … -o plan.bin`, then `render --plan plan.bin \
+         --shard K/N` (docs/shards.md); or shard pt, srt or mixture",
         .0.name()
     )]
     ShardLearns(Method),
+    #[error("the learned state is not one --method {} learns: {what}", method.name())]
+    Learned { method: Method, what: String },
     #[error(
         "--spatial-passes {passes} trains on {needs} samples per pixel, more than --spp {spp} \
          (pass i takes 2^i)"
@@ -176,8 +180,17 @@ pub trait PixelIntegrator: Send + Sync {
         Self: 'a;
     /// An estimator for one tile's pixels.
     fn estimator(&self) -> Self::Estimator<'_>;
-    /// The per-pixel sums of the samples preparing took, which the image keeps.
+    /// The per-pixel sums of the samples preparing took, which the image keeps (none in a
+    /// shard rendered with a saved learned state: the learn job's training shard has them).
     fn taken(&self) -> Option<&PixelSums> {
+        None
+    }
+    /// Samples per pixel preparing took, whether or not the image keeps them.
+    fn taken_spp(&self) -> u32 {
+        self.taken().map_or(0, |t| t.spp)
+    }
+    /// What preparing learned (methods that learn).
+    fn learned(&self) -> Option<Learned> {
         None
     }
     /// The GA plan it renders with.
@@ -204,8 +217,11 @@ pub trait Integrator: Send + Sync {
     }
     /// Renders `spp` samples per pixel more than preparing took (a time budget's render).
     fn render_more(&self, view: &SceneView, settings: &RenderSettings, spp: u32) -> Film;
-    /// Samples per pixel preparing took, which are in every image it renders.
+    /// Samples per pixel preparing took, which are in every image it renders (but in a shard
+    /// rendered with a saved learned state, which leaves them to the training shard).
     fn samples_taken(&self) -> u32;
+    /// What preparing learned, for a plan file (methods that learn).
+    fn learned(&self) -> Option<Learned>;
     fn plan(&self) -> Option<&Plan>;
     fn spatial(&self) -> Option<&SpatialField>;
     fn mixture(&self) -> Option<&Mixture>;
@@ -220,7 +236,10 @@ impl<I: PixelIntegrator> Integrator for I {
         tiles::render(view, &settings, self)
     }
     fn samples_taken(&self) -> u32 {
-        self.taken().map_or(0, |t| t.spp)
+        self.taken_spp()
+    }
+    fn learned(&self) -> Option<Learned> {
+        PixelIntegrator::learned(self)
     }
     fn plan(&self) -> Option<&Plan> {
         PixelIntegrator::plan(self)

@@ -47,6 +47,7 @@ pub fn train(context: &Context, plan: Option<Plan>) -> SpatialIntegrator {
         plan,
         training,
         max_bounces: context.settings.max_bounces,
+        keeps_taken: true,
     }
 }
 
@@ -56,6 +57,9 @@ pub struct SpatialIntegrator {
     pub plan: Option<Plan>,
     pub training: SpatialTraining,
     pub max_bounces: u32,
+    /// Whether the image keeps the training's samples: not in a shard rendered with a
+    /// saved learned state ([`super::learned`]), whose training shard holds them.
+    pub keeps_taken: bool,
 }
 
 impl PixelIntegrator for SpatialIntegrator {
@@ -64,7 +68,16 @@ impl PixelIntegrator for SpatialIntegrator {
         SpatialEstimator::new(self.plan.as_ref(), &self.training, self.max_bounces, None)
     }
     fn taken(&self) -> Option<&PixelSums> {
-        Some(&self.training.samples)
+        self.keeps_taken.then_some(&self.training.samples)
+    }
+    fn taken_spp(&self) -> u32 {
+        self.training.samples.spp
+    }
+    fn learned(&self) -> Option<super::Learned> {
+        Some(super::Learned {
+            plan: self.plan.clone(),
+            spatial: Some((&self.training).into()),
+        })
     }
     fn plan(&self) -> Option<&Plan> {
         self.plan.as_ref()
@@ -145,7 +158,7 @@ pub struct SpatialTraining {
 }
 
 /// Where a GA plan's per-pixel guides (`ga-pt`) sample beside the spatial guide.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum PlanGuides {
     /// At every pixel the plan guides.
     Everywhere,

@@ -126,7 +126,7 @@ pub struct Control {
 }
 
 /// Per pixel, the sums of the samples taken so far, which a render adds its own to.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PixelSums {
     /// Samples per pixel so far.
     pub spp: u32,
@@ -400,7 +400,9 @@ pub fn render_tile<E: PixelEstimator>(
             };
             let mut count = 0;
             if let Some(r) = resume {
-                (count, sum, sum_sq) = (r.counts[index], r.sum[index], r.sum_sq[index]);
+                // The resumed sums hold the samples preparing took too.
+                let done = r.counts[index].saturating_sub(taken_spp);
+                (count, sum, sum_sq) = (done, r.sum[index], r.sum_sq[index]);
             }
             for s in settings.shard.samples(settings.spp).skip(count as usize) {
                 if stop.requested().is_some() {

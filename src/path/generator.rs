@@ -62,9 +62,10 @@ pub enum Nee {
     End,
 }
 
-/// How a generator picks the direction out of a vertex.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+/// How a generator picks the direction out of a vertex. In text (JSON, TOML) it is tagged by
+/// `type` (`{ type = "anchor", anchor = […], … }`); in binary formats (a plan file), which
+/// cannot read such tags, by the variant's index ([`serde_direction`]).
+#[derive(Clone, Debug, PartialEq)]
 pub enum DirectionSampler {
     /// Proportional to BRDF × cos (the material's own sampler).
     Brdf,
@@ -73,6 +74,60 @@ pub enum DirectionSampler {
     /// Points on a parallelogram in space (beyond the paper: light that arrives from a
     /// long, thin region, which cones cover poorly).
     Patch(PatchSampler),
+}
+
+/// [`DirectionSampler`]'s two serialised forms: tagged by `type` where the format is
+/// human-readable, by variant index where it is not.
+mod serde_direction {
+    use super::{AnchorSampler, DirectionSampler, PatchSampler};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize)]
+    #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+    enum Tagged {
+        Brdf,
+        Anchor(AnchorSampler),
+        Patch(PatchSampler),
+    }
+
+    #[derive(Serialize, Deserialize)]
+    enum Indexed {
+        Brdf,
+        Anchor(AnchorSampler),
+        Patch(PatchSampler),
+    }
+
+    impl Serialize for DirectionSampler {
+        fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+            let human = serializer.is_human_readable();
+            match (self.clone(), human) {
+                (DirectionSampler::Brdf, true) => Tagged::Brdf.serialize(serializer),
+                (DirectionSampler::Anchor(a), true) => Tagged::Anchor(a).serialize(serializer),
+                (DirectionSampler::Patch(p), true) => Tagged::Patch(p).serialize(serializer),
+                (DirectionSampler::Brdf, false) => Indexed::Brdf.serialize(serializer),
+                (DirectionSampler::Anchor(a), false) => Indexed::Anchor(a).serialize(serializer),
+                (DirectionSampler::Patch(p), false) => Indexed::Patch(p).serialize(serializer),
+            }
+        }
+    }
+
+    impl<'de> Deserialize<'de> for DirectionSampler {
+        fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+            Ok(if deserializer.is_human_readable() {
+                match Tagged::deserialize(deserializer)? {
+                    Tagged::Brdf => DirectionSampler::Brdf,
+                    Tagged::Anchor(a) => DirectionSampler::Anchor(a),
+                    Tagged::Patch(p) => DirectionSampler::Patch(p),
+                }
+            } else {
+                match Indexed::deserialize(deserializer)? {
+                    Indexed::Brdf => DirectionSampler::Brdf,
+                    Indexed::Anchor(a) => DirectionSampler::Anchor(a),
+                    Indexed::Patch(p) => DirectionSampler::Patch(p),
+                }
+            })
+        }
+    }
 }
 
 /// One step of a generator: a directional sampler and the absorption before it.

@@ -9,7 +9,7 @@ use glam::{DVec3, Vec3};
 /// A weighted set of path generators, `pdf(X) = Σ w_g p_g(X)`, `Σ w_g = 1`. Component 0 is
 /// the defensive `srt` generator: with weight ≥ `w_min` it keeps every light-carrying path
 /// reachable, so the estimator stays unbiased whatever the other components do.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mixture {
     pub generators: Vec<PathGenerator>,
     pub weights: Vec<f64>,

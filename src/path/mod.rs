@@ -38,7 +38,7 @@ pub struct SceneView<'a> {
 pub const DENSITY_COST: f64 = 0.075;
 
 /// Counts of ray queries, for statistics.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct RayCounts {
     pub closest: u64,
     pub shadow: u64,

@@ -247,7 +247,7 @@ pub struct Scene {
 }
 
 /// What a scene contains, for deciding what it does not need (design §8).
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SceneAnalysis {
     pub triangles: usize,
     /// Triangles by material kind: Lambertian only, with a Phong lobe, delta BSDFs (mirrors,

@@ -7,8 +7,11 @@
 //! render on one machine adds `x₀ + x₁ + x₂ + …` in increasing `s`, so the two `f64` sums
 //! may differ in their last bits (a relative difference below `spp · 2⁻⁵³`); the image's
 //! `f32` pixels are equal unless a mean falls that close to the midpoint between two `f32`s.
+//!
+//! A render with a plan file (`render --plan`) whose training took samples has them in the
+//! learn job's training shard ([`Part::Training`]): its sums come first, then the shards'.
 
-use super::{file, Header, Identity, LayerSums, ShardError};
+use super::{file, Header, Identity, LayerSums, Part, ShardError};
 use crate::integrators::Shard;
 use std::path::{Path, PathBuf};
 
@@ -20,7 +23,9 @@ pub const LISTED: usize = 32;
 pub struct Merged {
     /// The first shard's header (its identity is every shard's).
     pub header: Header,
-    /// The shards merged, in the order their sums were added.
+    /// The learn job's training shard, if merged: its sums were added first.
+    pub training: Option<PathBuf>,
+    /// The shards merged, in the order their sums were added (after the training shard's).
     pub shards: Vec<(PathBuf, Shard)>,
     /// The summed layers.
     pub layers: Vec<LayerSums>,
@@ -43,6 +48,9 @@ pub enum Coverage {
     /// Shards of different `N`, or shards of a stopped render: the samples per pixel of
     /// the pixel that holds fewest, of the render's.
     Partial { spp: u32, of: u32 },
+    /// No file holds the learn job's `training` samples per pixel (the render used a plan
+    /// file whose training took them): the merge holds `spp` of the render's `of`.
+    NoTraining { training: u32, spp: u32, of: u32 },
 }
 
 impl Merged {
@@ -72,8 +80,15 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, ShardError> {
             });
         }
     }
-    headers.sort_by_key(|(_, h)| (h.shard.count, h.shard.index));
-    check_disjoint(&headers)?;
+    check_training(&headers, &first)?;
+    // The training shard first, then the others in increasing (N, K).
+    headers.sort_by_key(|(_, h)| (h.part != Part::Training, h.shard.count, h.shard.index));
+    let split = usize::from(
+        headers
+            .first()
+            .is_some_and(|(_, h)| h.part == Part::Training),
+    );
+    check_disjoint(&headers[split..])?;
 
     let pixels = first.pixels() as usize;
     let mut layers = vec![LayerSums::zero(pixels); first.layers()];
@@ -89,13 +104,49 @@ pub fn merge(paths: &[PathBuf]) -> Result<Merged, ShardError> {
             add(total, layer, path)?;
         }
     }
-    let coverage = coverage(&headers, &layers, first.identity.spp);
+    let training_spp = first.identity.plan.as_ref().map_or(0, |p| p.training_spp);
+    let coverage = if training_spp > 0 && !headers.iter().any(|(_, h)| h.part.has_training()) {
+        Coverage::NoTraining {
+            training: training_spp,
+            spp: layers.iter().map(LayerSums::fewest).min().unwrap_or(0),
+            of: first.identity.spp,
+        }
+    } else {
+        coverage(&headers[split..], &layers, first.identity.spp)
+    };
+    let training = headers[..split].first().map(|(p, _)| p.clone());
     Ok(Merged {
         header: first,
-        shards: headers.into_iter().map(|(p, h)| (p, h.shard)).collect(),
+        training,
+        shards: headers
+            .into_iter()
+            .skip(split)
+            .map(|(p, h)| (p, h.shard))
+            .collect(),
         layers,
         coverage,
     })
+}
+
+/// Refuses two files that both hold the learn job's training samples, and training samples
+/// in a render that used no plan file.
+fn check_training(headers: &[(PathBuf, Header)], first: &Header) -> Result<(), ShardError> {
+    let mut holders = headers.iter().filter(|(_, h)| h.part.has_training());
+    if let Some((a, _)) = holders.next() {
+        if let Some((b, _)) = holders.next() {
+            return Err(ShardError::TwoTrainings {
+                a: a.clone(),
+                b: b.clone(),
+            });
+        }
+        if first.identity.plan.is_none() {
+            return Err(ShardError::Inconsistent {
+                path: a.clone(),
+                message: "it holds training samples of a render that used no plan file".into(),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Refuses two shards that hold a common sample: `s mod N = K` and `s mod M = L` share
@@ -149,6 +200,12 @@ fn add(total: &mut LayerSums, layer: &LayerSums, path: &Path) -> Result<(), Shar
 }
 
 fn coverage(headers: &[(PathBuf, Header)], layers: &[LayerSums], spp: u32) -> Coverage {
+    let Some((_, first)) = headers.first() else {
+        return Coverage::Partial {
+            spp: layers.iter().map(LayerSums::fewest).min().unwrap_or(0),
+            of: spp,
+        };
+    };
     let held = layers
         .iter()
         .flat_map(|l| l.counts.iter().copied())
@@ -157,7 +214,7 @@ fn coverage(headers: &[(PathBuf, Header)], layers: &[LayerSums], spp: u32) -> Co
     if held == spp {
         return Coverage::Complete;
     }
-    let n = headers[0].1.shard.count;
+    let n = first.shard.count;
     let every_shard = headers.len() == n as usize;
     if !every_shard && headers.iter().all(|(_, h)| h.shard.count == n) {
         // The headers are sorted by index.

@@ -4,9 +4,15 @@
 //! sums. A shard records what makes it part of one render, its [`Identity`]: the genpath
 //! binary, the scene's files, the settings and the seeds, and a merge refuses shards whose
 //! identities differ.
+//!
+//! A method that learns (`ga`, `ga-pt`, `pg`) is sharded with its learned state trained
+//! once, by `genpath learn`, and saved in a plan file ([`plan_file`]) that every shard
+//! renders with; the learn job's training samples, which the image keeps, are a shard file
+//! of their own ([`Part::Training`]).
 
 pub mod file;
 pub mod merge;
+pub mod plan_file;
 
 pub use crate::integrators::LayerSums;
 use crate::integrators::{RenderSettings, Settings, Shard};
@@ -40,6 +46,21 @@ pub struct Identity {
     pub layer_seeds: Vec<u64>,
     /// Every method setting, as `--config` writes them.
     pub settings: serde_json::Value,
+    /// The plan file (`render --plan`) whose learned state the render used, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan: Option<PlanRef>,
+}
+
+/// The learned state a render used, as its shards' identity records it: shards merge only
+/// if they rendered with the same plan file.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRef {
+    /// Hash of the plan file's learned state ([`hash_bytes`] of its payload).
+    pub hash: String,
+    /// Samples per pixel its training took, which are in the learn job's training shard
+    /// (0: none, as for `ga`).
+    pub training_spp: u32,
 }
 
 impl Identity {
@@ -77,6 +98,7 @@ impl Identity {
                 path: PathBuf::new(),
                 message: e.to_string(),
             })?,
+            plan: None,
         })
     }
 
@@ -89,7 +111,7 @@ impl Identity {
             .find_map(|((name, u), (_, v))| first_difference(u, v, name.to_string()))
     }
 
-    fn fields(&self) -> [(&'static str, serde_json::Value); 14] {
+    fn fields(&self) -> [(&'static str, serde_json::Value); 15] {
         use serde_json::json;
         [
             ("command", json!(self.command)),
@@ -106,6 +128,7 @@ impl Identity {
             ("seed", json!(self.seed)),
             ("layer_seeds", json!(self.layer_seeds)),
             ("settings", self.settings.clone()),
+            ("plan", json!(self.plan)),
         ]
     }
 }
@@ -131,6 +154,37 @@ pub struct Header {
     /// For the record, not compared: where the scene was and the command line.
     pub scene_path: PathBuf,
     pub command_line: Vec<String>,
+    /// Which of the render's samples it holds besides `shard`'s.
+    #[serde(default, skip_serializing_if = "Part::is_samples")]
+    pub part: Part,
+}
+
+/// What a shard file holds, of a render whose identity has a [`PlanRef`] with training
+/// samples (a render without one has only [`Part::Samples`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    /// Shard `K/N`'s samples of those the render takes after the training (all of them
+    /// without a plan).
+    #[default]
+    Samples,
+    /// The learn job's training samples alone (`genpath learn`; its `shard` is `0/1` and
+    /// means nothing).
+    Training,
+    /// The training samples and every later sample: a render with `--plan` and no
+    /// `--shard` that keeps a shard file (`--checkpoint`, `--resume`).
+    WithTraining,
+}
+
+impl Part {
+    pub fn is_samples(&self) -> bool {
+        *self == Part::Samples
+    }
+
+    /// Whether the file holds the training samples.
+    pub fn has_training(&self) -> bool {
+        *self != Part::Samples
+    }
 }
 
 impl Header {
@@ -197,6 +251,8 @@ pub enum ShardError {
         modulus: u64,
         residue: u64,
     },
+    #[error("{} and {} both hold the learn job's training samples", a.display(), b.display())]
+    TwoTrainings { a: PathBuf, b: PathBuf },
     #[error("no shard files to merge")]
     Empty,
 }
@@ -249,6 +305,14 @@ pub fn hash_files(files: &[PathBuf], defines: &[(String, String)]) -> Result<u64
         }
     }
     Ok(hasher.finish())
+}
+
+/// A 64-bit hash of `bytes` (as [`hash_files`] hashes a file), in hexadecimal.
+pub fn hash_bytes(bytes: &[u8]) -> String {
+    let mut hasher = std::hash::DefaultHasher::new();
+    hasher.write_u64(bytes.len() as u64);
+    hasher.write(bytes);
+    hex(hasher.finish())
 }
 
 /// The hash of the running genpath binary's bytes ([`hash_files`]).

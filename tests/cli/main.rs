@@ -2,7 +2,8 @@
 //! file; and determinism across thread counts. This file holds the helpers; the tests are in
 //! `bad_input.rs` (malformed scenes and flags), `methods.rs` (each method's renders) and
 //! `commands.rs` (reference, sweep, bench, check, settings and the test-only method) and
-//! `shards.rs` (`--shard` and `merge`) and `resume.rs` (stopped, killed and resumed renders).
+//! `shards.rs` (`--shard` and `merge`), `resume.rs` (stopped, killed and resumed renders)
+//! and `plan.rs` (`learn` and `render --plan`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -10,6 +11,7 @@ mod common;
 mod bad_input;
 mod commands;
 mod methods;
+mod plan;
 mod resume;
 mod shards;
 

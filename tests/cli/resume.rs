@@ -201,7 +201,7 @@ fn a_killed_render_resumes_from_its_checkpoint() {
     assert_eq!(pixel_bits(&merged), pixel_bits(&whole));
 }
 
-/// A method that learns cannot be resumed, and a missing file is named.
+/// A method that learns cannot be resumed without a plan file, and a missing file is named.
 #[test]
 fn resume_refuses_learning_methods_and_missing_files() {
     let dir = tempfile::tempdir().unwrap();
@@ -227,4 +227,55 @@ fn resume_refuses_learning_methods_and_missing_files() {
         assert!(err.contains(needle), "{extra:?}: {err}");
         assert!(!out.exists());
     }
+}
+
+/// A method that learns resumes with a saved plan (`learn`, then `render --plan`): pg, whole
+/// (its shard file holds the training samples too) and as shard 1 of 2, stopped by SIGTERM
+/// after a checkpoint and resumed, ends with the in-process render's bits, and the shard
+/// merges with shard 0 and the training shard to it.
+#[test]
+fn a_stopped_render_with_a_plan_resumes_to_the_uninterrupted_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let pg = ["--method", "pg", "--spatial-passes", "3"];
+    let whole = dir.path().join("whole.exr");
+    assert_ok(&run(&args("render", &whole, &pg)));
+    let plan = dir.path().join("pg.plan");
+    assert_ok(&run(&args("learn", &plan, &pg)));
+    let with: Vec<&str> = [&pg[..], &["--plan", plan.to_str().unwrap()]].concat();
+
+    let out = dir.path().join("stopped.exr");
+    let every_tile = [&with[..], &["--checkpoint", "0"]].concat();
+    let stopped = stop_mid_render(&args("render", &out, &every_tile), &out, "TERM");
+    assert_eq!(stopped.status.code(), Some(143));
+    let (fewest, most) = counts(&out);
+    // Every pixel holds the 7 training samples.
+    assert!(
+        (7..1024).contains(&fewest) && most > fewest,
+        "{fewest}..{most}"
+    );
+    let file = shard_file(&out);
+    let resume = [&with[..], &["--resume", file.to_str().unwrap()]].concat();
+    assert_ok(&run(&args("render", &out, &resume)));
+    assert_eq!(pixel_bits(&out), pixel_bits(&whole));
+
+    let part = |k: u32| dir.path().join(format!("s{k}.exr"));
+    let zero = [&with[..], &["--shard", "0/2"]].concat();
+    assert_ok(&run(&args("render", &part(0), &zero)));
+    let one = [&with[..], &["--shard", "1/2", "--checkpoint", "0"]].concat();
+    let stopped = stop_mid_render(&args("render", &part(1), &one), &part(1), "TERM");
+    assert_eq!(stopped.status.code(), Some(143));
+    let file = shard_file(&part(1));
+    let resume = [
+        &with[..],
+        &["--shard", "1/2", "--resume", file.to_str().unwrap()],
+    ]
+    .concat();
+    assert_ok(&run(&args("render", &part(1), &resume)));
+    let merged = dir.path().join("merged.exr");
+    let files = [shard_file(&plan), shard_file(&part(0)), file];
+    let mut merge = vec!["merge".to_string(), "--complete".to_string()];
+    merge.extend(files.iter().map(|f| f.to_str().unwrap().to_string()));
+    merge.extend(["-o".to_string(), merged.to_str().unwrap().to_string()]);
+    assert_ok(&run(&merge));
+    assert_eq!(pixel_bits(&merged), pixel_bits(&whole));
 }

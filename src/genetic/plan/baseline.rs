@@ -11,7 +11,7 @@ use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Str
 use rayon::prelude::*;
 
 /// Why a GA pixel was chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Origin {
     Grid,

@@ -130,7 +130,7 @@ pub(super) fn pilot_pays(waves: &Waves) -> bool {
 /// One estimator's samples at a pixel, per sample: mean and variance under the pixel's
 /// [`ChannelWeights`] (`√(Σ_c w_c mean_c²)` and `Σ_c w_c Var_c`), and the cost
 /// ([`RayCounts::cost`]).
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Moments {
     pub mean: f64,
     pub variance: f64,
@@ -145,7 +145,7 @@ impl Moments {
 }
 
 /// The gate's comparison at a GA pixel.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Trial {
     pub pt: Moments,
     pub evolved: Moments,

@@ -76,7 +76,7 @@ use waves::Waves;
 /// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
 /// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
 /// tracer. (`PlanInputs { plan_for: PlanFor::Guide, … }` reads "a plan for a guide".)
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PlanFor {
     /// `ga`: the mixture estimator (eq. 8).
@@ -127,7 +127,7 @@ impl<'a> PlanInputs<'a> {
 }
 
 /// Per-phase totals of a plan.
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PlanStats {
     /// Wall-clock seconds of the grid rays and the baseline pass (none where the gate's
     /// pilot closes the GA), and of the GA phase (test paths included).
@@ -193,8 +193,9 @@ impl PlanStats {
     }
 }
 
-/// GA pixels and their mixtures, and how every other pixel combines them.
-#[derive(Clone, Debug)]
+/// GA pixels and their mixtures, and how every other pixel combines them. It serialises
+/// (a plan file, `genpath learn`) without its lookup index, which is rebuilt on first use.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Plan {
     width: u32,
     height: u32,
@@ -217,6 +218,7 @@ pub struct Plan {
     unnormalised: bool,
     pub stats: PlanStats,
     /// `pixels` and then `pt_points`, bucketed for [`Self::interpolation`] on first use.
+    #[serde(skip)]
     index: OnceLock<PointGrid>,
 }
 

@@ -26,7 +26,7 @@ pub const PRUNE_SHARE: f64 = 0.0;
 pub const CONVEX_ITERATIONS: usize = 200;
 
 /// The outcome of the genetic algorithm at one pixel.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GaPixel {
     pub x: u32,
     pub y: u32,

@@ -1,0 +1,229 @@
+//! `genpath learn`: prepares a method that learns (`ga`, `ga-pt`, `pg`) exactly as `render`
+//! does and saves what it learned in a plan file ([`genpath::shard::plan_file`]), with the
+//! training's samples (pg, ga-pt) in a training shard beside it; and `render --plan`'s side
+//! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md).
+
+use super::args::{MethodArgs, SceneArgs};
+use super::check_dir;
+use super::session::{shard_path, write_stats, Session};
+use anyhow::{bail, Context, Result};
+use clap::{ArgMatches, Args};
+use genpath::integrators::{prepare, LayerSums, Learned, Shard};
+use genpath::path::SceneView;
+use genpath::shard::plan_file::{self, PlanHeader};
+use genpath::shard::{Identity, Part, PlanRef};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args)]
+pub struct LearnArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The plan file to write (any name; `plan.bin`). Where the training took samples (pg,
+    /// ga-pt with the spatial guide), they go to the training shard `<FILE>.shard`, which
+    /// `genpath merge` adds to the render's shards; a `<FILE>.json` summarises the plan.
+    #[arg(short, long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// Samples per pixel of the render the plan is for (pass the same to `render --plan`)
+    /// [default: a Mitsuba scene's `sample_count`, else 64].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
+    pub spp: Option<u32>,
+    #[command(flatten)]
+    pub method: MethodArgs,
+}
+
+pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
+    check_dir(&args.output)?;
+    let method = args.method.method;
+    if !method.learns() {
+        bail!(
+            "--method {} learns nothing (learn is for pg, ga and ga-pt): render it, with \
+             --shard K/N to split it",
+            method.name()
+        );
+    }
+    let config = args.method.settings(matches)?;
+    let session = Session::open(&args.scene)?;
+    let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
+    let settings = session.settings(&args.scene, method, spp);
+    let identity = session.identity(
+        "render",
+        &args.scene,
+        &settings,
+        vec![settings.seed],
+        &config,
+    )?;
+    let view = SceneView::new(&session.scene, session.accel.as_ref());
+    let t_learn = Instant::now();
+    let prepared = session
+        .pool
+        .install(|| prepare(&view, &config, &settings))?;
+    let learn_s = t_learn.elapsed().as_secs_f64();
+    let learned = prepared
+        .learned()
+        .with_context(|| format!("--method {} kept no learned state", method.name()))?;
+    let payload = plan_file::payload(&learned)
+        .map_err(|e| anyhow::anyhow!("{}: cannot encode the plan: {e}", args.output.display()))?;
+    let reference = PlanRef {
+        hash: genpath::shard::hash_bytes(&payload),
+        training_spp: learned.training_spp(),
+    };
+    let header = PlanHeader {
+        identity: identity.clone(),
+        training_spp: reference.training_spp,
+        summary: summary(&learned),
+        scene_path: session.scene.path.clone(),
+        command_line: std::env::args().collect(),
+    };
+    plan_file::write(&args.output, &header, &payload)?;
+    let training = training_shard(&session, &args.output, &learned, identity, &reference)?;
+    let json = serde_json::json!({
+        "genpath_version": env!("CARGO_PKG_VERSION"),
+        "command_line": header.command_line,
+        "scene": header.scene_path,
+        "identity": header.identity,
+        "plan_file": { "file": args.output, "hash": reference.hash, "bytes": payload.len() },
+        "training_spp": reference.training_spp,
+        "training_shard": training,
+        "summary": header.summary,
+        "threads": session.pool.current_num_threads(),
+        "times_s": { "load": session.load_s, "accel_build": session.accel_s, "learn": learn_s },
+    });
+    write_stats(std::slice::from_ref(&args.output), &json)?;
+    if !args.scene.quiet {
+        let shard = training.map_or_else(String::new, |t| {
+            format!(
+                ", its {} training samples per pixel in {}",
+                reference.training_spp,
+                t.display()
+            )
+        });
+        eprintln!(
+            "genpath: learned {} for {}×{} at {spp} spp in {learn_s:.2} s → {} ({} bytes){shard}",
+            method.name(),
+            session.scene.camera.width,
+            session.scene.camera.height,
+            args.output.display(),
+            payload.len()
+        );
+    }
+    Ok(())
+}
+
+/// Writes the training's samples, if it took any, as the training shard beside `output`:
+/// its path.
+fn training_shard(
+    session: &Session,
+    output: &Path,
+    learned: &Learned,
+    identity: Identity,
+    reference: &PlanRef,
+) -> Result<Option<PathBuf>> {
+    let Some(spatial) = learned.spatial.as_ref().filter(|s| s.samples.spp > 0) else {
+        return Ok(None);
+    };
+    let samples = &spatial.samples;
+    let layer = LayerSums {
+        counts: vec![samples.spp; samples.sum.len()],
+        sum: samples.sum.clone(),
+        sum_sq: samples.sum_sq.clone(),
+    };
+    let identity = Identity {
+        plan: Some(reference.clone()),
+        ..identity
+    };
+    let path = shard_path(output);
+    session.write_shard(&path, identity, (Shard::WHOLE, Part::Training), &[layer])?;
+    Ok(Some(path))
+}
+
+/// What a plan file's header and a render's JSON say of what was learned.
+fn summary(learned: &Learned) -> serde_json::Value {
+    let plan = learned.plan.as_ref().map(|p| {
+        serde_json::json!({
+            "plan_for": p.plan_for,
+            "ga_pixels": p.pixels.len(),
+            "improved_pixels": p.pixels.iter().filter(|x| !x.kept_srt).count(),
+            "pt_points": p.pt_points.len(),
+            "closed_by_gate": p.is_closed(),
+            "stats": p.stats,
+        })
+    });
+    let spatial = learned.spatial.as_ref().map(|s| {
+        serde_json::json!({
+            "stats": s.guide.stats,
+            "plan_guides": s.plan_guides,
+        })
+    });
+    serde_json::json!({ "plan": plan, "spatial": spatial })
+}
+
+/// A plan file read for a render (`render --plan FILE`).
+pub struct SavedPlan {
+    pub path: PathBuf,
+    pub hash: String,
+    pub training_spp: u32,
+    pub summary: serde_json::Value,
+    /// Taken when the render prepares its method.
+    pub learned: Option<Learned>,
+}
+
+impl SavedPlan {
+    /// What the render's shards record of it.
+    pub fn reference(&self) -> PlanRef {
+        PlanRef {
+            hash: self.hash.clone(),
+            training_spp: self.training_spp,
+        }
+    }
+
+    /// What the render's JSON records of it.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "file": self.path,
+            "hash": self.hash,
+            "training_spp": self.training_spp,
+            "summary": self.summary,
+            "note": "the plan's and the spatial guide's times are the learn job's",
+        })
+    }
+}
+
+/// Reads the plan file at `path` for a render with `identity` (without a plan), shard
+/// `shard`: refuses a file that is damaged, or learned for another render (naming the first
+/// field that differs), or a split into more shards than there are samples after the
+/// training's.
+pub fn read_plan(path: &Path, identity: &Identity, shard: Shard) -> Result<SavedPlan> {
+    let file = plan_file::read(path).with_context(|| format!("--plan {}", path.display()))?;
+    if let Some((what, theirs, ours)) = file.header.identity.difference(identity) {
+        bail!(
+            "--plan {}: it was learned for another render: {what} is {theirs} there and {ours} \
+             here (learn with the same build, scene, size, seed, --spp and settings)",
+            path.display()
+        );
+    }
+    let training_spp = file.header.training_spp;
+    if training_spp != file.learned.training_spp() {
+        bail!(
+            "--plan {}: inconsistent: its header says {training_spp} training samples per \
+             pixel, its learned state {}",
+            path.display(),
+            file.learned.training_spp()
+        );
+    }
+    let after = identity.spp.saturating_sub(training_spp);
+    if !shard.is_whole() && shard.count > after {
+        bail!(
+            "--shard {shard}: {} shards of the {after} samples per pixel left after the plan's \
+             {training_spp} training samples leave some shards without a sample",
+            shard.count
+        );
+    }
+    Ok(SavedPlan {
+        path: path.to_path_buf(),
+        hash: file.hash,
+        training_spp,
+        summary: file.header.summary,
+        learned: Some(file.learned),
+    })
+}

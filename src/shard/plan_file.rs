@@ -1,0 +1,194 @@
+//! The plan file (`genpath learn … -o plan.bin`, read by `render --plan plan.bin`): the
+//! learned state of a method that learns ([`Learned`]: the GA plan, the spatial guide with
+//! its training's per-pixel sums and decisions), trained once and shared by every shard of
+//! a render. Little-endian throughout:
+//!
+//! | bytes | what |
+//! | --- | --- |
+//! | 8 | the mark `GPPLAN\0\0` |
+//! | 4 | format version, `u32` ([`VERSION`]) |
+//! | 4 | header length `H`, `u32` (at most [`MAX_HEADER`]) |
+//! | H | the [`PlanHeader`] as JSON (UTF-8): the render's identity, the training's samples per pixel, a summary |
+//! | 8 | payload length `L`, `u64` |
+//! | L | the payload: [`Learned`] in `bincode` 1 (fixed-width integers, `f32`/`f64` as their bits) |
+//! | 4 | CRC-32 (IEEE) of every byte before it |
+//!
+//! The payload round-trips exactly (every float as its bits); caches (a plan's lookup
+//! index) are not in it and are rebuilt on first use.
+
+use super::Identity;
+use crate::integrators::Learned;
+use bincode::Options;
+use std::path::{Path, PathBuf};
+
+/// The format version this genpath writes and reads.
+pub const VERSION: u32 = 1;
+/// The mark every plan file starts with.
+pub const MAGIC: &[u8; 8] = b"GPPLAN\0\0";
+/// The longest header read.
+pub const MAX_HEADER: u32 = 1 << 24;
+
+/// What a plan file says about its learned state.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanHeader {
+    /// The identity of the render it was learned for (command `render`, no plan): a render
+    /// with `--plan` must have this identity.
+    pub identity: Identity,
+    /// Samples per pixel the training took (pg's and ga-pt's spatial training passes),
+    /// which the learn job wrote to its training shard.
+    pub training_spp: u32,
+    /// What was learned, in brief (GA pixels, spatial passes, the trials' decisions).
+    pub summary: serde_json::Value,
+    /// For the record, not compared: where the scene was and the command line.
+    pub scene_path: PathBuf,
+    pub command_line: Vec<String>,
+}
+
+/// Why a plan file cannot be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanFileError {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: not a genpath plan file (it does not start with the plan format's mark)", path.display())]
+    NotPlan { path: PathBuf },
+    #[error("{}: plan format version {found}; this genpath reads version {VERSION}", path.display())]
+    Version { path: PathBuf, found: u32 },
+    #[error("{}: bad plan header: {message}", path.display())]
+    Header { path: PathBuf, message: String },
+    #[error("{}: truncated or padded: {found} bytes where the header promises {expected}", path.display())]
+    Length {
+        path: PathBuf,
+        found: u64,
+        expected: u64,
+    },
+    #[error("{}: corrupted: its checksum does not match its contents", path.display())]
+    Checksum { path: PathBuf },
+    #[error("{}: bad learned state: {message}", path.display())]
+    Payload { path: PathBuf, message: String },
+}
+
+/// The payload's encoding: `bincode` with fixed-width little-endian integers, nothing after.
+fn codec() -> impl Options {
+    bincode::options()
+        .with_fixint_encoding()
+        .with_little_endian()
+        .reject_trailing_bytes()
+}
+
+/// The payload's bytes: what a render's identity hashes ([`super::hash_bytes`]).
+pub fn payload(learned: &Learned) -> Result<Vec<u8>, String> {
+    codec().serialize(learned).map_err(|e| e.to_string())
+}
+
+/// The file's bytes, from its header and payload.
+pub fn encode(header: &PlanHeader, payload: &[u8]) -> Result<Vec<u8>, String> {
+    let json = serde_json::to_vec(header).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(28 + json.len() + payload.len());
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(payload);
+    let crc = crc32fast::hash(&out);
+    out.extend_from_slice(&crc.to_le_bytes());
+    Ok(out)
+}
+
+/// Writes a plan file atomically (temporary file, then rename).
+pub fn write(path: &Path, header: &PlanHeader, payload: &[u8]) -> Result<(), PlanFileError> {
+    let io = |message: String| PlanFileError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(message),
+    };
+    let bytes = encode(header, payload).map_err(io)?;
+    crate::image::write_bytes_atomic(path, &bytes).map_err(|e| io(e.to_string()))
+}
+
+/// A plan file read and checked: its header, its learned state, and the hash of its
+/// payload.
+pub struct PlanFile {
+    pub header: PlanHeader,
+    pub learned: Learned,
+    pub hash: String,
+}
+
+/// Reads and checks the plan file at `path`: its mark, version, length and checksum, then
+/// its header and payload.
+pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
+    let bytes = std::fs::read(path).map_err(|source| PlanFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let length = |found: usize, expected: usize| PlanFileError::Length {
+        path: path.to_path_buf(),
+        found: found as u64,
+        expected: expected as u64,
+    };
+    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+        return Err(PlanFileError::NotPlan {
+            path: path.to_path_buf(),
+        });
+    }
+    let word = |i: usize| -> Result<[u8; 4], PlanFileError> {
+        bytes
+            .get(i..i + 4)
+            .and_then(|b| b.try_into().ok())
+            .ok_or_else(|| length(bytes.len(), i + 4))
+    };
+    let version = u32::from_le_bytes(word(8)?);
+    if version != VERSION {
+        return Err(PlanFileError::Version {
+            path: path.to_path_buf(),
+            found: version,
+        });
+    }
+    let h = u32::from_le_bytes(word(12)?);
+    let bad_header = |message: String| PlanFileError::Header {
+        path: path.to_path_buf(),
+        message,
+    };
+    if h > MAX_HEADER {
+        return Err(bad_header(format!(
+            "header length {h} is more than {MAX_HEADER} bytes"
+        )));
+    }
+    let at = 16 + h as usize;
+    let l = bytes
+        .get(at..at + 8)
+        .and_then(|b| b.try_into().ok())
+        .map(u64::from_le_bytes)
+        .ok_or_else(|| length(bytes.len(), at + 8))?;
+    let expected = (at as u64 + 8).saturating_add(l).saturating_add(4);
+    if bytes.len() as u64 != expected {
+        return Err(PlanFileError::Length {
+            path: path.to_path_buf(),
+            found: bytes.len() as u64,
+            expected,
+        });
+    }
+    let (body, crc) = bytes.split_at(bytes.len() - 4);
+    if crc32fast::hash(body) != u32::from_le_bytes(word(bytes.len() - 4)?) || crc.len() != 4 {
+        return Err(PlanFileError::Checksum {
+            path: path.to_path_buf(),
+        });
+    }
+    let header: PlanHeader =
+        serde_json::from_slice(&body[16..at]).map_err(|e| bad_header(e.to_string()))?;
+    let payload = &body[at + 8..];
+    let learned: Learned = codec()
+        .deserialize(payload)
+        .map_err(|e| PlanFileError::Payload {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    Ok(PlanFile {
+        header,
+        learned,
+        hash: super::hash_bytes(payload),
+    })
+}
