@@ -11,7 +11,15 @@
 # Slurm stops (time limit, preemption, `scontrol requeue`) writes what it has, is requeued
 # and resumes from its shard file. The merge job (scripts/slurm/merge.sbatch) runs when every
 # task has succeeded (--dependency=afterok) and writes OUTDIR/merged.exr from the N shard
-# files. Prints the two job ids.
+# files. Prints the job ids.
+#
+# Methods that learn (--method pg, ga or ga-pt among the flags) learn once: a learn job
+# (scripts/slurm/learn.sbatch) runs `genpath learn SCENE RENDER_FLAGS -o OUTDIR/plan.bin`
+# first, the array waits for it (--dependency=afterok) and every task renders with
+# `--plan OUTDIR/plan.bin`, and the merge adds the learn job's training shard
+# (OUTDIR/plan.bin.shard, pg and ga-pt) to the tasks' shards: learn → array → merge. The
+# learn job is not split and not resumable: give it --learn-time. With --tasks, an existing
+# OUTDIR/plan.bin is used as it is (no learn job).
 #
 # Options:
 #   --shards N        shards (array tasks) [4]
@@ -19,15 +27,14 @@
 #   --mem M           memory per task, as sbatch takes it [2G]
 #   --time T          time limit per task run [01:00:00]
 #   --checkpoint S    seconds between checkpoints [60]
+#   --learn-time T    time limit of the learn job (methods that learn) [the --time]
 #   --tasks LIST      only these array indices (e.g. 1,5-7): resubmits failed tasks, whose
 #                     partial shard files they resume from, with a new merge job
 #   --genpath PATH    the genpath binary [target/release/genpath of this checkout]
 #   --sbatch FLAG     an extra sbatch flag for both jobs (repeatable: --partition=…, --account=…)
-#
-# Methods that learn (pg, ga, ga-pt) cannot be sharded yet: genpath refuses --shard for them.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-shards=4 cpus=1 mem=2G time=01:00:00 checkpoint=60 tasks="" extra=()
+shards=4 cpus=1 mem=2G time=01:00:00 checkpoint=60 tasks="" learn_time="" extra=()
 genpath=$(cd "$here/../.." && pwd)/target/release/genpath
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d; s/^# \{0,1\}//' >&2; exit 2; }
 while (($#)); do
@@ -37,6 +44,7 @@ while (($#)); do
     --mem) mem=$2; shift 2 ;;
     --time) time=$2; shift 2 ;;
     --checkpoint) checkpoint=$2; shift 2 ;;
+    --learn-time) learn_time=$2; shift 2 ;;
     --tasks) tasks=$2; shift 2 ;;
     --genpath) genpath=$2; shift 2 ;;
     --sbatch) extra+=("$2"); shift 2 ;;
@@ -57,12 +65,38 @@ command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found: is this a S
 mkdir -p "$out"
 scene=$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")
 out=$(cd "$out" && pwd)
+resubmit=${tasks:+yes}
 tasks=${tasks:-0-$((shards - 1))}
 
+# Whether the method learns: then learn once, and every task renders with the plan.
+method=pt
+for ((i = 1; i <= $#; i++)); do
+    arg=${!i}
+    case $arg in
+    --method=*) method=${arg#--method=} ;;
+    --method) j=$((i + 1)); method=${!j:-pt} ;;
+    esac
+done
+plan="" after=()
+case $method in
+pg | ga | ga-pt)
+    plan=$out/plan.bin
+    if [[ -z $resubmit || ! -f $plan ]]; then
+        learn=$(GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_PLAN="$plan" \
+            sbatch --parsable "${extra[@]}" --job-name=genpath-learn \
+            --cpus-per-task="$cpus" --mem="$mem" --time="${learn_time:-$time}" \
+            --output="$out/slurm-%j-learn.out" --export=ALL "$here/learn.sbatch" "$@")
+        learn=${learn%%;*}
+        after=(--dependency="afterok:$learn" --kill-on-invalid-dep=yes)
+        echo "learn: job $learn → $plan"
+    fi
+    ;;
+esac
+
 export GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_OUT="$out" GENPATH_SHARDS="$shards" \
-    GENPATH_CHECKPOINT="$checkpoint"
+    GENPATH_CHECKPOINT="$checkpoint" GENPATH_PLAN="$plan"
 # SIGTERM to the batch shell 60 s before the time limit: the render stops, saves and requeues.
-array=$(sbatch --parsable "${extra[@]}" --job-name=genpath-shard --array="$tasks" \
+array=$(sbatch --parsable "${extra[@]}" "${after[@]}" --job-name=genpath-shard --array="$tasks" \
     --requeue --signal=B:TERM@60 --cpus-per-task="$cpus" --mem="$mem" --time="$time" \
     --output="$out/slurm-%A_%a.out" --export=ALL "$here/shard.sbatch" "$@")
 array=${array%%;*}
