@@ -3,8 +3,10 @@
 # cluster on this machine (local-cluster.sh), submits a 4-shard `pt` render of a small fig5
 # through submit.sh, requeues one array task mid-render with `scontrol requeue` (it resumes
 # from its checkpoint), and checks that the merged image equals the render on one machine
-# bit for bit, and that a truncated shard is refused by the merge. Stops the daemons it
-# started, whatever happens.
+# bit for bit, and that a truncated shard is refused by the merge; then a method that learns
+# (pg) through its learn job, an array of shards rendering with the plan and the merge, which
+# must equal pg's render on one machine bit for bit. Stops the daemons it started, whatever
+# happens.
 #
 #   bash scripts/slurm/ci.sh [GENPATH]   # GENPATH: a built binary [target/release/genpath]
 set -euo pipefail
@@ -23,7 +25,20 @@ export SLURM_CONF=$GENPATH_SLURM_DIR/slurm.conf
 
 scene=$repo/scenes/fig5/scene.toml
 flags=(--method pt --width 64 --height 64 --spp 4096 --seed 3)
-fail() { echo "ci.sh: FAILED: $*" >&2; for f in "$work"/out/slurm-*.out; do [[ -f $f ]] && { echo "--- $f" >&2; cat "$f" >&2; }; done; exit 1; }
+# wait_for JOB: until the job has completed (at most 300 s); fails on any other end.
+wait_for() {
+    local i state=""
+    for ((i = 0; i < 300; i++)); do
+        state=$(scontrol show job "$1" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
+        case $state in
+        COMPLETED) return ;;
+        FAILED | CANCELLED | TIMEOUT | OUT_OF_MEMORY | NODE_FAIL) fail "job $1: $state" ;;
+        esac
+        sleep 1
+    done
+    fail "job $1 did not complete within 300 s (state ${state:-unknown})"
+}
+fail() { echo "ci.sh: FAILED: $*" >&2; for f in "$work"/out*/slurm-*.out; do [[ -f $f ]] && { echo "--- $f" >&2; cat "$f" >&2; }; done; exit 1; }
 
 echo "== the render on one machine"
 "$genpath" render "$scene" "${flags[@]}" --quiet -o "$work/single.exr"
@@ -53,15 +68,7 @@ done
 scontrol update JobId="${array}_1" StartTime=now || true
 
 echo "== wait for the merge (at most 300 s)"
-for ((i = 0; i < 300; i++)); do
-    state=$(scontrol show job "$merge" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
-    case $state in
-    COMPLETED) break ;;
-    FAILED | CANCELLED | TIMEOUT | OUT_OF_MEMORY | NODE_FAIL) fail "merge job $merge: $state" ;;
-    esac
-    sleep 1
-done
-[[ $state == COMPLETED ]] || fail "the merge job did not complete within 300 s (state ${state:-unknown})"
+wait_for "$merge"
 restarts=$(scontrol show job "${array}_1" | sed -n 's/.*Restarts=\([0-9]*\).*/\1/p')
 ((restarts >= 1)) || fail "task 1 was not requeued (Restarts=${restarts:-?})"
 grep -q "resuming from" "$work"/out/slurm-"${array}"_1.out || fail "task 1 did not resume from its shard file"
@@ -79,4 +86,14 @@ fi
 grep -q "truncated" "$work/bad.err" || fail "the refusal does not say truncated: $(cat "$work/bad.err")"
 [[ -e $work/bad.exr ]] && fail "a refused merge wrote an image"
 cat "$work/bad.err"
+echo "== a method that learns: learn → array of 2 shards → merge (pg)"
+pg=(--method pg --width 48 --height 40 --spp 64 --seed 5)
+"$genpath" render "$scene" "${pg[@]}" --quiet -o "$work/single-pg.exr"
+submitted=$(bash "$repo/scripts/slurm/submit.sh" --shards 2 --genpath "$genpath" \
+    "$scene" "$work/out-pg" -- "${pg[@]}")
+echo "$submitted"
+grep -q "^learn: job" <<<"$submitted" || fail "no learn job for pg: $submitted"
+merge=$(sed -n 's/.*merge: job \([0-9]*\) .*/\1/p' <<<"$submitted")
+wait_for "$merge"
+"$genpath" compare --bits "$work/out-pg/merged.exr" "$work/single-pg.exr" || fail "pg: merged ≠ single"
 echo "Slurm pipeline: ok"
