@@ -419,9 +419,14 @@ impl<'a> GenePool<'a> {
         (DirectionSampler::Anchor(sampler), Some(prim))
     }
 
-    /// A light region on an emitter picked by area, at a random level, and a random `β`.
+    /// A light region on an emitter picked by area, at a random level, and a random `β`
+    /// (uniform light sampling, never used, in a scene without area emitters).
     pub fn random_light(&self, rng: &mut crate::sampling::Rng) -> LightPointSampler {
         let emitters = &self.scene.emitters;
+        if emitters.prims.is_empty() {
+            // Lit by its environment alone: no light point is ever sampled.
+            return LightPointSampler::uniform(0);
+        }
         let prim = emitters.pick(rng.random::<f64>());
         let level = rng.random_range(0..=MAX_LIGHT_LEVEL);
         let cell = rng.random_range(0..1u32 << (2 * u32::from(level)));

@@ -552,7 +552,15 @@ impl TestPaths {
                 if self.delta[j] {
                     continue;
                 }
-                let a = g.absorption(k, j - start + 1, self.max_bounces);
+                // With next-event estimation at every vertex a direction follows the light
+                // point: at `max_bounces` only a path that escaped to the environment stores
+                // one (`PathGenerator::pdf_techniques`); before it, both absorptions agree.
+                let bounce = j - start + 1;
+                let a = if every {
+                    g.absorption_after_light(k, bounce, self.max_bounces)
+                } else {
+                    g.absorption(k, bounce, self.max_bounces)
+                };
                 if a >= 1.0 {
                     pdf = 0.0;
                     break;

@@ -33,8 +33,9 @@ impl PixelIntegrator for NeeOnly {
     }
 }
 
-/// The light a point sampled on the emitters sends to `x` (normal `n`) and on towards `wo`,
-/// over its density in solid angle.
+/// The light a point sampled on the emitters (or, with the scene's environment share, a
+/// direction uniform over the sphere towards its environment) sends to `x` (normal `n`) and
+/// on towards `wo`, over its density in solid angle.
 fn light_sample(
     view: &SceneView,
     (x, n, wo): (&SurfacePoint, Vec3, Vec3),
@@ -42,10 +43,36 @@ fn light_sample(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
-    match LightPoint::sample(view, (x, n), rng) {
+    let env_share = view.scene.environment_share();
+    if env_share <= 0.0 {
+        return match LightPoint::sample(view, (x, n), rng) {
+            Some(l) if view.unoccluded(x, &l.y, counts) => {
+                let le = view.material(l.y.prim).ke;
+                brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
+            }
+            _ => Vec3::ZERO,
+        };
+    }
+    let mut u = [uniform(rng), uniform(rng), uniform(rng)];
+    if let Some(env) = view
+        .scene
+        .environment
+        .filter(|_| f64::from(u[0]) < env_share)
+    {
+        let wi = env.sample(u[1], u[2]);
+        let cos = n.dot(wi);
+        if cos <= 0.0 || !view.escapes(x, wi, counts) {
+            return Vec3::ZERO;
+        }
+        let pdf = (env_share * env.pdf()) as f32;
+        return brdf::eval(material, n, wo, wi) * env.radiance * (cos / pdf);
+    }
+    u[0] = ((f64::from(u[0]) - env_share) / (1.0 - env_share)) as f32;
+    match LightPoint::from_uniforms(view, (x, n), u) {
         Some(l) if view.unoccluded(x, &l.y, counts) => {
             let le = view.material(l.y.prim).ke;
-            brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
+            let pdf = (1.0 - env_share) as f32 * l.pdf_solid_angle();
+            brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / pdf)
         }
         _ => Vec3::ZERO,
     }
@@ -63,15 +90,21 @@ impl PixelEstimator for NeeOnly {
         let (mut ray, mut beta, mut radiance) = (*ray, Vec3::ONE, Vec3::ZERO);
         // Whether emission at the next hit counts: no light sample could have found it.
         let mut count_emission = true;
-        for _ in 0..=self.max_bounces {
-            let Some(x) = view.trace(&ray, counts) else {
+        for bounce in 0..=self.max_bounces {
+            let hit = view.trace(&ray, counts);
+            if count_emission {
+                // The camera ray's as the scene shows it (`hide_emitters`).
+                radiance += beta
+                    * match &hit {
+                        _ if bounce == 0 => view.seen_directly(hit.as_ref(), ray.dir),
+                        Some(x) => emitted(view.material(x.prim), x, -ray.dir),
+                        None => view.escaped(),
+                    };
+            }
+            let Some(x) = hit else {
                 break;
             };
-            let material = view.material(x.prim);
             let wo = -ray.dir;
-            if count_emission {
-                radiance += beta * emitted(material, &x, wo);
-            }
             let n = brdf::facing_normal(x.ng, wo);
             let material = view.scattering_material(&x, wo);
             if !material.scatters() {

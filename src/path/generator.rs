@@ -208,8 +208,12 @@ pub struct Contribution {
     /// Ends with a light point (`true`) or on an emitter a sampled direction hit.
     pub nee: bool,
     /// With [`Nee::Every`], the emitter point after a non-delta `x_len` (none after a delta
-    /// one, which admits direction sampling alone).
+    /// one, which admits direction sampling alone, and none for the environment).
     pub light: Option<Connection>,
+    /// Ends with a direction out of `x_len` that escaped the scene to the environment
+    /// (Mitsuba's `constant` emitter), which only direction sampling reaches: its density is
+    /// the directions' at all `len` vertices.
+    pub escaped: bool,
 }
 
 impl PathGenerator {
@@ -260,7 +264,8 @@ impl PathGenerator {
     }
 
     /// Density with which this generator produces the first `len` vertices of `path`
-    /// followed by its light point (`nee`), or by an emitter hit through a delta vertex.
+    /// followed by its light point (`nee`), or by an emitter hit through a delta vertex, or
+    /// by the environment (the direction out of `x_len` escaped).
     /// Directions in solid angle, the light point in area: the measure all generators share.
     pub fn pdf_path(
         &self,
@@ -304,7 +309,8 @@ impl PathGenerator {
     /// produces contribution `c` of `path` by its two techniques (design §13): directions at
     /// all `c.len` vertices, or at the first `c.len − 1` and then a light point from
     /// `x_len`, whose absorption does not enter. Directions in solid angle, the last segment
-    /// too (the light point's density converted there). After a delta `x_len`, `p_light` is 0.
+    /// too (the light point's density converted there). After a delta `x_len`, and for the
+    /// environment, `p_light` is 0.
     pub fn pdf_techniques(
         &self,
         view: &SceneView,
@@ -325,20 +331,28 @@ impl PathGenerator {
             prefix *= (1.0 - a) * self.direction_pdf(view, k, v);
             k += 1;
         }
+        let direction = |last: &PathVertex| {
+            let a = self.absorption_after_light(k, c.len, max_bounces);
+            if a >= 1.0 {
+                0.0
+            } else {
+                (1.0 - a) * self.direction_pdf(view, k, last)
+            }
+        };
         let Some(end) = c.light else {
+            let last = &path.vertices[c.len - 1];
             // An emitter reached through a delta `x_len`: its direction had no density.
-            return (prefix, 0.0);
+            if last.delta {
+                return (prefix, 0.0);
+            }
+            // The environment, which only directions reach, after a non-delta `x_len`.
+            return (prefix * direction(last), 0.0);
         };
         let last = PathVertex {
             wi: end.wi,
             ..path.vertices[c.len - 1]
         };
-        let a = self.absorption_after_light(k, c.len, max_bounces);
-        let dir = if a >= 1.0 {
-            0.0
-        } else {
-            (1.0 - a) * self.direction_pdf(view, k, &last)
-        };
+        let dir = direction(&last);
         let scene = view.scene;
         let light = self
             .light

@@ -128,7 +128,10 @@ impl Mixture {
                 pdf += w * scale * p;
             }
         }
-        pdf
+        match view.scene.environment {
+            Some(env) if c.escaped => pdf * env.escape_pdf_scale(),
+            _ => pdf,
+        }
     }
 
     /// Picks a component by its weight, `u` uniform in [0, 1).

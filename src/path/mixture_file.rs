@@ -52,9 +52,10 @@ struct GeneratorFile {
     light: Option<LightPointSampler>,
 }
 
-/// Uniform light sampling by area (a light-point sampler with β = 0).
+/// Uniform light sampling by area (a light-point sampler with β = 0; in a scene lit only by
+/// its environment, one that is never sampled).
 pub fn uniform_light(scene: &Scene) -> LightPointSampler {
-    LightPointSampler::uniform(scene.emitters.prims[0])
+    LightPointSampler::uniform(scene.emitters.prims.first().copied().unwrap_or(0))
 }
 
 /// The `srt` method as a mixture: the one `srt` generator with uniform light sampling.
@@ -89,6 +90,13 @@ pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), String> {
                     .map_err(|e| format!("step {k}: {e}"))?;
             }
         }
+    }
+    if scene.emitters.prims.is_empty() {
+        // Lit by its environment alone: no light point is ever sampled.
+        if g.light != uniform_light(scene) {
+            return Err("light: the scene has no area emitter to sample light points on".into());
+        }
+        return Ok(());
     }
     LightPointSampler::new(g.light.region, g.light.beta, &scene.emitters)
         .map_err(|e| format!("light: {e}"))?;

@@ -124,6 +124,30 @@ impl<'a> SceneView<'a> {
         Ray::new(from, to - from, 0.0, 1.0)
     }
 
+    /// Whether nothing blocks the ray from `x` along unit `dir` out of the scene (a shadow
+    /// ray towards the environment).
+    pub fn escapes(&self, x: &SurfacePoint, dir: Vec3, counts: &mut RayCounts) -> bool {
+        self.unblocked(&self.spawn(x, dir), counts)
+    }
+
+    /// What a camera ray along `dir` sees directly: the emission of its first hit `x1`
+    /// (towards the camera) or, where it escapes, the environment's radiance; nothing with
+    /// `hide_emitters`.
+    pub fn seen_directly(&self, x1: Option<&SurfacePoint>, dir: Vec3) -> Vec3 {
+        if self.scene.hide_emitters {
+            return Vec3::ZERO;
+        }
+        match x1 {
+            Some(x1) => emitted(self.material(x1.prim), x1, -dir),
+            None => self.escaped(),
+        }
+    }
+
+    /// The radiance a ray that escapes the scene gathers: the environment's, or none.
+    pub fn escaped(&self) -> Vec3 {
+        self.scene.environment.map_or(Vec3::ZERO, |e| e.radiance)
+    }
+
     /// Whether nothing blocks a shadow ray (from [`SceneView::shadow_ray`]).
     pub fn unblocked(&self, ray: &Ray, counts: &mut RayCounts) -> bool {
         counts.shadow += 1;
@@ -195,9 +219,9 @@ pub fn camera_sample<G: PathGuide>(
         return radiance.as_dvec3();
     };
     match view.trace(ray, counts) {
-        None => DVec3::ZERO,
+        None => view.seen_directly(None, ray.dir).as_dvec3(),
         Some(x1) => {
-            let direct = emitted(view.material(x1.prim), &x1, -ray.dir).as_dvec3();
+            let direct = view.seen_directly(Some(&x1), ray.dir).as_dvec3();
             direct + mixture.estimate(view, ray.origin, x1, max_bounces, rng, counts, scratch)
         }
     }

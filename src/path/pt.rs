@@ -205,10 +205,23 @@ pub struct LightPoint {
 impl LightPoint {
     /// A point on the emitters from the next three uniform numbers of `rng`, seen from `x`
     /// (facing normal `n`); `None` where it lies behind `x` or faces away from it (either
-    /// way it sends `x` nothing). Visibility is not tested.
+    /// way it sends `x` nothing), or where the scene has no area emitter. Visibility is not
+    /// tested.
     pub fn sample(view: &SceneView, (x, n): (&SurfacePoint, Vec3), rng: &mut Rng) -> Option<Self> {
-        let scene = view.scene;
         let u = [uniform(rng), uniform(rng), uniform(rng)];
+        Self::from_uniforms(view, (x, n), u)
+    }
+
+    /// [`Self::sample`] from the three uniform numbers `u`.
+    pub fn from_uniforms(
+        view: &SceneView,
+        (x, n): (&SurfacePoint, Vec3),
+        u: [f32; 3],
+    ) -> Option<Self> {
+        let scene = view.scene;
+        if scene.emitters.prims.is_empty() {
+            return None;
+        }
         let ls = scene.emitters.sample(&scene.mesh, u);
         let y = SurfacePoint {
             p: ls.point,
@@ -257,7 +270,11 @@ struct LightHit {
 }
 
 /// Next-event estimation at `x` (normal `n`), where it runs with probability `light_share`:
-/// a point on an emitter from three uniform numbers, and what it brings if it reaches `x`.
+/// from three uniform numbers, the environment (with probability
+/// [`Scene::environment_share`](crate::scene::Scene::environment_share), then a direction
+/// uniform over the sphere from the last two) or a point on an area emitter (the first
+/// number rescaled), and what it brings if it reaches `x`. Without an environment the
+/// numbers and the arithmetic are those of an area-only scene.
 fn next_event<B: VertexBsdf>(
     view: &SceneView,
     (x, n): (&SurfacePoint, Vec3),
@@ -266,19 +283,58 @@ fn next_event<B: VertexBsdf>(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Option<LightHit> {
-    let light = LightPoint::sample(view, (x, n), rng)?;
+    let mut u = [uniform(rng), uniform(rng), uniform(rng)];
+    let env_share = view.scene.environment_share();
+    if env_share > 0.0 {
+        if f64::from(u[0]) < env_share {
+            let share = light_share * env_share;
+            return environment_event(view, (x, n), bsdf, share, counts, [u[1], u[2]]);
+        }
+        u[0] = ((f64::from(u[0]) - env_share) / (1.0 - env_share)) as f32;
+    }
+    let light = LightPoint::from_uniforms(view, (x, n), u)?;
     let (wi, cos_x) = (light.wi, light.cos_x);
     let le = view.material(light.y.prim).ke;
     let f = bsdf.eval(wi);
     if !(le.max_element() > 0.0 && f.max_element() > 0.0 && view.unoccluded(x, &light.y, counts)) {
         return None;
     }
-    let pdf_light = light_share as f32 * light.pdf_solid_angle();
+    let pdf_light = (light_share * (1.0 - env_share)) as f32 * light.pdf_solid_angle();
     let pdf_brdf = bsdf.pdf(wi) as f32;
     let weight = power_heuristic(pdf_light, pdf_brdf);
     Some(LightHit {
         wi,
         le,
+        f,
+        scale: cos_x * weight / pdf_light,
+    })
+}
+
+/// Next-event estimation towards the environment, chosen with probability `share`: a
+/// direction uniform over the sphere from the two uniform numbers `u`.
+fn environment_event<B: VertexBsdf>(
+    view: &SceneView,
+    (x, n): (&SurfacePoint, Vec3),
+    bsdf: &B,
+    share: f64,
+    counts: &mut RayCounts,
+    u: [f32; 2],
+) -> Option<LightHit> {
+    let env = view.scene.environment?;
+    let wi = env.sample(u[0], u[1]);
+    let cos_x = n.dot(wi);
+    if cos_x <= 0.0 {
+        return None;
+    }
+    let f = bsdf.eval(wi);
+    if !(f.max_element() > 0.0 && view.escapes(x, wi, counts)) {
+        return None;
+    }
+    let pdf_light = (share * env.pdf()) as f32;
+    let weight = power_heuristic(pdf_light, bsdf.pdf(wi) as f32);
+    Some(LightHit {
+        wi,
+        le: env.radiance,
         f,
         scale: cos_x * weight / pdf_light,
     })
@@ -300,13 +356,29 @@ fn emission_weight(
         } else {
             let dist2 = (y.p - x.p).length_squared();
             let total_area = view.scene.emitters.total_area;
+            let share = light_share * (1.0 - view.scene.environment_share());
             let pdf_light =
-                light_share as f32 * light_pdf_solid_angle(total_area.recip(), dist2, cos_light);
+                share as f32 * light_pdf_solid_angle(total_area.recip(), dist2, cos_light);
             power_heuristic(bs.pdf as f32, pdf_light)
         })
     } else {
         None
     }
+}
+
+/// The environment's radiance that the direction `bs` found by escaping the scene, MIS
+/// weighted against next-event estimation (which ran with probability `light_share`).
+fn escape_radiance(view: &SceneView, bs: &BrdfSample, light_share: f64) -> Vec3 {
+    let Some(env) = view.scene.environment else {
+        return Vec3::ZERO;
+    };
+    let weight = if bs.delta {
+        1.0
+    } else {
+        let pdf_light = (light_share * view.scene.environment_share() * env.pdf()) as f32;
+        power_heuristic(bs.pdf as f32, pdf_light)
+    };
+    env.radiance * weight
 }
 
 /// [`radiance`], with directions drawn from `guide`'s BSDF at every vertex and next-event
@@ -324,10 +396,10 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
     mut recorder: Option<&mut R>,
 ) -> Vec3 {
     let Some(mut x) = view.trace(ray, counts) else {
-        return Vec3::ZERO;
+        return view.seen_directly(None, ray.dir);
     };
     let mut wo = -ray.dir;
-    let mut radiance = emitted(view.material(x.prim), &x, wo);
+    let mut radiance = view.seen_directly(Some(&x), ray.dir);
     let mut beta = Vec3::ONE;
     // What Russian roulette multiplies `beta` by: the radiance scale of the interfaces
     // crossed so far undone (1 where no glass was crossed).
@@ -391,6 +463,13 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         }
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace(&next_ray, counts) else {
+            let env = escape_radiance(view, &bs, light_share);
+            if env.max_element() > 0.0 {
+                radiance += beta * env;
+                if let Some(r) = recorder.as_deref_mut().filter(|_| diffuse && !bs.delta) {
+                    r.emission_seen(radiance);
+                }
+            }
             break;
         };
         let y_material = view.material(y.prim);

@@ -97,7 +97,10 @@ impl Walk {
         contributions: &mut Vec<Contribution>,
         y: Option<SurfacePoint>,
     ) -> Option<Query> {
-        let y = y?;
+        let Some(y) = y else {
+            self.escaped(view, contributions);
+            return None;
+        };
         if self.mirror || self.estimator == Nee::Every {
             self.emission_found(view, &y, contributions);
         }
@@ -137,6 +140,25 @@ impl Walk {
             len: self.bounce,
             nee: false,
             light,
+            escaped: false,
+        });
+    }
+
+    /// The environment's radiance that the pending direction found by escaping the scene,
+    /// as a contribution of direction sampling alone (for either estimator: no light point
+    /// reaches the environment, whose density is left out of the light-point samplers), whose
+    /// density is that of the directions at all its `len` vertices.
+    fn escaped(&self, view: &SceneView, out: &mut Vec<Contribution>) {
+        let le = view.escaped();
+        if le.max_element() <= 0.0 {
+            return;
+        }
+        out.push(Contribution {
+            f: self.throughput * le.as_dvec3(),
+            len: self.bounce,
+            nee: false,
+            light: None,
+            escaped: true,
         });
     }
 
@@ -155,6 +177,7 @@ impl Walk {
                         len: self.bounce,
                         nee: true,
                         light: None,
+                        escaped: false,
                     });
                 }
                 None
@@ -217,8 +240,12 @@ impl Walk {
             g.absorption(k, bounce, self.max_bounces)
         };
         if (uniform(rng) as f64) < absorption {
-            // Absorbed: one shadow ray to a light point (next-event estimation).
+            // Absorbed: one shadow ray to a light point (next-event estimation), where the
+            // scene has area emitters.
             path.vertices.push(vertex);
+            if scene.emitters.prims.is_empty() {
+                return None;
+            }
             let u = [
                 uniform(rng) as f64,
                 uniform(rng) as f64,
@@ -320,6 +347,9 @@ impl Walk {
     ) -> Option<Ray> {
         self.pending = None;
         let scene = view.scene;
+        if scene.emitters.prims.is_empty() {
+            return None;
+        }
         let u = [
             uniform(rng) as f64,
             uniform(rng) as f64,
@@ -356,6 +386,7 @@ impl Walk {
                 area_to_solid_angle: f64::from(dist2) / f64::from(cos_y),
                 pdf_sampled: g.light.pdf_area(&scene.mesh, &scene.emitters, y, prim),
             }),
+            escaped: false,
         });
         Some(view.shadow_ray(&x, &y_point))
     }

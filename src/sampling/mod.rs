@@ -12,7 +12,7 @@ pub mod specular;
 
 use crate::accel::Ray;
 use crate::scene::Camera;
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rand::Rng as _;
 use rand_pcg::Pcg32;
 
@@ -114,6 +114,15 @@ pub fn uniform(rng: &mut Rng) -> f32 {
 /// inside the pixel (a box filter), from two uniform numbers, horizontal first.
 pub fn camera_ray(camera: &Camera, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
     camera.ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
+}
+
+/// A direction uniform over the unit sphere from two uniform numbers in [0, 1) (Mitsuba's
+/// `square_to_uniform_sphere`: `z = 1 − 2 u1`, azimuth `2π u2`).
+pub fn uniform_sphere(u1: f32, u2: f32) -> Vec3 {
+    let z = 1.0 - 2.0 * u1;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+    Vec3::new(r * c, r * s, z)
 }
 
 /// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal

@@ -6,7 +6,7 @@ use super::config::PlanConfig;
 use super::pixel::PixelContext;
 use super::PlanStats;
 use crate::path::mixture::{Mixture, MixtureScratch};
-use crate::path::{emitted, RayCounts, SceneView};
+use crate::path::{RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
 use rayon::prelude::*;
 
@@ -166,7 +166,7 @@ fn baseline(
                         };
                         let material = view.material(x1.prim);
                         scatters |= material.scatters();
-                        let value = emitted(material, &x1, -ray.dir).as_dvec3()
+                        let value = view.seen_directly(Some(&x1), ray.dir).as_dvec3()
                             + srt.estimate(
                                 view,
                                 ray.origin,

@@ -1,6 +1,6 @@
 //! A parsed Mitsuba document as a genpath [`Scene`]: the sensor, film, sampler and
 //! integrator as the camera and render defaults, the shapes as triangles, the BSDFs and
-//! area emitters as materials. Every plugin and parameter genpath does not implement is
+//! area emitters as materials, the `constant` emitter as the environment. Every plugin and parameter genpath does not implement is
 //! refused with its file and line ([`Props::finish`]).
 
 use super::parse::Doc;
@@ -10,8 +10,8 @@ use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
 use crate::accel::TriangleMesh;
 use crate::scene::{
-    triangle_area, Camera, Dielectric, Emitters, Material, RenderDefaults, Scene, SceneError,
-    MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    triangle_area, Camera, Dielectric, Emitters, Environment, Material, RenderDefaults, Scene,
+    SceneError, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -36,6 +36,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let root = Props::new(doc, 0);
     let mut sensor = None;
     let mut integrator = None;
+    let mut environment = None;
     let mut geometry = Geometry::default();
     for (prop, i) in root.children() {
         let p = Props::new(doc, i);
@@ -49,6 +50,12 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
             "shape" => shape(&p, &mut geometry, &mut warnings)?,
             // Defined for reference by id: built where they are used.
             "bsdf" | "texture" => {}
+            "emitter" if p.object().plugin == "constant" => {
+                if environment.is_some() {
+                    return Err(p.error("a second `constant` emitter (genpath takes one)"));
+                }
+                environment = Some(constant_emitter(&p, &mut warnings)?);
+            }
             "emitter" => return Err(emitter_refusal(&p)),
             _ => return Err(p.error("genpath does not implement this plugin")),
         }
@@ -59,9 +66,9 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         return Err(doc.error(root.loc(), "the scene has no <sensor>"));
     };
     let (camera, spp) = self::sensor(&Props::new(doc, sensor), &mut warnings)?;
-    let max_bounces = match integrator {
+    let (max_bounces, hide_emitters) = match integrator {
         Some(i) => self::integrator(&Props::new(doc, i), &mut warnings)?,
-        None => MAX_BOUNCES_LIMIT,
+        None => (MAX_BOUNCES_LIMIT, false),
     };
     if geometry.degenerate > 0 {
         warnings.push(format!(
@@ -85,10 +92,10 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let emitters = Emitters::new(&mesh, |prim| {
         materials[material_of[prim as usize] as usize].is_emitter()
     });
-    if emitters.prims.is_empty() || emitters.total_area <= 0.0 {
+    if (emitters.prims.is_empty() || emitters.total_area <= 0.0) && environment.is_none() {
         return Err(doc.error(
             root.loc(),
-            "the scene has no emitter (genpath needs an `area` emitter on some shape)",
+            "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant` one)",
         ));
     }
     let extent = mesh
@@ -102,6 +109,8 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         materials,
         material_of,
         emitters,
+        environment,
+        hide_emitters,
         render: RenderDefaults { max_bounces, spp },
         extent,
         warnings,
@@ -111,10 +120,10 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
 
 fn emitter_refusal(p: &Props) -> SceneError {
     match p.object().plugin.as_str() {
-        "constant" => p.error("the constant (environment) emitter is not supported yet"),
+        "constant" => p.error("a `constant` (environment) emitter belongs in the scene, not in a shape"),
         "area" => p.error("an area emitter must be nested in a shape"),
         other => p.error(format!(
-            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape)"
+            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape; constant)"
         )),
     }
 }
@@ -324,6 +333,18 @@ fn area_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Vec3, SceneErro
     Ok(radiance.as_vec3())
 }
 
+/// Mitsuba's `constant` emitter: its `radiance` (given explicitly).
+fn constant_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Environment, SceneError> {
+    let radiance = p
+        .color("radiance", ColorUse::Emission, warnings)?
+        .ok_or_else(|| p.error("needs a `radiance` (genpath does not assume Mitsuba's default)"))?;
+    if radiance.min_element() < 0.0 || radiance.as_vec3().max_element() > 1e30 {
+        return Err(p.error(format!("`radiance` {radiance} is negative or beyond 1e30")));
+    }
+    p.finish()?;
+    Ok(Environment::new(radiance.as_vec3()))
+}
+
 /// The perspective sensor, its film and sampler: the camera and the default spp.
 fn sensor(p: &Props, warnings: &mut Vec<String>) -> Result<(Camera, Option<u32>), SceneError> {
     if p.object().plugin != "perspective" {
@@ -502,8 +523,9 @@ fn sampler(p: &Props, warnings: &mut Vec<String>) -> Result<u32, SceneError> {
         .ok_or_else(|| p.error(format!("`sample_count` {spp} is not in 1..=16777216")))
 }
 
-/// The `path` integrator as genpath's max bounces (Mitsuba's `max_depth` − 1).
-fn integrator(p: &Props, warnings: &mut Vec<String>) -> Result<u32, SceneError> {
+/// The `path` integrator as genpath's max bounces (Mitsuba's `max_depth` − 1) and its
+/// `hide_emitters`.
+fn integrator(p: &Props, warnings: &mut Vec<String>) -> Result<(u32, bool), SceneError> {
     if p.object().plugin != "path" {
         return Err(p.error(format!("genpath does not implement the `{}` integrator (supported: path; genpath's --method picks how it is estimated)", p.object().plugin)));
     }
@@ -532,9 +554,7 @@ fn integrator(p: &Props, warnings: &mut Vec<String>) -> Result<u32, SceneError> 
     if rr != i64::from(crate::path::pt::RR_START) {
         warnings.push(format!("{}: rr_depth {rr}: genpath's Russian roulette starts at bounce {} (the noise differs, the image's expectation does not)", p.doc.at(p.loc()), crate::path::pt::RR_START));
     }
-    if p.bool("hide_emitters", false)? {
-        return Err(p.error("`hide_emitters` true is not supported"));
-    }
+    let hide_emitters = p.bool("hide_emitters", false)?;
     p.finish()?;
-    Ok(bounces)
+    Ok((bounces, hide_emitters))
 }
