@@ -3,7 +3,9 @@
 //! test's samples), per block of pixels inside a 99.9 % interval (Šidák-corrected), with a
 //! must-reject twin: for `box.xml` the same render mirrored left-right (a camera frame with
 //! +x to the right instead of Mitsuba's left), for `glass.xml` (a `dielectric` cube and a
-//! `thindielectric` pane) a render with the cube's index of refraction 3 % off. And the
+//! `thindielectric` pane) a render with the cube's index of refraction 3 % off, for
+//! `env.xml` (a `constant` emitter and a small area light) a render with the sky's radiance
+//! 3 % off; and `hide_emitters`. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
 
@@ -139,6 +141,110 @@ fn pt_agrees_with_mitsuba_through_glass_and_an_index_3_percent_off_does_not() {
     );
 }
 
+/// The samples of the environment test (its reference has 64 × as many).
+const ENV_SPP: u32 = 256;
+
+#[test]
+fn pt_agrees_with_mitsuba_under_an_environment_and_a_sky_3_percent_off_does_not() {
+    let path = scene_path("env.xml");
+    let reference = genpath::image::read(&scene_path("env.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert!(scene.environment.is_some() && !scene.emitters.prims.is_empty());
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, ENV_SPP);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "env.xml: max |z| {z:.2} ≥ {critical:.2}");
+    // The sky's radiance 3 % high.
+    let sky = [("env".into(), "0.515, 0.618, 0.824".into())];
+    let off = Scene::load_with(&path, &sky).unwrap();
+    let (z_off, _) = max_z(&render(&off, ENV_SPP), &reference, false);
+    eprintln!("env.xml: max |z| {z:.2}, with the sky 3 % off {z_off:.2} (critical {critical:.2})");
+    assert!(
+        z_off > critical,
+        "env.xml with the sky 3 % off: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
+    );
+}
+
+/// `hide_emitters`: every method's camera rays that escape to the environment or see the
+/// light give 0, and the rest of the image is what it is without it (`env.xml` at 32², its
+/// camera moved back so that the sky and the light's face are in view).
+#[test]
+fn hide_emitters_hides_the_sky_and_the_light_from_the_camera_only() {
+    let text = std::fs::read_to_string(scene_path("env.xml"))
+        .unwrap()
+        .replace("0.3, 3, 4.5", "0.3, 1.2, 6");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("env.xml");
+    std::fs::write(&path, text).unwrap();
+    let load = |hide: &str| {
+        let defines = [("hide".into(), hide.into()), ("res".into(), "32".into())];
+        let scene = Scene::load_with(&path, &defines).unwrap();
+        assert_eq!(scene.hide_emitters, hide == "true");
+        scene
+    };
+    let (shown, hidden) = (load("false"), load("true"));
+    for method in [
+        Method::Pt,
+        Method::Srt,
+        Method::Ga,
+        Method::GaPt,
+        Method::Pg,
+    ] {
+        let render = |scene: &Scene| {
+            let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+            let view = SceneView::new(scene, accel.as_ref());
+            let settings = RenderSettings {
+                method,
+                spp: 4,
+                max_bounces: scene.render.max_bounces,
+                seed: 3,
+                progress: false,
+                shard: Default::default(),
+                control: Default::default(),
+            };
+            let mut config = genpath::integrators::Settings::default();
+            for setting in [
+                "ga_grid=8",
+                "population=8",
+                "generations=2",
+                "test_paths=500",
+            ] {
+                config.assign(setting).unwrap();
+            }
+            genpath::integrators::prepare(&view, &config, &settings)
+                .unwrap()
+                .render(&view, &settings)
+                .image
+        };
+        let (a, b) = (render(&shown), render(&hidden));
+        let (mut sky, mut light, mut other) = (0, 0, 0);
+        let sky_radiance = shown.environment.unwrap().radiance;
+        for (pa, pb) in a.pixels.iter().zip(&b.pixels) {
+            if glam::Vec3::from(*pa) == sky_radiance {
+                // The sky seen directly (nothing else is exactly its radiance).
+                assert_eq!(*pb, [0.0; 3], "{method:?}");
+                sky += 1;
+            } else if pa[0] > 30.0 {
+                assert!(
+                    pb[0] < 30.0,
+                    "{method:?}: the light is seen with hide_emitters"
+                );
+                light += 1;
+            } else {
+                other += 1;
+            }
+        }
+        assert!(
+            sky > 32 && light > 0 && other > 32,
+            "{method:?}: {sky} {light} {other}"
+        );
+    }
+}
+
 /// The glass of `glass.xml` as Mitsuba reads it: η = int_ior / ext_ior in single precision,
 /// with Mitsuba's named indices (bk7 1.5046, air 1.000277), both sides scattering.
 #[test]
@@ -168,9 +274,23 @@ fn glass_xml_has_mitsubas_indices() {
 #[cfg(feature = "testing")]
 #[test]
 fn every_method_renders_glass_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("glass.xml");
+}
+
+/// As for `glass.xml`: every method renders `env.xml` (a `constant` emitter with a small
+/// area light) at 32² without a bad pixel, with finite positive densities and `pt`'s image
+/// mean; and a mixture density 50 % off is seen.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_env_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("env.xml");
+}
+
+#[cfg(feature = "testing")]
+fn every_method_renders_as_pt_does(name: &str) {
     use genpath::check::{check, CheckConfig};
     use genpath::path::mixture_file;
-    let mut scene = Scene::load(&scene_path("glass.xml")).unwrap();
+    let mut scene = Scene::load(&scene_path(name)).unwrap();
     scene.resize(32, 32);
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
@@ -300,4 +420,46 @@ fn ply_ascii_binary_obj_and_serialized_give_the_same_triangles() {
         "{:?}",
         meshes[0].1
     );
+}
+
+/// The `constant` emitter's refusals, each naming the file and line: a scene without any
+/// emitter (still), a second `constant`, one without `radiance` (genpath does not assume
+/// Mitsuba's default), one nested in a shape, a negative radiance.
+#[test]
+fn constant_emitter_refusals_name_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("", "no emitter"),
+        (
+            r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+<emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#,
+            "a second `constant`",
+        ),
+        (r#"<emitter type="constant"/>"#, "needs a `radiance`"),
+        (
+            r#"<emitter type="constant"><rgb name="radiance" value="-1"/></emitter>"#,
+            "negative",
+        ),
+        (
+            r#"<shape type="rectangle"><emitter type="constant"><rgb name="radiance" value="1"/></emitter></shape>"#,
+            "belongs in the scene",
+        ),
+    ];
+    for (i, (emitters, expected)) in cases.iter().enumerate() {
+        let text = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+<shape type="cube"/>
+{emitters}
+</scene>
+"#
+        );
+        let path = dir.path().join(format!("s{i}.xml"));
+        std::fs::write(&path, text).unwrap();
+        let error = Scene::load(&path).unwrap_err().to_string();
+        assert!(
+            error.contains(expected) && error.contains(&format!("s{i}.xml:")),
+            "{emitters}: {error}"
+        );
+    }
 }
