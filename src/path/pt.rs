@@ -463,12 +463,10 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         }
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace(&next_ray, counts) else {
-            let env = escape_radiance(view, &bs, light_share);
-            if env.max_element() > 0.0 {
-                radiance += beta * env;
-                if let Some(r) = recorder.as_deref_mut().filter(|_| diffuse && !bs.delta) {
-                    r.emission_seen(radiance);
-                }
+            // The environment's light stays in a diffuse vertex's record (unlike an area
+            // emitter's): its light samples, uniform over the sphere, do not sample it well.
+            if view.scene.environment.is_some() {
+                radiance += beta * escape_radiance(view, &bs, light_share);
             }
             break;
         };
