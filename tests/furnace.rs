@@ -28,7 +28,7 @@ const Z: f64 = 3.29;
 /// has unbounded variance in the furnace's corners, where emitters meet the surfaces.
 const METHODS: [(Method, Nee, u32); 3] = [
     (Method::Pt, Nee::Every, 64),
-    (Method::Srt, Nee::Every, 64),
+    (Method::Srt, Nee::Every, 256),
     (Method::Ga, Nee::Every, 256),
 ];
 
