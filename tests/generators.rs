@@ -2,7 +2,9 @@
 //! of the technique that sampled a path, `PathGenerator::pdf_techniques`), evaluated from the
 //! stored vertices alone, equals the product of the densities used while the path was
 //! sampled, for paths of every generator type (BRDF-only `srt`, anchor-point, with a
-//! light-point region), in a diffuse scene and in a scene with Phong lobes and a mirror.
+//! light-point region), in a diffuse scene, in a scene with Phong lobes and a mirror, and
+//! under an environment (`scenes/mitsuba/env.xml`: paths that escape to it, whose density is
+//! their directions' at every vertex).
 
 use genpath::accel::{self, AccelKind};
 use genpath::path::generator::{
@@ -16,13 +18,12 @@ use glam::DVec3;
 use std::path::Path;
 
 fn load(name: &str) -> Scene {
-    let mut scene = Scene::load(
-        &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(name)
-            .join("scene.toml"),
-    )
-    .unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let path = match name.strip_suffix(".xml") {
+        Some(_) => scenes.join("mitsuba").join(name),
+        None => scenes.join(name).join("scene.toml"),
+    };
+    let mut scene = Scene::load(&path).unwrap();
     scene.resize(32, 32);
     scene
 }
@@ -109,13 +110,14 @@ fn sampled_and_evaluated(
     }
 }
 
-fn check_scene(name: &str, nee: Nee) -> usize {
+/// The contributions checked, and how many of them escaped to the environment.
+fn check_scene(name: &str, nee: Nee) -> (usize, usize) {
     let scene = load(name);
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
     let mut counts = RayCounts::default();
     let mut path = PathVertices::default();
-    let mut checked = 0;
+    let (mut checked, mut escaped) = (0, 0);
     for (gi, g) in generators(&scene).iter().enumerate() {
         for i in 0..16 * 32 * 32 {
             let pixel = i % (32 * 32);
@@ -149,20 +151,26 @@ fn check_scene(name: &str, nee: Nee) -> usize {
                     "{name} {nee:?}, generator {gi}, pixel {pixel}: sampled {product:e} vs evaluated {evaluated:e}"
                 );
                 checked += 1;
+                escaped += usize::from(c.escaped);
             }
         }
     }
-    checked
+    (checked, escaped)
 }
 
 #[test]
 fn pdf_path_matches_the_sampling_densities() {
-    for name in ["fig5", "glossy"] {
+    for name in ["fig5", "glossy", "env.xml"] {
         for nee in [Nee::End, Nee::Every] {
-            let checked = check_scene(name, nee);
+            let (checked, escaped) = check_scene(name, nee);
             assert!(
                 checked > 200,
                 "{name} {nee:?}: only {checked} light-carrying paths checked"
+            );
+            assert_eq!(
+                escaped > 200,
+                name == "env.xml",
+                "{name} {nee:?}: {escaped}"
             );
         }
     }
