@@ -74,10 +74,11 @@ fn stop_mid_render(args: &[String], out: &Path, signal: &str) -> Output {
         }
         std::thread::sleep(Duration::from_millis(5));
     }
-    let killed = Command::new("kill")
-        .args([&format!("-{signal}"), &child.id().to_string()])
+    // The shell's own `kill`: a minimal system (CI's Debian 13 root) has no kill program.
+    let killed = Command::new("sh")
+        .args(["-c", &format!("kill -{signal} {}", child.id())])
         .status()
-        .expect("run kill");
+        .expect("run sh");
     assert!(killed.success());
     child.wait_with_output().unwrap()
 }
