@@ -12,7 +12,7 @@
 mod common;
 
 use genpath::accel::{self, AccelKind};
-use genpath::integrators::{prepare, Method, RenderSettings, Settings};
+use genpath::integrators::{prepare, Film, Method, RenderSettings, Settings};
 use genpath::path::generator::Nee;
 use genpath::path::SceneView;
 use genpath::scene::Scene;
@@ -53,36 +53,49 @@ fn furnace(rho: f32, max_bounces: u32, (method, nee, spp): (Method, Nee, u32)) -
     for m in &mut scene.materials {
         m.kd = glam::Vec3::splat(rho);
     }
+    let film = render_small_ga(&scene, (method, nee, spp), max_bounces, 7, &[]);
+    let n = film.image.pixels.len() as f64;
+    let mean = film.image.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / n;
+    let var_of_grand_mean = film.variance_of_mean.iter().map(|v| v[0]).sum::<f64>() / (n * n);
+    (mean, var_of_grand_mean.sqrt())
+}
+
+/// `scene` rendered by `method` (`srt` and `ga` with the estimator `nee`) at `spp`, with a
+/// small GA without the gate (every pixel renders with evolved mixtures) and the settings
+/// `extra`.
+fn render_small_ga(
+    scene: &Scene,
+    (method, nee, spp): (Method, Nee, u32),
+    max_bounces: u32,
+    seed: u64,
+    extra: &[&str],
+) -> Film {
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
-    let view = SceneView::new(&scene, accel.as_ref());
+    let view = SceneView::new(scene, accel.as_ref());
     let settings = RenderSettings {
         method,
         spp,
         max_bounces,
-        seed: 7,
+        seed,
         progress: false,
         shard: Default::default(),
         control: Default::default(),
     };
-    // A small GA without the gate: every pixel renders with evolved mixtures.
     let mut config = Settings::default();
     config.srt.nee = nee;
-    for setting in [
+    let small_ga = [
         "gate=false",
         "ga_grid=8",
         "population=12",
         "generations=6",
         "test_paths=2000",
-    ] {
+    ];
+    for setting in small_ga.iter().chain(extra) {
         config.assign(setting).unwrap();
     }
-    let film = prepare(&view, &config, &settings)
+    prepare(&view, &config, &settings)
         .unwrap()
-        .render(&view, &settings);
-    let n = film.image.pixels.len() as f64;
-    let mean = film.image.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / n;
-    let var_of_grand_mean = film.variance_of_mean.iter().map(|v| v[0]).sum::<f64>() / (n * n);
-    (mean, var_of_grand_mean.sqrt())
+        .render(&view, &settings)
 }
 
 fn analytic(max_bounces: u32) -> f64 {
@@ -178,35 +191,17 @@ fn white_furnace((method, nee, spp): (Method, Nee, u32), pdf_error: Option<f64>)
     if let Some(factor) = pdf_error {
         scene.environment = scene.environment.map(|e| e.with_pdf_error(factor));
     }
-    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
-    let view = SceneView::new(&scene, accel.as_ref());
-    let settings = RenderSettings {
-        method,
-        spp,
-        max_bounces: scene.render.max_bounces,
-        seed: 11,
-        progress: false,
-        shard: Default::default(),
-        control: Default::default(),
-    };
-    let mut config = Settings::default();
-    config.srt.nee = nee;
     // With albedo 1 a path's weight grows by 1 / (1 − a) per vertex: `srt`'s default
     // absorption of 1/2 would give its estimate infinite variance where paths stay inside
     // the box, and the test's standard errors would mean nothing.
-    for setting in [
-        "gate=false",
-        "ga_grid=8",
-        "population=12",
-        "generations=6",
-        "test_paths=2000",
-        "srt_absorption=0.1",
-    ] {
-        config.assign(setting).unwrap();
-    }
-    let film = prepare(&view, &config, &settings)
-        .unwrap()
-        .render(&view, &settings);
+    let bounces = scene.render.max_bounces;
+    let film = render_small_ga(
+        &scene,
+        (method, nee, spp),
+        bounces,
+        11,
+        &["srt_absorption=0.1"],
+    );
     let side = scene.camera.width;
     let (mut max_z, mut blocks) = (0.0f64, 0);
     for by in (0..side).step_by(ENV_BLOCK as usize) {
