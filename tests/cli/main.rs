@@ -18,6 +18,21 @@ mod shards;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// fig5 at 48×40 and 8 spp, quietly (the shard, plan and resume tests' size).
+const SMALL: [&str; 7] = ["--spp", "8", "--width", "48", "--height", "40", "--quiet"];
+
+/// A small GA: 16-pixel grid, 3000 test paths, 12 individuals, 6 generations.
+const SMALL_GA: [&str; 8] = [
+    "--ga-grid",
+    "16",
+    "--test-paths",
+    "3000",
+    "--population",
+    "12",
+    "--generations",
+    "6",
+];
+
 /// Runs genpath in the repository's root, where relative paths such as
 /// `scenes/fig5/scene.toml` resolve.
 fn genpath(args: &[&str]) -> Output {

@@ -256,19 +256,12 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
             explain.to_str().unwrap(),
             "--method",
             "ga",
-            "--ga-grid",
-            "16",
-            "--test-paths",
-            "3000",
-            "--population",
-            "12",
-            "--generations",
-            "6",
             "--threads",
             threads,
             "--seed",
             seed,
         ];
+        args.extend_from_slice(&SMALL_GA);
         if !gate {
             args.push("--no-gate");
         }

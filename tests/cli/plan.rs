@@ -6,21 +6,6 @@
 use super::*;
 use std::process::Output;
 
-/// fig5 at 48×40 and 8 spp, quietly.
-const SMALL: [&str; 7] = ["--spp", "8", "--width", "48", "--height", "40", "--quiet"];
-
-/// A small GA (as tests/cli/methods.rs runs it).
-const SMALL_GA: [&str; 8] = [
-    "--ga-grid",
-    "16",
-    "--test-paths",
-    "3000",
-    "--population",
-    "12",
-    "--generations",
-    "6",
-];
-
 /// Each method that learns with small settings: ga without the gate (so that its GA pixels
 /// render), pg and ga-pt with 2 spatial passes (3 of the 8 samples per pixel).
 fn methods() -> Vec<(&'static str, Vec<&'static str>)> {

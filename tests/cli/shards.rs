@@ -5,9 +5,6 @@
 use super::*;
 use std::process::Output;
 
-/// fig5 at 48×40 and 8 spp, quietly.
-const SMALL: [&str; 7] = ["--spp", "8", "--width", "48", "--height", "40", "--quiet"];
-
 /// `genpath render` of `scene` (fig5 if `None`) at [`SMALL`] into `dir/name` with `extra`
 /// flags; must succeed. The image's path.
 fn render_in(dir: &Path, name: &str, scene: Option<&Path>, extra: &[&str]) -> PathBuf {
