@@ -29,25 +29,19 @@ const PIXEL_BYTES: u64 = 4 + 6 * 8;
 /// The file's bytes.
 pub fn encode(header: &Header, layers: &[LayerSums]) -> Vec<u8> {
     let json = serde_json::to_vec(header).expect("a header serialises");
-    let pixels = header.pixels() as usize;
-    let mut out = Vec::with_capacity(16 + json.len() + layers.len() * pixels * 52 + 4);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&json);
-    for layer in layers {
-        for c in &layer.counts {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-        for values in [&layer.sum, &layer.sum_sq] {
-            for v in values.iter().flat_map(|v| v.to_array()) {
-                out.extend_from_slice(&v.to_le_bytes());
+    let body_len = layers.len() * header.pixels() as usize * PIXEL_BYTES as usize;
+    super::frame::encode(MAGIC, VERSION, &json, body_len, |out| {
+        for layer in layers {
+            for c in &layer.counts {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+            for values in [&layer.sum, &layer.sum_sq] {
+                for v in values.iter().flat_map(|v| v.to_array()) {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
             }
         }
-    }
-    let crc = crc32fast::hash(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    out
+    })
 }
 
 /// Writes a shard file atomically (temporary file, then rename).

@@ -11,6 +11,7 @@
 //! of their own ([`Part::Training`]).
 
 pub mod file;
+mod frame;
 pub mod merge;
 pub mod plan_file;
 

@@ -87,16 +87,17 @@ pub fn payload(learned: &Learned) -> Result<Vec<u8>, String> {
 /// The file's bytes, from its header and payload.
 pub fn encode(header: &PlanHeader, payload: &[u8]) -> Result<Vec<u8>, String> {
     let json = serde_json::to_vec(header).map_err(|e| e.to_string())?;
-    let mut out = Vec::with_capacity(28 + json.len() + payload.len());
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    out.extend_from_slice(payload);
-    let crc = crc32fast::hash(&out);
-    out.extend_from_slice(&crc.to_le_bytes());
-    Ok(out)
+    let body = |out: &mut Vec<u8>| {
+        out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        out.extend_from_slice(payload);
+    };
+    Ok(super::frame::encode(
+        MAGIC,
+        VERSION,
+        &json,
+        8 + payload.len(),
+        body,
+    ))
 }
 
 /// Writes a plan file atomically (temporary file, then rename).
