@@ -110,8 +110,8 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     })?;
     let plan = prepared.plan();
     let film = session.pool.install(|| prepared.render(&view, &settings));
-    let layers = [film.sums.clone()];
-    continuation.check_stopped(&session, &layers, of, identity)?;
+    let layers = std::slice::from_ref(&film.sums);
+    continuation.check_stopped(&session, layers, of, identity)?;
 
     let t_write = Instant::now();
     for output in &args.outputs {
@@ -122,7 +122,7 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         genpath::image::write(file, &picture)?;
     }
     let resume = args.shard.resume.as_deref();
-    let shard = continuation.finish(&session, &layers, "samples_per_pixel", film.spp, resume)?;
+    let shard = continuation.finish(&session, layers, "samples_per_pixel", film.spp, resume)?;
     let write_s = t_write.elapsed().as_secs_f64();
 
     let mut stats = render_stats(
