@@ -75,6 +75,10 @@ fn main() {
             eprintln!("genpath: {stopped}");
             std::process::exit(stopped.exit_code());
         }
+        if let Some(stopped) = error.downcast_ref::<cli::resume::LearnInterrupted>() {
+            eprintln!("genpath: {stopped}");
+            std::process::exit(stopped.exit_code());
+        }
         eprintln!("genpath: error: {error:#}");
         std::process::exit(1);
     }

@@ -2,17 +2,26 @@
 //! does and saves what it learned in a plan file ([`genpath::shard::plan_file`]), with the
 //! training's samples (pg, ga-pt) in a training shard beside it; and `render --plan`'s side
 //! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md).
+//!
+//! A GA plan keeps its waves of GA pixels in a folder as they finish ([`WaveDir`]), so that
+//! learning stopped by SIGINT or SIGTERM goes on where it stopped when the command runs
+//! again, and so that `learn --shard K/N` splits the GA over jobs: each job evolves its
+//! share of the first wave not yet complete and stops there (the waves are the barriers
+//! between the steps of a job array); `learn` without `--shard` then builds the plan from
+//! every share.
 
 use super::args::{MethodArgs, SceneArgs};
 use super::check_dir;
 use super::session::{shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
-use genpath::integrators::{prepare, LayerSums, Learned, Shard};
+use genpath::genetic::plan::{PlanError, WaveEntry, WaveStore};
+use genpath::integrators::{prepare, LayerSums, Learned, Method, PrepareError, Shard, Stop};
 use genpath::path::SceneView;
-use genpath::shard::plan_file::{self, PlanHeader};
+use genpath::shard::plan_file::{self, PlanHeader, WaveHeader};
 use genpath::shard::{Identity, Part, PlanRef};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(Args)]
@@ -28,6 +37,20 @@ pub struct LearnArgs {
     /// [default: a Mitsuba scene's `sample_count`, else 64].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
     pub spp: Option<u32>,
+    /// Split the GA (ga, ga-pt) over N jobs: this one evolves the GA pixels j of the first
+    /// wave not yet complete with j mod N = K, keeps them in the waves folder, and stops.
+    /// The GA has four waves (the gate's pilot, the pilot going on, the first wave, the
+    /// warm-started second), each a barrier: run the N jobs four times, one step after
+    /// another (a job array per step), then `learn` without --shard to build the plan from
+    /// the waves (docs/shards.md; scripts/slurm/submit.sh does it).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<Shard>,
+    /// The folder where the GA keeps its waves of GA pixels as they finish (shared by
+    /// every job of a split GA) [default: `<FILE>.waves`, removed once the plan is written].
+    /// Learning stopped by SIGINT or SIGTERM goes on from it when the same command runs
+    /// again.
+    #[arg(long, value_name = "DIR")]
+    pub waves: Option<PathBuf>,
     #[command(flatten)]
     pub method: MethodArgs,
 }
@@ -42,6 +65,13 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
             method.name()
         );
     }
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    if !shard.is_whole() && method == Method::Pg {
+        bail!(
+            "--shard {shard}: pg learns no GA plan to split (its spatial guide's training passes \
+             run in one job): learn it without --shard"
+        );
+    }
     let config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
@@ -53,11 +83,70 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         vec![settings.seed],
         &config,
     )?;
+    let waves = WaveDir::open(
+        args.waves
+            .clone()
+            .unwrap_or_else(|| suffixed(&args.output, "waves")),
+        identity.clone(),
+        shard,
+        super::resume::stop_on_signals()?,
+    )?;
+    let waves = Arc::new(waves);
+    let settings = genpath::integrators::RenderSettings {
+        control: genpath::integrators::Control {
+            waves: Some(waves.clone()),
+            ..Default::default()
+        },
+        ..settings
+    };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let t_learn = Instant::now();
-    let prepared = session
-        .pool
-        .install(|| prepare(&view, &config, &settings))?;
+    let prepared = match session.pool.install(|| prepare(&view, &config, &settings)) {
+        Ok(prepared) => prepared,
+        Err(PrepareError::Plan(PlanError::ShareDone {
+            wave,
+            evolved,
+            missing,
+        })) => {
+            if !args.scene.quiet {
+                let what = PlanError::ShareDone {
+                    wave,
+                    evolved,
+                    missing,
+                };
+                eprintln!(
+                    "genpath: learn --shard {shard}: {what} ({:.2} s; waves in {})",
+                    t_learn.elapsed().as_secs_f64(),
+                    waves.dir.display()
+                );
+            }
+            return Ok(());
+        }
+        Err(PrepareError::Plan(PlanError::Stopped {
+            signal,
+            wave,
+            done,
+            jobs,
+        })) => {
+            return Err(super::resume::LearnInterrupted::new(
+                signal,
+                waves.dir.clone(),
+                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved"),
+            )
+            .into())
+        }
+        Err(e) => return Err(e.into()),
+    };
+    if !shard.is_whole() {
+        // The method learned nothing to split (the gate closed the GA before its waves).
+        if !args.scene.quiet {
+            eprintln!(
+                "genpath: learn --shard {shard}: the GA has no wave left; learn without --shard \
+                 builds the plan"
+            );
+        }
+        return Ok(());
+    }
     let learn_s = t_learn.elapsed().as_secs_f64();
     let learned = prepared
         .learned()
@@ -90,6 +179,10 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         "times_s": { "load": session.load_s, "accel_build": session.accel_s, "learn": learn_s },
     });
     write_stats(std::slice::from_ref(&args.output), &json)?;
+    if args.waves.is_none() {
+        std::fs::remove_dir_all(&waves.dir)
+            .with_context(|| format!("cannot remove {}", waves.dir.display()))?;
+    }
     if !args.scene.quiet {
         let shard = training.map_or_else(String::new, |t| {
             format!(
@@ -108,6 +201,121 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `path` with `.suffix` added after its name.
+fn suffixed(path: &Path, suffix: &str) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".");
+    name.push(suffix);
+    PathBuf::from(name)
+}
+
+/// The GA's waves kept as files in a folder: `wave-W.K-of-N.bin`, the GA pixels of wave `W`
+/// that job `K/N` evolved (plan_file's wave files), every file checked against the render
+/// the plan is learned for.
+#[derive(Debug)]
+pub struct WaveDir {
+    dir: PathBuf,
+    identity: Identity,
+    shard: Shard,
+    stop: Stop,
+}
+
+impl WaveDir {
+    /// The folder at `dir`, made if it does not exist.
+    fn open(dir: PathBuf, identity: Identity, shard: Shard, stop: Stop) -> Result<Self> {
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("--waves {}: cannot make the folder", dir.display()))?;
+        Ok(Self {
+            dir,
+            identity,
+            shard,
+            stop,
+        })
+    }
+
+    /// This job's file of wave `wave`.
+    fn file(&self, wave: usize) -> PathBuf {
+        let Shard { index, count } = self.shard;
+        self.dir.join(format!("wave-{wave}.{index}-of-{count}.bin"))
+    }
+
+    /// Every wave file of wave `wave`, by name.
+    fn files(&self, wave: usize) -> std::io::Result<Vec<PathBuf>> {
+        let prefix = format!("wave-{wave}.");
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&self.dir)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with(&prefix) && n.ends_with(".bin"))
+            })
+            .collect();
+        files.sort();
+        Ok(files)
+    }
+
+    /// A wave file's results, refused where it is of another render or another wave.
+    fn read(&self, path: &Path, wave: usize) -> Result<Vec<WaveEntry>, String> {
+        let (header, entries) = plan_file::read_waves(path).map_err(|e| e.to_string())?;
+        if let Some((what, theirs, ours)) = header.identity.difference(&self.identity) {
+            return Err(format!(
+                "{}: it was learned for another render: {what} is {theirs} there and {ours} \
+                 here (every job of a split GA must run the same command but for --shard)",
+                path.display()
+            ));
+        }
+        if header.wave != wave {
+            return Err(format!(
+                "{}: it holds wave {}, not {wave}",
+                path.display(),
+                header.wave
+            ));
+        }
+        Ok(entries)
+    }
+}
+
+impl WaveStore for WaveDir {
+    fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, String> {
+        let files = self
+            .files(wave)
+            .map_err(|e| format!("{}: {e}", self.dir.display()))?;
+        let mut entries = Vec::new();
+        for path in files {
+            entries.extend(self.read(&path, wave)?);
+        }
+        Ok(entries)
+    }
+
+    fn save(&self, wave: usize, jobs: usize, entries: &[WaveEntry]) -> Result<(), String> {
+        let path = self.file(wave);
+        let mut all = match path.exists() {
+            true => self.read(&path, wave)?,
+            false => Vec::new(),
+        };
+        all.extend_from_slice(entries);
+        let header = WaveHeader {
+            identity: self.identity.clone(),
+            wave,
+            jobs,
+            shard: self.shard.to_string(),
+        };
+        plan_file::write_waves(&path, &header, &all).map_err(|e| e.to_string())
+    }
+
+    fn mine(&self, job: usize) -> bool {
+        job % self.shard.count as usize == self.shard.index as usize
+    }
+
+    fn split(&self) -> bool {
+        !self.shard.is_whole()
+    }
+
+    fn stop_requested(&self) -> Option<usize> {
+        self.stop.requested()
+    }
 }
 
 /// Writes the training's samples, if it took any, as the training shard beside `output`:

@@ -53,6 +53,36 @@ impl Interrupted {
     }
 }
 
+/// Learning stopped by a signal, after it kept what it had in its waves folder: `main`
+/// exits with `128 + signal`.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "stopped by {name} {detail}; they are kept in {}: run the same command to go on",
+    waves.display()
+)]
+pub struct LearnInterrupted {
+    pub signal: usize,
+    pub name: &'static str,
+    pub waves: PathBuf,
+    pub detail: String,
+}
+
+impl LearnInterrupted {
+    pub fn new(signal: usize, waves: PathBuf, detail: String) -> Self {
+        Self {
+            signal,
+            name: signal_name(signal),
+            waves,
+            detail,
+        }
+    }
+
+    /// The process's exit status.
+    pub fn exit_code(&self) -> i32 {
+        128 + self.signal as i32
+    }
+}
+
 fn signal_name(signal: usize) -> &'static str {
     match signal as i32 {
         signal_hook::consts::SIGINT => "SIGINT",

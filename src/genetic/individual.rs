@@ -65,7 +65,7 @@ struct Arrival {
 
 /// A generator with an identity: copies (crossover, elitism) keep the id, any change gets a
 /// new one, so the fitness cache evaluates each distinct generator once.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Gene {
     pub id: u64,
     pub generator: PathGenerator,
@@ -74,7 +74,7 @@ pub struct Gene {
 }
 
 /// A weighted set of generators; `genes[0]` is the defensive `srt` generator (id 0).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Individual {
     pub genes: Vec<Gene>,
     /// Sum to 1; `weights[0] ≥ GaConfig::defensive_weight`.

@@ -24,7 +24,7 @@ pub mod test_method;
 pub mod tiles;
 
 use crate::accel::Ray;
-use crate::genetic::plan::Plan;
+use crate::genetic::plan::{Plan, PlanError};
 use crate::genetic::GaConfigError;
 use crate::guiding::SpatialField;
 use crate::path::mixture::Mixture;
@@ -129,6 +129,8 @@ pub struct RenderSettings {
 pub enum PrepareError {
     #[error(transparent)]
     Ga(#[from] GaConfigError),
+    #[error(transparent)]
+    Plan(#[from] PlanError),
     #[error(transparent)]
     Settings(#[from] settings::SettingsError),
     #[error("--method mixture needs --generators FILE")]

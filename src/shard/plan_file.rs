@@ -17,6 +17,7 @@
 //! index) are not in it and are rebuilt on first use.
 
 use super::Identity;
+use crate::genetic::plan::WaveEntry;
 use crate::integrators::Learned;
 use bincode::Options;
 use std::path::{Path, PathBuf};
@@ -53,11 +54,15 @@ pub enum PlanFileError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{}: not a genpath plan file (it does not start with the plan format's mark)", path.display())]
-    NotPlan { path: PathBuf },
-    #[error("{}: plan format version {found}; this genpath reads version {VERSION}", path.display())]
-    Version { path: PathBuf, found: u32 },
-    #[error("{}: bad plan header: {message}", path.display())]
+    #[error("{}: not a genpath {kind} file (it does not start with the {kind} format's mark)", path.display())]
+    NotPlan { path: PathBuf, kind: &'static str },
+    #[error("{}: {kind} format version {found}; this genpath reads version {VERSION}", path.display())]
+    Version {
+        path: PathBuf,
+        kind: &'static str,
+        found: u32,
+    },
+    #[error("{}: bad header: {message}", path.display())]
     Header { path: PathBuf, message: String },
     #[error("{}: truncated or padded: {found} bytes where the header promises {expected}", path.display())]
     Length {
@@ -67,7 +72,7 @@ pub enum PlanFileError {
     },
     #[error("{}: corrupted: its checksum does not match its contents", path.display())]
     Checksum { path: PathBuf },
-    #[error("{}: bad learned state: {message}", path.display())]
+    #[error("{}: bad contents: {message}", path.display())]
     Payload { path: PathBuf, message: String },
 }
 
@@ -86,27 +91,58 @@ pub fn payload(learned: &Learned) -> Result<Vec<u8>, String> {
 
 /// The file's bytes, from its header and payload.
 pub fn encode(header: &PlanHeader, payload: &[u8]) -> Result<Vec<u8>, String> {
+    encode_framed(&PLAN, header, payload)
+}
+
+/// Writes a plan file atomically (temporary file, then rename).
+pub fn write(path: &Path, header: &PlanHeader, payload: &[u8]) -> Result<(), PlanFileError> {
+    write_framed(&PLAN, path, header, payload)
+}
+
+/// A file of this module's layout (a JSON header, then a `bincode` payload): its mark,
+/// version and name.
+struct Kind {
+    magic: &'static [u8; 8],
+    version: u32,
+    name: &'static str,
+}
+
+const PLAN: Kind = Kind {
+    magic: MAGIC,
+    version: VERSION,
+    name: "plan",
+};
+
+fn encode_framed(
+    kind: &Kind,
+    header: &impl serde::Serialize,
+    payload: &[u8],
+) -> Result<Vec<u8>, String> {
     let json = serde_json::to_vec(header).map_err(|e| e.to_string())?;
     let body = |out: &mut Vec<u8>| {
         out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
         out.extend_from_slice(payload);
     };
     Ok(super::frame::encode(
-        MAGIC,
-        VERSION,
+        kind.magic,
+        kind.version,
         &json,
         8 + payload.len(),
         body,
     ))
 }
 
-/// Writes a plan file atomically (temporary file, then rename).
-pub fn write(path: &Path, header: &PlanHeader, payload: &[u8]) -> Result<(), PlanFileError> {
+fn write_framed(
+    kind: &Kind,
+    path: &Path,
+    header: &impl serde::Serialize,
+    payload: &[u8],
+) -> Result<(), PlanFileError> {
     let io = |message: String| PlanFileError::Io {
         path: path.to_path_buf(),
         source: std::io::Error::other(message),
     };
-    let bytes = encode(header, payload).map_err(io)?;
+    let bytes = encode_framed(kind, header, payload).map_err(io)?;
     crate::image::write_bytes_atomic(path, &bytes).map_err(|e| io(e.to_string()))
 }
 
@@ -121,6 +157,20 @@ pub struct PlanFile {
 /// Reads and checks the plan file at `path`: its mark, version, length and checksum, then
 /// its header and payload.
 pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
+    let (header, learned, hash) = read_framed(&PLAN, path)?;
+    Ok(PlanFile {
+        header,
+        learned,
+        hash,
+    })
+}
+
+/// Reads and checks a file of `kind` at `path`: its header, its payload, and the payload's
+/// hash.
+fn read_framed<H: serde::de::DeserializeOwned, P: serde::de::DeserializeOwned>(
+    kind: &Kind,
+    path: &Path,
+) -> Result<(H, P, String), PlanFileError> {
     let bytes = std::fs::read(path).map_err(|source| PlanFileError::Io {
         path: path.to_path_buf(),
         source,
@@ -130,9 +180,10 @@ pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
         found: found as u64,
         expected: expected as u64,
     };
-    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+    if bytes.len() < 8 || &bytes[..8] != kind.magic {
         return Err(PlanFileError::NotPlan {
             path: path.to_path_buf(),
+            kind: kind.name,
         });
     }
     let word = |i: usize| -> Result<[u8; 4], PlanFileError> {
@@ -142,9 +193,10 @@ pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
             .ok_or_else(|| length(bytes.len(), i + 4))
     };
     let version = u32::from_le_bytes(word(8)?);
-    if version != VERSION {
+    if version != kind.version {
         return Err(PlanFileError::Version {
             path: path.to_path_buf(),
+            kind: kind.name,
             found: version,
         });
     }
@@ -178,18 +230,57 @@ pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
             path: path.to_path_buf(),
         });
     }
-    let header: PlanHeader =
-        serde_json::from_slice(&body[16..at]).map_err(|e| bad_header(e.to_string()))?;
+    let header: H = serde_json::from_slice(&body[16..at]).map_err(|e| bad_header(e.to_string()))?;
     let payload = &body[at + 8..];
-    let learned: Learned = codec()
+    let contents: P = codec()
         .deserialize(payload)
         .map_err(|e| PlanFileError::Payload {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
-    Ok(PlanFile {
-        header,
-        learned,
-        hash: super::hash_bytes(payload),
-    })
+    Ok((header, contents, super::hash_bytes(payload)))
+}
+
+/// The mark every wave file starts with.
+pub const WAVES_MAGIC: &[u8; 8] = b"GPWAVES\0";
+
+const WAVES: Kind = Kind {
+    magic: WAVES_MAGIC,
+    version: 1,
+    name: "GA wave",
+};
+
+/// What a wave file (`genpath learn`'s GA pixels of one wave, evolved by one job) says
+/// about its results.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaveHeader {
+    /// The identity of the render the plan is learned for (as a plan file's).
+    pub identity: Identity,
+    /// The wave's number, and how many GA pixels it has.
+    pub wave: usize,
+    pub jobs: usize,
+    /// The job that evolved them: `K/N` of `learn --shard K/N` (`0/1` unsplit).
+    pub shard: String,
+}
+
+/// Writes a wave file atomically.
+pub fn write_waves(
+    path: &Path,
+    header: &WaveHeader,
+    entries: &[WaveEntry],
+) -> Result<(), PlanFileError> {
+    let payload = codec()
+        .serialize(entries)
+        .map_err(|e| PlanFileError::Payload {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    write_framed(&WAVES, path, header, &payload)
+}
+
+/// Reads and checks the wave file at `path`.
+pub fn read_waves(path: &Path) -> Result<(WaveHeader, Vec<WaveEntry>), PlanFileError> {
+    let (header, entries, _) = read_framed(&WAVES, path)?;
+    Ok((header, entries))
 }

@@ -5,7 +5,8 @@ use super::super::test_paths::TestPaths;
 use super::super::{fitness, ChannelWeights};
 use super::baseline::Origin;
 use super::pixel::{Evolved, GaRun, PixelContext};
-use super::waves::Waves;
+use super::stages::PlanError;
+use super::waves::{Job, Waves};
 use super::PlanFor;
 use crate::guiding::Guide;
 use crate::path::generator::Nee;
@@ -83,10 +84,22 @@ pub(super) fn pilot_pixels(grid: &[(u32, u32)], gate: bool) -> Vec<(u32, u32, Or
 /// For a mixture, a pilot pixel is not started once so many others failed to pay that the
 /// pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips depends on the
 /// threads' timing, so a mixture's pilot that fails leaves the whole image to `pt` (see
-/// `Plan::closed`), whichever of its pixels ran.
-pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) {
+/// `Plan::closed`), whichever of its pixels ran. With a store (learning kept between
+/// processes, or split over jobs) every pilot pixel runs, as one wave: the store's
+/// results must not depend on timing.
+pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) -> Result<(), PlanError> {
     let plan_for = waves.context.plan_for;
     let pilot = waves.pilot;
+    let run = || GaRun {
+        seeds: Vec::new(),
+        generations: scout,
+        stream: 0,
+        trial: true,
+    };
+    if waves.context.store.is_some() {
+        let jobs: Vec<Job> = (0..pilot).map(|pixel| Job { pixel, run: run() }).collect();
+        return waves.evolve(&jobs);
+    }
     let losing = AtomicUsize::new(0);
     let settled =
         || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
@@ -97,13 +110,7 @@ pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) {
             if settled() {
                 return None;
             }
-            let run = GaRun {
-                seeds: Vec::new(),
-                generations: scout,
-                stream: 0,
-                trial: true,
-            };
-            let r = this.evolve_one(i, &run);
+            let r = this.evolve_one(i, &run());
             if !r.0.pays(plan_for) {
                 losing.fetch_add(1, Ordering::Relaxed);
             }
@@ -113,6 +120,7 @@ pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) {
     for (i, r) in scouted_pilot {
         waves.done[i] = Some(r);
     }
+    Ok(())
 }
 
 /// Whether the GA goes on past the scouted pilot: where at least half the pilot pixels

@@ -51,6 +51,7 @@ mod config;
 mod gate;
 mod interpolation;
 mod pixel;
+mod stages;
 mod waves;
 
 pub use baseline::Origin;
@@ -59,6 +60,7 @@ pub use gate::{
     gate_margins, GateConfig, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
 };
 pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
+pub use stages::{PlanError, WaveEntry, WaveStore};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
@@ -102,6 +104,9 @@ pub struct PlanInputs<'a> {
     /// A spatial guide takes over where the plan's guides do not (`ga-pt` with
     /// `spatial_guide`), so a failed pilot leaves every pixel to it.
     pub spatial_guide: bool,
+    /// Where the GA pixels' waves are kept between processes (`genpath learn`), if they
+    /// are ([`stages`]).
+    pub store: Option<&'a dyn WaveStore>,
 }
 
 impl<'a> PlanInputs<'a> {
@@ -122,6 +127,7 @@ impl<'a> PlanInputs<'a> {
             srt_absorption: crate::path::generator::SRT_ABSORPTION,
             nee: Nee::default(),
             spatial_guide: plan_for == PlanFor::Guide,
+            store: None,
         }
     }
 }
@@ -232,7 +238,7 @@ impl Plan {
         inputs: &PlanInputs,
         seed: u64,
         progress: bool,
-    ) -> Result<Self, GaConfigError> {
+    ) -> Result<Self, PlanError> {
         let PlanInputs {
             plan: config,
             max_bounces,
@@ -247,6 +253,14 @@ impl Plan {
         };
         ga.validate()?;
         config.validate()?;
+        if let (Some(_), Some(limit)) = (inputs.store, config.time_limit) {
+            // Which pixels a time limit leaves out depends on the machine and its load.
+            return Err(GaConfigError(format!(
+                "ga_time_limit {limit}: a plan learned by `genpath learn` must not depend on \
+                 time (its waves are kept and may be split over jobs); leave it out"
+            ))
+            .into());
+        }
         let scene = view.scene;
         let (width, height) = (scene.camera.width, scene.camera.height);
         // A guide's GA keeps the end-only estimator's test paths, with which `ga-pt` was
@@ -273,20 +287,28 @@ impl Plan {
             plan_for,
             gate,
             seed,
+            store: inputs.store,
         };
         let mut waves = Waves::new(&context, pilot_pixels(&grid, gate), progress, t0);
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        scout_pilot(&mut waves, scout);
+        scout_pilot(&mut waves, scout)?;
         let pilot_pays = pilot_pays(&waves);
         let closed = gate && !pilot_pays && (plan_for == PlanFor::Mixture || inputs.spatial_guide);
         let mut pt_points = Vec::new();
         // Seconds of the baseline, which runs between GA waves.
         let baseline_part = if !gate || pilot_pays {
-            waves.past_pilot(&cells, scout, &mut stats, &mut pt_points)
+            waves.past_pilot(&cells, scout, &mut stats, &mut pt_points)?
         } else {
             waves.leave_to_pt(&grid, &mut stats, &mut pt_points);
             0.0
         };
+        if inputs.store.is_some_and(|s| s.split()) {
+            return Err(PlanError::ShareDone {
+                wave: None,
+                evolved: 0,
+                missing: 0,
+            });
+        }
         let (results, scouted) = waves.finish();
         stats.baseline_seconds = grid_seconds + baseline_part;
         stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;

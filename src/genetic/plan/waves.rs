@@ -5,6 +5,7 @@ use super::super::individual::Individual;
 use super::baseline::{baseline_choice, Origin};
 use super::config::PlanConfig;
 use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
+use super::stages::{PlanError, WaveEntry, WaveStore};
 use super::{PlanFor, PlanStats};
 use crate::progress::progress_bar;
 use indicatif::ProgressBar;
@@ -48,6 +49,8 @@ pub(super) struct Waves<'a> {
     late: Vec<usize>,
     /// When the plan began: `PlanConfig::time_limit` counts from here.
     start: Instant,
+    /// Waves evolved so far: the next one's number in the store.
+    wave: usize,
 }
 
 impl<'a> Waves<'a> {
@@ -69,6 +72,7 @@ impl<'a> Waves<'a> {
             scouted: Vec::new(),
             late: Vec::new(),
             start,
+            wave: 0,
         }
     }
 
@@ -93,8 +97,14 @@ impl<'a> Waves<'a> {
         r
     }
 
-    /// Evolves a wave's pixels in parallel.
-    fn evolve(&mut self, wave: &[Job]) {
+    /// Evolves a wave's pixels in parallel, or, with a store, takes those it holds and
+    /// evolves this job's share of the rest, keeping them there.
+    pub(super) fn evolve(&mut self, wave: &[Job]) -> Result<(), PlanError> {
+        let number = self.wave;
+        self.wave += 1;
+        if let Some(store) = self.context.store {
+            return self.evolve_stored(store, number, wave);
+        }
         let this = &*self;
         let results: Vec<(usize, Evolved)> = wave
             .par_iter()
@@ -103,11 +113,98 @@ impl<'a> Waves<'a> {
         for (i, r) in results {
             self.done[i] = Some(r);
         }
+        Ok(())
+    }
+
+    /// [`Self::evolve`] through `store`: the wave's results it holds, then this job's share
+    /// of the others in chunks, each kept as it finishes, so that a signal loses at most
+    /// one chunk's pixels in flight. Stops with [`PlanError::ShareDone`] where other jobs'
+    /// shares are missing, and with [`PlanError::Stopped`] on a signal.
+    fn evolve_stored(
+        &mut self,
+        store: &dyn WaveStore,
+        number: usize,
+        wave: &[Job],
+    ) -> Result<(), PlanError> {
+        if wave.is_empty() {
+            return Ok(());
+        }
+        let mut found: Vec<Option<Evolved>> = vec![None; wave.len()];
+        for e in store.load(number).map_err(PlanError::Store)? {
+            let job = e.job as usize;
+            let Some(expected) = wave.get(job).map(|j| self.chosen[j.pixel]) else {
+                return Err(PlanError::Store(format!(
+                    "wave {number} has {} GA pixels, and a stored result is for its job {job}",
+                    wave.len()
+                )));
+            };
+            if (e.pixel.x, e.pixel.y) != (expected.0, expected.1) {
+                return Err(PlanError::Store(format!(
+                    "wave {number}, job {job}: the stored result is for pixel ({}, {}), this \
+                     plan's job is pixel ({}, {})",
+                    e.pixel.x, e.pixel.y, expected.0, expected.1
+                )));
+            }
+            let mut pixel = e.pixel;
+            pixel.best = e.best;
+            found[job].get_or_insert((pixel, e.counts));
+        }
+        let todo: Vec<usize> = (0..wave.len())
+            .filter(|&k| found[k].is_none() && store.mine(k))
+            .collect();
+        let chunk = 4 * rayon::current_num_threads();
+        let mut evolved = 0;
+        for c in todo.chunks(chunk) {
+            let this = &*self;
+            let results: Vec<(usize, Evolved)> = c
+                .par_iter()
+                .filter(|_| store.stop_requested().is_none())
+                .map(|&k| (k, this.evolve_one(wave[k].pixel, &wave[k].run)))
+                .collect();
+            let entries: Vec<WaveEntry> = results
+                .iter()
+                .map(|(k, (pixel, counts))| WaveEntry {
+                    job: *k as u32,
+                    pixel: pixel.clone(),
+                    best: pixel.best.clone(),
+                    counts: *counts,
+                })
+                .collect();
+            if !entries.is_empty() {
+                store
+                    .save(number, wave.len(), &entries)
+                    .map_err(PlanError::Store)?;
+            }
+            evolved += results.len();
+            for (k, r) in results {
+                found[k] = Some(r);
+            }
+            if let Some(signal) = store.stop_requested() {
+                return Err(PlanError::Stopped {
+                    signal,
+                    wave: number,
+                    done: found.iter().flatten().count(),
+                    jobs: wave.len(),
+                });
+            }
+        }
+        let missing = found.iter().filter(|f| f.is_none()).count();
+        if missing > 0 {
+            return Err(PlanError::ShareDone {
+                wave: Some(number),
+                evolved,
+                missing,
+            });
+        }
+        for (job, r) in wave.iter().zip(found) {
+            self.done[job.pixel] = r;
+        }
+        Ok(())
     }
 
     /// Evolves `jobs` as a wave; with a time limit in chunks, each only if time is left
     /// (the others are late).
-    fn evolve_in_chunks(&mut self, jobs: &[Job]) {
+    fn evolve_in_chunks(&mut self, jobs: &[Job]) -> Result<(), PlanError> {
         let limit = self.context.config.time_limit;
         let chunk = match limit {
             Some(_) => 4 * rayon::current_num_threads(),
@@ -117,9 +214,10 @@ impl<'a> Waves<'a> {
             if limit.is_some_and(|limit| self.start.elapsed().as_secs_f64() >= limit) {
                 self.late.extend(c.iter().map(|j| j.pixel));
             } else {
-                self.evolve(c);
+                self.evolve(c)?;
             }
         }
+        Ok(())
     }
 
     /// Past a pilot that pays, or without the gate: the baseline, which chooses the other GA
@@ -132,7 +230,7 @@ impl<'a> Waves<'a> {
         scout: usize,
         stats: &mut PlanStats,
         pt_points: &mut Vec<(u32, u32)>,
-    ) -> f64 {
+    ) -> Result<f64, PlanError> {
         let t2 = Instant::now();
         let keep = self.positions();
         let choice = baseline_choice(self.context, cells, &keep, stats);
@@ -142,7 +240,7 @@ impl<'a> Waves<'a> {
         }
         self.add(&choice.pixels, &keep);
         let baseline_part = t2.elapsed().as_secs_f64();
-        let late = self.evolve_rest(scout);
+        let late = self.evolve_rest(scout)?;
         stats.time_limited_pixels = late.len();
         // A mixture's variance can grow fast away from its GA pixel, so with the gate a
         // cell the GA did not reach renders with `pt`. A guide keeps `pt`'s next-event
@@ -154,7 +252,7 @@ impl<'a> Waves<'a> {
             let chosen = &self.chosen;
             pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
         }
-        baseline_part
+        Ok(baseline_part)
     }
 
     /// Past a pilot that does not pay: no baseline, and every other cell's pixel in `grid`
@@ -174,7 +272,7 @@ impl<'a> Waves<'a> {
     /// goes on, then the other chosen pixels evolve. With warm starts, the grid pixels of
     /// "white" cells (in a checkerboard of cells) first, then the rest, seeded from their
     /// evolved neighbours. Returns the pixels the time limit left out.
-    fn evolve_rest(&mut self, scout: usize) -> Vec<usize> {
+    fn evolve_rest(&mut self, scout: usize) -> Result<Vec<usize>, PlanError> {
         let config = self.context.config;
         let g = config.grid;
         let white = |i: usize| {
@@ -183,7 +281,7 @@ impl<'a> Waves<'a> {
         };
         let (first, second): (Vec<usize>, Vec<usize>) =
             (self.pilot..self.chosen.len()).partition(|&i| !config.warm_start || white(i));
-        self.go_on(scout);
+        self.go_on(scout)?;
         // For a mixture every GA pixel runs the gate's trial; for a guide only the pilot
         // (see the module documentation).
         let trial = self.context.plan_for == PlanFor::Mixture;
@@ -192,17 +290,17 @@ impl<'a> Waves<'a> {
             .iter()
             .map(|&i| Job::cold(i, generations, trial))
             .collect();
-        self.evolve_in_chunks(&cold);
+        self.evolve_in_chunks(&cold)?;
         let second = self.warm_wave(&second, trial);
-        self.evolve_in_chunks(&second);
-        std::mem::take(&mut self.late)
+        self.evolve_in_chunks(&second)?;
+        Ok(std::mem::take(&mut self.late))
     }
 
     /// The pilot goes on from each pixel's best individual for the generations its
     /// `scout`ing left, whatever the time limit (the pilot showed the GA pays); its scouting
     /// still counts in the stats. A scout without a best individual (no light-carrying test
     /// path) or without generations left stands as it is.
-    fn go_on(&mut self, scout: usize) {
+    fn go_on(&mut self, scout: usize) -> Result<(), PlanError> {
         let rest = self.context.ga.generations.saturating_sub(scout);
         let mut go_on = Vec::new();
         for i in 0..self.pilot {
@@ -224,7 +322,7 @@ impl<'a> Waves<'a> {
             }
         }
         self.bar.inc_length(go_on.len() as u64);
-        self.evolve(&go_on);
+        self.evolve(&go_on)
     }
 
     /// The second wave's jobs: with warm starts, seeds from the pilot and the first wave
