@@ -83,18 +83,24 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         vec![settings.seed],
         &config,
     )?;
-    let waves = WaveDir::open(
-        args.waves
-            .clone()
-            .unwrap_or_else(|| suffixed(&args.output, "waves")),
-        identity.clone(),
-        shard,
-        super::resume::stop_on_signals()?,
-    )?;
-    let waves = Arc::new(waves);
+    let stop = super::resume::stop_on_signals()?;
+    // pg learns no GA plan: nothing of its learning is kept between processes.
+    let waves = match method {
+        Method::Pg => None,
+        _ => Some(Arc::new(WaveDir::open(
+            args.waves
+                .clone()
+                .unwrap_or_else(|| suffixed(&args.output, "waves")),
+            identity.clone(),
+            shard,
+            stop.clone(),
+        )?)),
+    };
+    let waves_dir = waves.as_ref().map(|w| w.dir.clone());
     let settings = genpath::integrators::RenderSettings {
         control: genpath::integrators::Control {
-            waves: Some(waves.clone()),
+            stop: stop.clone(),
+            waves: waves.map(|w| w as Arc<dyn WaveStore>),
             ..Default::default()
         },
         ..settings
@@ -117,7 +123,7 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
                 eprintln!(
                     "genpath: learn --shard {shard}: {what} ({:.2} s; waves in {})",
                     t_learn.elapsed().as_secs_f64(),
-                    waves.dir.display()
+                    waves_dir.as_deref().unwrap_or(Path::new("")).display()
                 );
             }
             return Ok(());
@@ -130,13 +136,23 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         })) => {
             return Err(super::resume::LearnInterrupted::new(
                 signal,
-                waves.dir.clone(),
+                waves_dir,
                 format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved"),
             )
             .into())
         }
         Err(e) => return Err(e.into()),
     };
+    if let Some(signal) = stop.requested() {
+        return Err(super::resume::LearnInterrupted::new(
+            signal,
+            waves_dir,
+            "in the spatial guide's training, whose passes start over when the command runs \
+             again"
+                .to_string(),
+        )
+        .into());
+    }
     if !shard.is_whole() {
         // The method learned nothing to split (the gate closed the GA before its waves).
         if !args.scene.quiet {
@@ -179,9 +195,8 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         "times_s": { "load": session.load_s, "accel_build": session.accel_s, "learn": learn_s },
     });
     write_stats(std::slice::from_ref(&args.output), &json)?;
-    if args.waves.is_none() {
-        std::fs::remove_dir_all(&waves.dir)
-            .with_context(|| format!("cannot remove {}", waves.dir.display()))?;
+    if let (None, Some(dir)) = (&args.waves, waves_dir) {
+        std::fs::remove_dir_all(&dir).with_context(|| format!("cannot remove {}", dir.display()))?;
     }
     if !args.scene.quiet {
         let shard = training.map_or_else(String::new, |t| {

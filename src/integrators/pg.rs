@@ -9,7 +9,9 @@
 use super::ga_pt::GuideEstimator;
 use super::settings::SpatialConfig;
 use super::tiles::{self, render_tile, PixelSums};
-use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings};
+use super::{
+    Context, Control, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings,
+};
 use crate::accel::Ray;
 use crate::genetic::plan::Plan;
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
@@ -236,12 +238,16 @@ impl TrainingSchedule {
 }
 
 /// The settings of training pass `pass` (`2^pass` samples per pixel from its own stream) of
-/// a render with `settings`; nothing stops, resumes or checkpoints it.
+/// a render with `settings`: nothing resumes or checkpoints it, and a stop (`genpath learn`
+/// on a signal) ends it and the training, which the learning then discards.
 fn training_pass(settings: &RenderSettings, pass: u32) -> RenderSettings {
     RenderSettings {
         spp: 1 << pass,
         seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
-        control: Default::default(),
+        control: Control {
+            stop: settings.control.stop.clone(),
+            ..Default::default()
+        },
         ..settings.clone()
     }
 }
@@ -283,7 +289,9 @@ pub fn train_spatial(
     let mut recorded_in_all = 0;
     let bar = progress_bar(0, "guide", settings.progress);
     let (mut pass, mut last) = (0, 0.0);
-    while schedule.runs(pass, start.elapsed().as_secs_f64(), last) {
+    while schedule.runs(pass, start.elapsed().as_secs_f64(), last)
+        && settings.control.stop.requested().is_none()
+    {
         let t0 = Instant::now();
         // From pass `FIRST_TRIAL_PASS` on, each pass tries the plan's guides against the
         // spatial guide alone until a trial decides (the guides stay where it does not).
