@@ -196,7 +196,8 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     });
     write_stats(std::slice::from_ref(&args.output), &json)?;
     if let (None, Some(dir)) = (&args.waves, waves_dir) {
-        std::fs::remove_dir_all(&dir).with_context(|| format!("cannot remove {}", dir.display()))?;
+        std::fs::remove_dir_all(&dir)
+            .with_context(|| format!("cannot remove {}", dir.display()))?;
     }
     if !args.scene.quiet {
         let shard = training.map_or_else(String::new, |t| {

@@ -2,8 +2,9 @@
 //! file; and determinism across thread counts. This file holds the helpers; the tests are in
 //! `bad_input.rs` (malformed scenes and flags), `methods.rs` (each method's renders) and
 //! `commands.rs` (reference, sweep, bench, check, settings and the test-only method) and
-//! `shards.rs` (`--shard` and `merge`), `resume.rs` (stopped, killed and resumed renders)
-//! and `plan.rs` (`learn` and `render --plan`).
+//! `shards.rs` (`--shard` and `merge`), `resume.rs` (stopped, killed and resumed renders),
+//! `plan.rs` (`learn` and `render --plan`) and `waves.rs` (the GA split over jobs, and
+//! stopped learning).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -14,6 +15,7 @@ mod methods;
 mod plan;
 mod resume;
 mod shards;
+mod waves;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -1,0 +1,251 @@
+//! The GA's waves kept between processes (`learn --waves`): `learn --shard K/N` split over
+//! three jobs, one step per wave, then `learn` without `--shard`, builds the plan that
+//! renders the in-process plan's image bit for bit (ga without the gate, whose first and
+//! warm-started waves it splits; ga-pt with the gate, whose pilot waves it splits too); a
+//! learn stopped by SIGTERM goes on to that plan; wave files of another render, or
+//! damaged, are refused.
+
+use super::*;
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+/// fig5 at 48×40, 8 spp, with the small GA: ga without the gate, and ga-pt with it (2
+/// spatial passes).
+fn methods() -> Vec<(&'static str, Vec<&'static str>)> {
+    let small = [&SMALL[..6], &SMALL_GA[..]].concat();
+    vec![
+        (
+            "ga",
+            [&["--method", "ga", "--no-gate"][..], &small].concat(),
+        ),
+        (
+            "ga-pt",
+            [&["--method", "ga-pt", "--spatial-passes", "2"][..], &small].concat(),
+        ),
+    ]
+}
+
+/// `genpath COMMAND fig5 -o OUT --quiet FLAGS…`.
+fn run(command: &str, out: &Path, flags: &[&str]) -> Output {
+    let scene = fig5();
+    let mut args = vec![
+        command,
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ];
+    args.extend_from_slice(flags);
+    genpath(&args)
+}
+
+fn ok(command: &str, out: &Path, flags: &[&str]) -> Output {
+    let output = run(command, out, flags);
+    assert!(
+        output.status.success(),
+        "{command} {flags:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output
+}
+
+/// The wave files in `dir`, by name.
+fn wave_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+/// The GA split over three jobs, four steps (one per wave), then the plan built from the
+/// waves: its render is the in-process render's, bit for bit. A job run again (a requeued
+/// array task) changes nothing.
+#[test]
+fn a_split_ga_builds_the_in_process_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (method, flags) in methods() {
+        let inline = d.join(format!("{method}-inline.exr"));
+        ok("render", &inline, &flags);
+        let waves = d.join(format!("{method}.waves"));
+        let plan = d.join(format!("{method}.plan"));
+        let with_waves = [&flags[..], &["--waves", waves.to_str().unwrap()]].concat();
+        for step in 0..4 {
+            for k in 0..3 {
+                let shard = format!("{k}/3");
+                let split = [&with_waves[..], &["--shard", &shard]].concat();
+                ok("learn", &plan, &split);
+                assert!(!plan.exists(), "{method}: a split job wrote the plan");
+                if (step, k) == (1, 0) {
+                    // Requeued: the same job again.
+                    ok("learn", &plan, &split);
+                }
+            }
+        }
+        let files = wave_files(&waves);
+        assert!(
+            files.len() >= 4,
+            "{method}: the waves were not split: {files:?}"
+        );
+        ok("learn", &plan, &with_waves);
+        let saved = d.join(format!("{method}-saved.exr"));
+        ok(
+            "render",
+            &saved,
+            &[&flags[..], &["--plan", plan.to_str().unwrap()]].concat(),
+        );
+        assert_eq!(
+            pixel_bits(&saved),
+            pixel_bits(&inline),
+            "{method}: the plan built from split waves renders another image"
+        );
+        assert!(waves.is_dir(), "--waves DIR given: the folder stays");
+    }
+}
+
+/// Starts `learn`, waits until its waves folder holds a file (its first chunk of GA pixels
+/// kept), then sends SIGTERM: the ended process.
+fn stop_mid_learning(args: &[String], waves: &Path) -> Output {
+    let mut child: Child = Command::new(env!("CARGO_BIN_EXE_genpath"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run genpath");
+    let start = Instant::now();
+    while wave_files(waves).is_empty() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no wave file within a minute"
+        );
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("learn ended ({status}) before it kept a wave");
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    // The shell's own `kill`: a minimal system (CI's Debian 13 root) has no kill program.
+    let killed = Command::new("sh")
+        .args(["-c", &format!("kill -TERM {}", child.id())])
+        .status()
+        .expect("run sh");
+    assert!(killed.success());
+    child.wait_with_output().unwrap()
+}
+
+/// SIGTERM mid-GA: exit 143, no plan, the finished GA pixels kept in the default waves
+/// folder; the same command goes on to the uninterrupted plan's image and removes the
+/// folder. The must-reject twin: the command with another seed refuses the kept waves,
+/// naming the seed.
+#[test]
+fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // fig5 at 96×80 with an 8-pixel grid on one thread: about 120 GA pixels, kept four at
+    // a time.
+    let flags: Vec<&str> = [
+        &["--method", "ga", "--no-gate", "--threads", "1"][..],
+        &["--spp", "8", "--width", "96", "--height", "80"],
+        &["--ga-grid", "8", "--test-paths", "3000"],
+        &["--population", "12", "--generations", "6"],
+    ]
+    .concat();
+    let inline = d.join("inline.exr");
+    ok("render", &inline, &flags);
+
+    let plan = d.join("ga.plan");
+    let waves = d.join("ga.plan.waves");
+    let scene = fig5();
+    let args: Vec<String> = [
+        "learn",
+        scene.to_str().unwrap(),
+        "-o",
+        plan.to_str().unwrap(),
+    ]
+    .iter()
+    .chain(&flags)
+    .map(|s| s.to_string())
+    .collect();
+    let stopped = stop_mid_learning(&args, &waves);
+    let err = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(143), "{err}");
+    assert!(err.contains("stopped by SIGTERM in wave"), "{err}");
+    assert!(!plan.exists(), "a stopped learn wrote the plan");
+    assert!(!wave_files(&waves).is_empty());
+
+    let other_seed = [&flags[..], &["--seed", "9"]].concat();
+    let refused = run("learn", &plan, &other_seed);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success(), "another seed took the waves");
+    assert!(
+        err.contains("learned for another render") && err.contains("seed"),
+        "{err}"
+    );
+    assert!(!plan.exists());
+
+    ok("learn", &plan, &flags);
+    assert!(
+        !waves.exists(),
+        "the default waves folder stays after the plan"
+    );
+    let saved = d.join("saved.exr");
+    ok(
+        "render",
+        &saved,
+        &[&flags[..], &["--plan", plan.to_str().unwrap()]].concat(),
+    );
+    assert_eq!(pixel_bits(&saved), pixel_bits(&inline));
+}
+
+/// A truncated wave file and a file that is not one are refused, naming the file; `pg`
+/// refuses `--shard`; a time limit on the GA is refused where its waves are kept.
+#[test]
+fn damaged_wave_files_and_impossible_splits_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, flags) = methods().remove(0);
+    let waves = d.join("w");
+    let plan = d.join("ga.plan");
+    let with_waves = [&flags[..], &["--waves", waves.to_str().unwrap()]].concat();
+    ok(
+        "learn",
+        &plan,
+        &[&with_waves[..], &["--shard", "0/2"]].concat(),
+    );
+    let file = wave_files(&waves).remove(0);
+    let bytes = std::fs::read(&file).unwrap();
+    for (damage, needle) in [
+        (bytes[..bytes.len() - 9].to_vec(), "truncated"),
+        (
+            b"not a wave file at all".to_vec(),
+            "not a genpath GA wave file",
+        ),
+    ] {
+        std::fs::write(&file, &damage).unwrap();
+        let output = run("learn", &plan, &with_waves);
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success(), "{needle}: accepted");
+        assert!(err.contains(needle) && err.contains("wave-"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!plan.exists());
+    }
+
+    let pg = [
+        "--method", "pg", "--spp", "8", "--width", "48", "--height", "40",
+    ];
+    let output = run("learn", &plan, &[&pg[..], &["--shard", "1/2"]].concat());
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && err.contains("pg learns no GA plan to split"),
+        "{err}"
+    );
+
+    let timed = [&flags[..], &["--ga-time-limit", "5"]].concat();
+    let output = run("learn", &d.join("timed.plan"), &timed);
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        !output.status.success() && err.contains("must not depend on time"),
+        "{err}"
+    );
+}
