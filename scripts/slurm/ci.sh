@@ -5,8 +5,9 @@
 # from its checkpoint), and checks that the merged image equals the render on one machine
 # bit for bit, and that a truncated shard is refused by the merge; then a method that learns
 # (pg) through its learn job, an array of shards rendering with the plan and the merge, which
-# must equal pg's render on one machine bit for bit. Stops the daemons it started, whatever
-# happens.
+# must equal pg's render on one machine bit for bit; and ga-pt with its GA split over two
+# learn jobs per wave, whose merged image must equal its render on one machine bit for bit.
+# Stops the daemons it started, whatever happens.
 #
 #   bash scripts/slurm/ci.sh [GENPATH]   # GENPATH: a built binary [target/release/genpath]
 set -euo pipefail
@@ -96,4 +97,18 @@ grep -q "^learn: job" <<<"$submitted" || fail "no learn job for pg: $submitted"
 merge=$(sed -n 's/.*merge: job \([0-9]*\) .*/\1/p' <<<"$submitted")
 wait_for "$merge"
 "$genpath" compare --bits "$work/out-pg/merged.exr" "$work/single-pg.exr" || fail "pg: merged ≠ single"
+
+echo "== the GA split over learn jobs: 4 waves × 2 shards → learn → array of 2 shards → merge (ga-pt)"
+gapt=(--method ga-pt --width 48 --height 40 --spp 16 --seed 7 --spatial-passes 2
+    --ga-grid 16 --test-paths 3000 --population 12 --generations 6)
+"$genpath" render "$scene" "${gapt[@]}" --quiet -o "$work/single-ga-pt.exr"
+submitted=$(bash "$repo/scripts/slurm/submit.sh" --shards 2 --learn-shards 2 --genpath "$genpath" \
+    "$scene" "$work/out-ga-pt" -- "${gapt[@]}")
+echo "$submitted"
+grep -q "^learn: waves: jobs" <<<"$submitted" || fail "the GA was not split: $submitted"
+merge=$(sed -n 's/.*merge: job \([0-9]*\) .*/\1/p' <<<"$submitted")
+wait_for "$merge"
+ls "$work/out-ga-pt/plan.bin.waves"
+ls "$work/out-ga-pt/plan.bin.waves" | grep -q "wave-0.1-of-2.bin" || fail "no pilot wave of shard 1/2"
+"$genpath" compare --bits "$work/out-ga-pt/merged.exr" "$work/single-ga-pt.exr" || fail "ga-pt: merged ≠ single"
 echo "Slurm pipeline: ok"

@@ -18,7 +18,10 @@
 # first, the array waits for it (--dependency=afterok) and every task renders with
 # `--plan OUTDIR/plan.bin`, and the merge adds the learn job's training shard
 # (OUTDIR/plan.bin.shard, pg and ga-pt) to the tasks' shards: learn → array → merge. The
-# learn job is not split and not resumable: give it --learn-time. With --tasks, an existing
+# GA (ga, ga-pt) keeps its waves of GA pixels in OUTDIR/plan.bin.waves, so a learn job that
+# Slurm stops is requeued and goes on; with --learn-shards L it is split over L jobs: four
+# job arrays of L tasks one after another (`learn --shard K/L`, one per wave of the GA),
+# then the learn job builds the plan from their waves. With --tasks, an existing
 # OUTDIR/plan.bin is used as it is (no learn job).
 #
 # Options:
@@ -27,14 +30,15 @@
 #   --mem M           memory per task, as sbatch takes it [2G]
 #   --time T          time limit per task run [01:00:00]
 #   --checkpoint S    seconds between checkpoints [60]
-#   --learn-time T    time limit of the learn job (methods that learn) [the --time]
+#   --learn-time T    time limit of each learn job (methods that learn) [the --time]
+#   --learn-shards L  split the GA (ga, ga-pt) over L jobs per wave [1: one learn job]
 #   --tasks LIST      only these array indices (e.g. 1,5-7): resubmits failed tasks, whose
 #                     partial shard files they resume from, with a new merge job
 #   --genpath PATH    the genpath binary [target/release/genpath of this checkout]
 #   --sbatch FLAG     an extra sbatch flag for both jobs (repeatable: --partition=…, --account=…)
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
-shards=4 cpus=1 mem=2G time=01:00:00 checkpoint=60 tasks="" learn_time="" extra=()
+shards=4 cpus=1 mem=2G time=01:00:00 checkpoint=60 tasks="" learn_time="" learn_shards=1 extra=()
 genpath=$(cd "$here/../.." && pwd)/target/release/genpath
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d; s/^# \{0,1\}//' >&2; exit 2; }
 while (($#)); do
@@ -45,6 +49,7 @@ while (($#)); do
     --time) time=$2; shift 2 ;;
     --checkpoint) checkpoint=$2; shift 2 ;;
     --learn-time) learn_time=$2; shift 2 ;;
+    --learn-shards) learn_shards=$2; shift 2 ;;
     --tasks) tasks=$2; shift 2 ;;
     --genpath) genpath=$2; shift 2 ;;
     --sbatch) extra+=("$2"); shift 2 ;;
@@ -59,6 +64,7 @@ scene=$1 out=$2
 shift 2
 [[ ${1:-} == -- ]] && shift
 [[ $shards =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --shards must be a positive integer" >&2; exit 2; }
+[[ $learn_shards =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --learn-shards must be a positive integer" >&2; exit 2; }
 [[ -x $genpath ]] || { echo "submit.sh: $genpath is not an executable genpath (cargo build --release, or --genpath PATH)" >&2; exit 2; }
 [[ -f $scene ]] || { echo "submit.sh: $scene: no such scene file" >&2; exit 2; }
 command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found: is this a Slurm login node?" >&2; exit 2; }
@@ -81,14 +87,37 @@ plan="" after=()
 case $method in
 pg | ga | ga-pt)
     plan=$out/plan.bin
+    if [[ $method == pg ]] && ((learn_shards > 1)); then
+        echo "submit.sh: --learn-shards: pg learns no GA to split (its training runs in one job)" >&2
+        exit 2
+    fi
     if [[ -z $resubmit || ! -f $plan ]]; then
-        learn=$(GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_PLAN="$plan" \
-            sbatch --parsable "${extra[@]}" --job-name=genpath-learn \
-            --cpus-per-task="$cpus" --mem="$mem" --time="${learn_time:-$time}" \
-            --output="$out/slurm-%j-learn.out" --export=ALL "$here/learn.sbatch" "$@")
-        learn=${learn%%;*}
-        after=(--dependency="afterok:$learn" --kill-on-invalid-dep=yes)
-        echo "learn: job $learn → $plan"
+        # learn_job [ARRAY]: submits a learn job (with ARRAY, an array of the L shards of a
+        # wave) after the job in $after; its id becomes the next job's dependency.
+        learn_job() {
+            local array=() id
+            [[ -n $1 ]] && array=(--array="$1")
+            shift
+            # SIGTERM 60 s before the time limit: the GA keeps its waves and the job requeues.
+            id=$(GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_PLAN="$plan" \
+                GENPATH_LEARN_SHARDS="$learn_shards" \
+                sbatch --parsable "${extra[@]}" "${after[@]}" "${array[@]}" \
+                --job-name=genpath-learn --requeue --signal=B:TERM@60 \
+                --cpus-per-task="$cpus" --mem="$mem" --time="${learn_time:-$time}" \
+                --output="$out/slurm-%j-learn.out" --export=ALL "$here/learn.sbatch" "$@")
+            id=${id%%;*}
+            after=(--dependency="afterok:$id" --kill-on-invalid-dep=yes)
+        }
+        if ((learn_shards > 1)); then
+            waves=()
+            for wave in 0 1 2 3; do
+                learn_job "0-$((learn_shards - 1))" "$@"
+                waves+=("${after[0]#--dependency=afterok:}")
+            done
+            echo "learn: waves: jobs ${waves[*]} (arrays of $learn_shards)"
+        fi
+        learn_job "" "$@"
+        echo "learn: job ${after[0]#--dependency=afterok:} → $plan"
     fi
     ;;
 esac
