@@ -143,3 +143,31 @@ fn render_small_fig5(out: &Path, extra: &[&str]) {
         String::from_utf8_lossy(&output.stderr)
     );
 }
+
+/// Waits until `ready` (at most a minute; the process must not end before), then sends
+/// `signal` (a `kill` name) to `child`: the ended process. `what` names what it waits for.
+fn signal_when(
+    mut child: std::process::Child,
+    ready: impl Fn() -> bool,
+    signal: &str,
+    what: &str,
+) -> Output {
+    let start = std::time::Instant::now();
+    while !ready() {
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(60),
+            "no {what} within a minute"
+        );
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the process ended ({status}) before its {what}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    // The shell's own `kill`: a minimal system (CI's Debian 13 root) has no kill program.
+    let killed = Command::new("sh")
+        .args(["-c", &format!("kill -{signal} {}", child.id())])
+        .status()
+        .expect("run sh");
+    assert!(killed.success());
+    child.wait_with_output().unwrap()
+}

@@ -6,7 +6,6 @@
 
 use super::*;
 use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
 
 /// fig5 at 32×32, 1024 spp, one thread (`--method pt` unless `extra` names one): about a
 /// second, four tiles one after another.
@@ -61,26 +60,8 @@ fn shard_file(image: &Path) -> PathBuf {
 /// Starts `args` with a checkpoint after every tile, waits for the first checkpoint (a
 /// quarter of the image rendered), then sends `signal` (a `kill` name): the ended process.
 fn stop_mid_render(args: &[String], out: &Path, signal: &str) -> Output {
-    let mut child = spawn(args);
     let shard = shard_file(out);
-    let start = Instant::now();
-    while !shard.exists() {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "no checkpoint within a minute"
-        );
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("the render ended ({status}) before its first checkpoint");
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    // The shell's own `kill`: a minimal system (CI's Debian 13 root) has no kill program.
-    let killed = Command::new("sh")
-        .args(["-c", &format!("kill -{signal} {}", child.id())])
-        .status()
-        .expect("run sh");
-    assert!(killed.success());
-    child.wait_with_output().unwrap()
+    signal_when(spawn(args), || shard.exists(), signal, "first checkpoint")
 }
 
 /// The fewest and most samples any pixel holds in the shard file beside `image`, over its

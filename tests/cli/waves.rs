@@ -6,8 +6,7 @@
 //! damaged, are refused.
 
 use super::*;
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Stdio;
 
 /// fig5 at 48×40, 8 spp, with the small GA: ga without the gate, and ga-pt with it (2
 /// spatial passes).
@@ -107,31 +106,15 @@ fn a_split_ga_builds_the_in_process_plan() {
 /// Starts `learn`, waits until its waves folder holds a file (its first chunk of GA pixels
 /// kept), then sends SIGTERM: the ended process.
 fn stop_mid_learning(args: &[String], waves: &Path) -> Output {
-    let mut child: Child = Command::new(env!("CARGO_BIN_EXE_genpath"))
+    let child = Command::new(env!("CARGO_BIN_EXE_genpath"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(args)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("run genpath");
-    let start = Instant::now();
-    while wave_files(waves).is_empty() {
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "no wave file within a minute"
-        );
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("learn ended ({status}) before it kept a wave");
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    // The shell's own `kill`: a minimal system (CI's Debian 13 root) has no kill program.
-    let killed = Command::new("sh")
-        .args(["-c", &format!("kill -TERM {}", child.id())])
-        .status()
-        .expect("run sh");
-    assert!(killed.success());
-    child.wait_with_output().unwrap()
+    let kept = || !wave_files(waves).is_empty();
+    signal_when(child, kept, "TERM", "first kept wave")
 }
 
 /// SIGTERM mid-GA: exit 143, no plan, the finished GA pixels kept in the default waves
