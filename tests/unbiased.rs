@@ -116,7 +116,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {
         let schedule = TrainingSchedule::new(&SpatialConfig::default(), spp);
-        let t = train_spatial(&view, &settings, schedule, plan);
+        let t = train_spatial(&view, &settings, schedule, plan).unwrap();
         assert!(
             t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
             "{name}: the spatial guide did not train"

@@ -17,9 +17,10 @@
 # (scripts/slurm/learn.sbatch) runs `genpath learn SCENE RENDER_FLAGS -o OUTDIR/plan.bin`
 # first, the array waits for it (--dependency=afterok) and every task renders with
 # `--plan OUTDIR/plan.bin`, and the merge adds the learn job's training shard
-# (OUTDIR/plan.bin.shard, pg and ga-pt) to the tasks' shards: learn → array → merge. The
-# GA (ga, ga-pt) keeps its waves of GA pixels in OUTDIR/plan.bin.waves, so a learn job that
-# Slurm stops is requeued and goes on; with --learn-shards L it is split over L jobs: four
+# (OUTDIR/plan.bin.shard, pg and ga-pt) to the tasks' shards: learn → array → merge.
+# Learning keeps what it finished (the GA's waves, the spatial guide's passes) in
+# OUTDIR/plan.bin.learning, so a learn job that Slurm stops is requeued and goes on; with
+# --learn-shards L the GA (ga, ga-pt) is split over L jobs: four
 # job arrays of L tasks one after another (`learn --shard K/L`, one per wave of the GA),
 # then the learn job builds the plan from their waves. With --tasks, an existing
 # OUTDIR/plan.bin is used as it is (no learn job).
@@ -98,7 +99,7 @@ pg | ga | ga-pt)
             local array=() id
             [[ -n $1 ]] && array=(--array="$1")
             shift
-            # SIGTERM 60 s before the time limit: the GA keeps its waves and the job requeues.
+            # SIGTERM 60 s before the time limit: learning keeps what it finished and requeues.
             id=$(GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_PLAN="$plan" \
                 GENPATH_LEARN_SHARDS="$learn_shards" \
                 sbatch --parsable "${extra[@]}" "${after[@]}" "${array[@]}" \

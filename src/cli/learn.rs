@@ -3,22 +3,22 @@
 //! training's samples (pg, ga-pt) in a training shard beside it; and `render --plan`'s side
 //! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md).
 //!
-//! A GA plan keeps its waves of GA pixels in a folder as they finish ([`WaveDir`]), so that
-//! learning stopped by SIGINT or SIGTERM goes on where it stopped when the command runs
-//! again, and so that `learn --shard K/N` splits the GA over jobs: each job evolves its
-//! share of the first wave not yet complete and stops there (the waves are the barriers
-//! between the steps of a job array); `learn` without `--shard` then builds the plan from
-//! every share.
+//! Learning keeps what it finished in a folder ([`LearnDir`]): a GA plan's waves of GA
+//! pixels as they finish, the spatial guide's training after each pass. Learning stopped by
+//! SIGINT or SIGTERM goes on from there when the command runs again, and `learn --shard K/N`
+//! splits the GA over jobs: each job evolves its share of the first wave not yet complete
+//! and stops there (the waves are the barriers between the steps of a job array); `learn`
+//! without `--shard` then builds the plan from every share.
 
 use super::args::{MethodArgs, SceneArgs};
 use super::check_dir;
 use super::session::{shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
-use genpath::genetic::plan::{PlanError, WaveEntry, WaveStore};
+use genpath::genetic::plan::{LearnStore, PlanError, WaveEntry};
 use genpath::integrators::{prepare, LayerSums, Learned, Method, PrepareError, Shard, Stop};
 use genpath::path::SceneView;
-use genpath::shard::plan_file::{self, PlanHeader, WaveHeader};
+use genpath::shard::plan_file::{self, PlanHeader, TrainingHeader, WaveHeader};
 use genpath::shard::{Identity, Part, PlanRef};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -38,19 +38,20 @@ pub struct LearnArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
     pub spp: Option<u32>,
     /// Split the GA (ga, ga-pt) over N jobs: this one evolves the GA pixels j of the first
-    /// wave not yet complete with j mod N = K, keeps them in the waves folder, and stops.
+    /// wave not yet complete with j mod N = K, keeps them in the learning folder, and stops.
     /// The GA has four waves (the gate's pilot, the pilot going on, the first wave, the
     /// warm-started second), each a barrier: run the N jobs four times, one step after
     /// another (a job array per step), then `learn` without --shard to build the plan from
     /// the waves (docs/shards.md; scripts/slurm/submit.sh does it).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
-    /// The folder where the GA keeps its waves of GA pixels as they finish (shared by
-    /// every job of a split GA) [default: `<FILE>.waves`, removed once the plan is written].
+    /// The folder where learning keeps what it finished: the GA's waves of GA pixels as
+    /// they finish (shared by every job of a split GA) and the spatial guide's training
+    /// after each pass [default: `<FILE>.learning`, removed once the plan is written].
     /// Learning stopped by SIGINT or SIGTERM goes on from it when the same command runs
     /// again.
     #[arg(long, value_name = "DIR")]
-    pub waves: Option<PathBuf>,
+    pub learn_dir: Option<PathBuf>,
     #[command(flatten)]
     pub method: MethodArgs,
 }
@@ -84,23 +85,12 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         &config,
     )?;
     let stop = super::resume::stop_on_signals()?;
-    // pg learns no GA plan: nothing of its learning is kept between processes.
-    let waves = match method {
-        Method::Pg => None,
-        _ => Some(Arc::new(WaveDir::open(
-            args.waves
-                .clone()
-                .unwrap_or_else(|| suffixed(&args.output, "waves")),
-            identity.clone(),
-            shard,
-            stop.clone(),
-        )?)),
-    };
-    let waves_dir = waves.as_ref().map(|w| w.dir.clone());
+    let dir = (args.learn_dir.clone()).unwrap_or_else(|| suffixed(&args.output, "learning"));
+    let store = LearnDir::open(dir.clone(), identity.clone(), shard, stop.clone())?;
     let settings = genpath::integrators::RenderSettings {
         control: genpath::integrators::Control {
             stop: stop.clone(),
-            waves: waves.map(|w| w as Arc<dyn WaveStore>),
+            learning: Some(Arc::new(store)),
             ..Default::default()
         },
         ..settings
@@ -109,21 +99,12 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     let t_learn = Instant::now();
     let prepared = match session.pool.install(|| prepare(&view, &config, &settings)) {
         Ok(prepared) => prepared,
-        Err(PrepareError::Plan(PlanError::ShareDone {
-            wave,
-            evolved,
-            missing,
-        })) => {
+        Err(PrepareError::Plan(done @ PlanError::ShareDone { .. })) => {
             if !args.scene.quiet {
-                let what = PlanError::ShareDone {
-                    wave,
-                    evolved,
-                    missing,
-                };
                 eprintln!(
-                    "genpath: learn --shard {shard}: {what} ({:.2} s; waves in {})",
+                    "genpath: learn --shard {shard}: {done} ({:.2} s; kept in {})",
                     t_learn.elapsed().as_secs_f64(),
-                    waves_dir.as_deref().unwrap_or(Path::new("")).display()
+                    dir.display()
                 );
             }
             return Ok(());
@@ -134,24 +115,15 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
             done,
             jobs,
         })) => {
-            return Err(super::resume::LearnInterrupted::new(
-                signal,
-                waves_dir,
-                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved"),
-            )
-            .into())
+            let detail =
+                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved");
+            return Err(super::resume::LearnInterrupted::new(signal, dir, detail).into());
         }
         Err(e) => return Err(e.into()),
     };
     if let Some(signal) = stop.requested() {
-        return Err(super::resume::LearnInterrupted::new(
-            signal,
-            waves_dir,
-            "in the spatial guide's training, whose passes start over when the command runs \
-             again"
-                .to_string(),
-        )
-        .into());
+        let detail = "in the spatial guide's training, with its finished passes".to_string();
+        return Err(super::resume::LearnInterrupted::new(signal, dir, detail).into());
     }
     if !shard.is_whole() {
         // The method learned nothing to split (the gate closed the GA before its waves).
@@ -195,7 +167,7 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         "times_s": { "load": session.load_s, "accel_build": session.accel_s, "learn": learn_s },
     });
     write_stats(std::slice::from_ref(&args.output), &json)?;
-    if let (None, Some(dir)) = (&args.waves, waves_dir) {
+    if args.learn_dir.is_none() {
         std::fs::remove_dir_all(&dir)
             .with_context(|| format!("cannot remove {}", dir.display()))?;
     }
@@ -227,22 +199,23 @@ fn suffixed(path: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// The GA's waves kept as files in a folder: `wave-W.K-of-N.bin`, the GA pixels of wave `W`
-/// that job `K/N` evolved (plan_file's wave files), every file checked against the render
+/// What learning finished, kept as files in a folder: `wave-W.K-of-N.bin`, the GA pixels of
+/// wave `W` that job `K/N` evolved (plan_file's wave files), and `training.bin`, the spatial
+/// guide's training after its last finished pass; every file is checked against the render
 /// the plan is learned for.
 #[derive(Debug)]
-pub struct WaveDir {
+pub struct LearnDir {
     dir: PathBuf,
     identity: Identity,
     shard: Shard,
     stop: Stop,
 }
 
-impl WaveDir {
+impl LearnDir {
     /// The folder at `dir`, made if it does not exist.
     fn open(dir: PathBuf, identity: Identity, shard: Shard, stop: Stop) -> Result<Self> {
         std::fs::create_dir_all(&dir)
-            .with_context(|| format!("--waves {}: cannot make the folder", dir.display()))?;
+            .with_context(|| format!("--learn-dir {}: cannot make the folder", dir.display()))?;
         Ok(Self {
             dir,
             identity,
@@ -293,7 +266,7 @@ impl WaveDir {
     }
 }
 
-impl WaveStore for WaveDir {
+impl LearnStore for LearnDir {
     fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, String> {
         let files = self
             .files(wave)
@@ -331,6 +304,30 @@ impl WaveStore for WaveDir {
 
     fn stop_requested(&self) -> Option<usize> {
         self.stop.requested()
+    }
+
+    fn load_training(&self) -> Result<Option<Vec<u8>>, String> {
+        let path = self.dir.join("training.bin");
+        if !path.exists() {
+            return Ok(None);
+        }
+        let (header, state) = plan_file::read_training(&path).map_err(|e| e.to_string())?;
+        if let Some((what, theirs, ours)) = header.identity.difference(&self.identity) {
+            return Err(format!(
+                "{}: it was learned for another render: {what} is {theirs} there and {ours} here",
+                path.display()
+            ));
+        }
+        Ok(Some(state))
+    }
+
+    fn save_training(&self, passes: u32, state: &[u8]) -> Result<(), String> {
+        let header = TrainingHeader {
+            identity: self.identity.clone(),
+            passes,
+        };
+        plan_file::write_training(&self.dir.join("training.bin"), &header, state)
+            .map_err(|e| e.to_string())
     }
 }
 

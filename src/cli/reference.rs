@@ -82,7 +82,7 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
                 stop: continuation.stop.clone(),
                 resume: continuation.resumed(i),
                 checkpoint: continuation.checkpoint(&session, layers),
-                waves: None,
+                learning: None,
             },
             ..session.settings(&args.scene, method, args.spp / 2)
         };

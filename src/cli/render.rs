@@ -97,7 +97,7 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         stop: continuation.stop.clone(),
         resume: continuation.resumed(0),
         checkpoint: continuation.checkpoint(&session, |sums| vec![sums.clone()]),
-        waves: None,
+        learning: None,
     };
     let settings = RenderSettings {
         control,

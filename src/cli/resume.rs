@@ -53,33 +53,26 @@ impl Interrupted {
     }
 }
 
-/// Learning stopped by a signal, after it kept the GA's finished waves in their folder
-/// (none for pg): `main` exits with `128 + signal`.
+/// Learning stopped by a signal, after it kept what it finished (the GA's waves, the spatial
+/// guide's passes) in its folder: `main` exits with `128 + signal`.
 #[derive(Debug, thiserror::Error)]
-#[error("stopped by {name} {detail}. {}", kept(.waves.as_deref()))]
+#[error(
+    "stopped by {name} {detail}, kept in {}: run the same command to go on",
+    dir.display()
+)]
 pub struct LearnInterrupted {
     pub signal: usize,
     pub name: &'static str,
-    pub waves: Option<PathBuf>,
+    pub dir: PathBuf,
     pub detail: String,
 }
 
-fn kept(waves: Option<&Path>) -> String {
-    match waves {
-        Some(dir) => format!(
-            "The GA's waves are kept in {}: run the same command to go on",
-            dir.display()
-        ),
-        None => "Nothing is kept: run the same command to start over".to_string(),
-    }
-}
-
 impl LearnInterrupted {
-    pub fn new(signal: usize, waves: Option<PathBuf>, detail: String) -> Self {
+    pub fn new(signal: usize, dir: PathBuf, detail: String) -> Self {
         Self {
             signal,
             name: signal_name(signal),
-            waves,
+            dir,
             detail,
         }
     }

@@ -82,6 +82,26 @@ impl SampleStorage {
     }
 
     /// Forgets the records and light tries, keeping the storage (and which cells are dark).
+    /// Per facing and lattice cell, whether it is dark (what a guide keeps of the guides
+    /// before it).
+    pub fn dark(&self) -> &[bool] {
+        &self.dark
+    }
+
+    /// Takes `dark` as the cells that are dark (a training kept between processes); refused
+    /// when it is not of this storage's lattice.
+    pub fn set_dark(&mut self, dark: Vec<bool>) -> Result<(), String> {
+        if dark.len() != self.dark.len() {
+            return Err(format!(
+                "{} dark-cell flags for a lattice of {} cells",
+                dark.len(),
+                self.dark.len()
+            ));
+        }
+        self.dark = dark;
+        Ok(())
+    }
+
     pub fn clear(&mut self) {
         self.records.clear();
         self.light_tries.clear();

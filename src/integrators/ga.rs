@@ -28,7 +28,7 @@ pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareE
         srt_absorption: config.srt.srt_absorption,
         nee: config.srt.nee,
         spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
-        store: settings.control.waves.as_deref(),
+        store: settings.control.learning.as_deref(),
     };
     Ok(Plan::build(
         context.view,

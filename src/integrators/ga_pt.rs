@@ -26,7 +26,7 @@ pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     }
     let plan = build_plan(context, PlanFor::Guide)?;
     if spatial {
-        return Ok(Box::new(pg::train(context, Some(plan))));
+        return Ok(Box::new(pg::train(context, Some(plan))?));
     }
     Ok(Box::new(GaPt {
         plan,

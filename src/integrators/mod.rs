@@ -131,6 +131,9 @@ pub enum PrepareError {
     Ga(#[from] GaConfigError),
     #[error(transparent)]
     Plan(#[from] PlanError),
+    /// What `genpath learn` kept of an earlier run cannot be used.
+    #[error("{0}")]
+    Kept(String),
     #[error(transparent)]
     Settings(#[from] settings::SettingsError),
     #[error("--method mixture needs --generators FILE")]

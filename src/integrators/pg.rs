@@ -26,7 +26,7 @@ use std::time::Instant;
 
 pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     check_schedule(context)?;
-    Ok(Box::new(train(context, None)))
+    Ok(Box::new(train(context, None)?))
 }
 
 /// Refuses `--spatial-passes` whose training would take more samples than `--spp`.
@@ -42,15 +42,15 @@ pub fn check_schedule(context: &Context) -> Result<(), PrepareError> {
 }
 
 /// Trains the spatial guide with `context`'s settings, beside `plan`'s per-pixel guides.
-pub fn train(context: &Context, plan: Option<Plan>) -> SpatialIntegrator {
+pub fn train(context: &Context, plan: Option<Plan>) -> Result<SpatialIntegrator, PrepareError> {
     let schedule = TrainingSchedule::new(&context.config.spatial, context.settings.spp);
-    let training = train_spatial(context.view, context.settings, schedule, plan.as_ref());
-    SpatialIntegrator {
+    let training = train_spatial(context.view, context.settings, schedule, plan.as_ref())?;
+    Ok(SpatialIntegrator {
         plan,
         training,
         max_bounces: context.settings.max_bounces,
         keeps_taken: true,
-    }
+    })
 }
 
 /// Path tracing guided by a trained spatial guide, beside a GA plan's per-pixel guides
@@ -152,6 +152,7 @@ const RECORDS_PER_SAMPLE: usize = 2;
 /// A spatial guide and the path-traced samples its training took: they are samples of the
 /// image like any other (each unbiased given the guide it was drawn with), and renders
 /// keep them.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct SpatialTraining {
     pub guide: Arc<SpatialField>,
     pub samples: PixelSums,
@@ -271,31 +272,54 @@ pub fn train_spatial(
     settings: &RenderSettings,
     schedule: TrainingSchedule,
     plan: Option<&Plan>,
-) -> SpatialTraining {
+) -> Result<SpatialTraining, PrepareError> {
     let start = Instant::now();
     let camera = &view.scene.camera;
     let tiles = tiles::tiles(camera.width, camera.height);
     let pixels = (camera.width * camera.height) as usize;
     let mut records = SampleStorage::around(&view.scene.mesh);
-    // Before the first pass: no samples, and a guide that has learned nothing.
-    let mut training = SpatialTraining {
-        guide: Arc::new(records.field()),
-        samples: PixelSums::zero(pixels),
-        plan_guides: PlanGuides::Everywhere,
-    };
-    let mut guides_trial = None;
     let open_plan = plan.filter(|p| !p.is_closed());
-    let mut trialling = open_plan.is_some();
-    let mut recorded_in_all = 0;
+    let store = settings.control.learning.as_deref();
+    let kept = |e: String| PrepareError::Kept(e);
+    let mut at = match store.map(|s| s.load_training()).transpose().map_err(kept)? {
+        Some(Some(bytes)) => bincode::deserialize::<Between>(&bytes)
+            .map_err(|e| kept(format!("the spatial guide's training: {e}")))?,
+        // Before the first pass: no samples, and a guide that has learned nothing.
+        _ => Between {
+            passes: 0,
+            training: SpatialTraining {
+                guide: Arc::new(records.field()),
+                samples: PixelSums::zero(pixels),
+                plan_guides: PlanGuides::Everywhere,
+            },
+            guides_trial: None,
+            trialling: open_plan.is_some(),
+            recorded_in_all: 0,
+            seconds: 0.0,
+            last: 0.0,
+            dark: Vec::new(),
+        },
+    };
+    if at.training.samples.sum.len() != pixels {
+        return Err(kept(format!(
+            "the spatial guide's kept training is of {} pixels, not {pixels}",
+            at.training.samples.sum.len()
+        )));
+    }
+    if at.passes > 0 {
+        let dark = std::mem::take(&mut at.dark);
+        records.set_dark(dark).map_err(kept)?;
+    }
     let bar = progress_bar(0, "guide", settings.progress);
-    let (mut pass, mut last) = (0, 0.0);
-    while schedule.runs(pass, start.elapsed().as_secs_f64(), last)
-        && settings.control.stop.requested().is_none()
-    {
+    let stop = &settings.control.stop;
+    let elapsed = |at: &Between| at.seconds + start.elapsed().as_secs_f64();
+    while schedule.runs(at.passes, elapsed(&at), at.last) && stop.requested().is_none() {
         let t0 = Instant::now();
+        let pass = at.passes;
+        let training = &mut at.training;
         // From pass `FIRST_TRIAL_PASS` on, each pass tries the plan's guides against the
         // spatial guide alone until a trial decides (the guides stay where it does not).
-        let trial = trialling && pass >= FIRST_TRIAL_PASS;
+        let trial = at.trialling && pass >= FIRST_TRIAL_PASS;
         if trial {
             training.plan_guides = PlanGuides::OutsideControl;
         }
@@ -309,7 +333,7 @@ pub fn train_spatial(
             .map(|tile| {
                 let recorder = Some((PathSegmentStorage::new(&records), recorded));
                 let max_bounces = settings.max_bounces;
-                let mut estimator = SpatialEstimator::new(plan, &training, max_bounces, recorder);
+                let mut estimator = SpatialEstimator::new(plan, training, max_bounces, recorder);
                 let result = render_tile(
                     view,
                     &pass_settings,
@@ -323,6 +347,10 @@ pub fn train_spatial(
                 (recorder, result.sums)
             })
             .collect();
+        if stop.requested().is_some() {
+            // A pass cut short: the training stands as after the last whole one.
+            break;
+        }
         records.clear();
         let mut arms = TrialArms::new();
         for (recorder, sums) in per_tile {
@@ -349,34 +377,71 @@ pub fn train_spatial(
         }
         if trial {
             let outcome;
-            (outcome, trialling) = arms.decide(pass);
+            (outcome, at.trialling) = arms.decide(pass);
             training.plan_guides = if outcome.kept {
                 PlanGuides::Everywhere
             } else {
                 PlanGuides::Nowhere
             };
-            guides_trial = Some(outcome);
+            at.guides_trial = Some(outcome);
         }
         training.samples.spp += pass_settings.spp;
-        recorded_in_all += records.len();
+        at.recorded_in_all += records.len();
         training.guide = Arc::new(records.field());
         bar.set_position(u64::from(training.samples.spp));
-        last = t0.elapsed().as_secs_f64();
-        pass += 1;
+        at.last = t0.elapsed().as_secs_f64();
+        at.passes += 1;
+        if let Some(store) = store {
+            let seconds = at.seconds;
+            at.seconds = elapsed(&at);
+            at.dark = records.dark().to_vec();
+            let bytes = bincode::serialize(&at).map_err(|e| kept(e.to_string()))?;
+            store.save_training(at.passes, &bytes).map_err(kept)?;
+            (at.seconds, at.dark) = (seconds, Vec::new());
+        }
     }
     bar.finish_and_clear();
+    let seconds = elapsed(&at);
+    let Between {
+        passes,
+        training,
+        guides_trial,
+        recorded_in_all,
+        ..
+    } = at;
     // No other owner is left: this moves the guide out.
     let mut guide = Arc::unwrap_or_clone(training.guide);
-    guide.stats.passes = pass;
+    guide.stats.passes = passes;
     guide.stats.spp = training.samples.spp;
     guide.stats.records = recorded_in_all;
-    guide.stats.seconds = start.elapsed().as_secs_f64();
+    guide.stats.seconds = seconds;
     guide.stats.guides_trial = guides_trial;
-    SpatialTraining {
+    Ok(SpatialTraining {
         guide: Arc::new(guide),
         samples: training.samples,
         plan_guides: training.plan_guides,
-    }
+    })
+}
+
+/// The training between two passes: what the next pass starts from, which `genpath learn`
+/// keeps after each pass ([`crate::genetic::plan::LearnStore::save_training`]), so that
+/// learning stopped by a signal goes on from the next pass to the same guide.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Between {
+    /// Passes finished.
+    passes: u32,
+    training: SpatialTraining,
+    /// The last decided trial of a plan's guides, and whether the trials go on.
+    guides_trial: Option<GuidesTrial>,
+    trialling: bool,
+    recorded_in_all: usize,
+    /// Seconds of the passes of earlier processes (a time schedule's clock goes on from
+    /// them), and of the last pass.
+    seconds: f64,
+    last: f64,
+    /// The training records' dark cells ([`SampleStorage::dark`]), which the next guide
+    /// keeps (empty but where kept between processes).
+    dark: Vec<bool>,
 }
 
 /// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum

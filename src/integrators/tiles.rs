@@ -3,7 +3,7 @@
 //! pixel's samples summed by the estimator its integrator gives it.
 
 use super::{PixelEstimator, PixelIntegrator, RenderSettings};
-use crate::genetic::plan::WaveStore;
+use crate::genetic::plan::LearnStore;
 use crate::image::Image;
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
@@ -124,9 +124,10 @@ pub struct Control {
     /// samples, and the render takes the rest onto those sums (`render --resume FILE`).
     pub resume: Option<Arc<LayerSums>>,
     pub checkpoint: Option<Checkpoint>,
-    /// Where a GA plan keeps its waves of GA pixels between processes (`genpath learn`):
-    /// learning that goes on after a signal, and the GA split over jobs.
-    pub waves: Option<Arc<dyn WaveStore>>,
+    /// Where learning keeps what it finished between processes (`genpath learn`): a GA
+    /// plan's waves of GA pixels and the spatial guide's passes, so that learning goes on
+    /// after a signal, and the GA splits over jobs.
+    pub learning: Option<Arc<dyn LearnStore>>,
 }
 
 /// Per pixel, the sums of the samples taken so far, which a render adds its own to.

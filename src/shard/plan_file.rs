@@ -284,3 +284,42 @@ pub fn read_waves(path: &Path) -> Result<(WaveHeader, Vec<WaveEntry>), PlanFileE
     let (header, entries, _) = read_framed(&WAVES, path)?;
     Ok((header, entries))
 }
+
+const TRAINING: Kind = Kind {
+    magic: b"GPTRAIN\0",
+    version: 1,
+    name: "spatial training",
+};
+
+/// What a training file (`genpath learn`'s spatial guide after its last finished pass) says
+/// about it.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingHeader {
+    /// The identity of the render the plan is learned for (as a plan file's).
+    pub identity: Identity,
+    /// Passes finished.
+    pub passes: u32,
+}
+
+/// Writes a training file atomically: `state` is the training as the spatial guide encodes
+/// it.
+pub fn write_training(
+    path: &Path,
+    header: &TrainingHeader,
+    state: &[u8],
+) -> Result<(), PlanFileError> {
+    let payload = codec()
+        .serialize(state)
+        .map_err(|e| PlanFileError::Payload {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    write_framed(&TRAINING, path, header, &payload)
+}
+
+/// Reads and checks the training file at `path`.
+pub fn read_training(path: &Path) -> Result<(TrainingHeader, Vec<u8>), PlanFileError> {
+    let (header, state, _) = read_framed(&TRAINING, path)?;
+    Ok((header, state))
+}

@@ -3,7 +3,7 @@
 //! `bad_input.rs` (malformed scenes and flags), `methods.rs` (each method's renders) and
 //! `commands.rs` (reference, sweep, bench, check, settings and the test-only method) and
 //! `shards.rs` (`--shard` and `merge`), `resume.rs` (stopped, killed and resumed renders),
-//! `plan.rs` (`learn` and `render --plan`) and `waves.rs` (the GA split over jobs, and
+//! `plan.rs` (`learn` and `render --plan`) and `learning.rs` (the GA split over jobs, and
 //! stopped learning).
 
 #[path = "../common/mod.rs"]
@@ -11,11 +11,11 @@ mod common;
 
 mod bad_input;
 mod commands;
+mod learning;
 mod methods;
 mod plan;
 mod resume;
 mod shards;
-mod waves;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

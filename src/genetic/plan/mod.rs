@@ -60,7 +60,7 @@ pub use gate::{
     gate_margins, GateConfig, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
 };
 pub use pixel::{GaPixel, CONVEX_ITERATIONS, PRUNE_SHARE};
-pub use stages::{PlanError, WaveEntry, WaveStore};
+pub use stages::{LearnStore, PlanError, WaveEntry};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
@@ -106,7 +106,7 @@ pub struct PlanInputs<'a> {
     pub spatial_guide: bool,
     /// Where the GA pixels' waves are kept between processes (`genpath learn`), if they
     /// are ([`stages`]).
-    pub store: Option<&'a dyn WaveStore>,
+    pub store: Option<&'a dyn LearnStore>,
 }
 
 impl<'a> PlanInputs<'a> {

@@ -8,7 +8,7 @@ use super::super::{fitness, GaConfig};
 use super::baseline::Origin;
 use super::config::PlanConfig;
 use super::gate::{gate_margins, run_trial, Trial};
-use super::stages::WaveStore;
+use super::stages::LearnStore;
 use super::PlanFor;
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
@@ -100,7 +100,7 @@ pub(super) struct PixelContext<'a> {
     pub(super) gate: bool,
     pub(super) seed: u64,
     /// Where the waves are kept between processes, if they are.
-    pub(super) store: Option<&'a dyn WaveStore>,
+    pub(super) store: Option<&'a dyn LearnStore>,
 }
 
 /// How the GA starts at a pixel, and whether the pixel then runs the gate's trial.

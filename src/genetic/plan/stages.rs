@@ -1,6 +1,7 @@
 //! A plan's GA pixels evolved outside one process: the waves ([`super::waves::Waves`]:
 //! the pilot's scouting, the pilot going on, the cold first wave, the warm-started second)
-//! kept in a [`WaveStore`] as they finish, so that learning stopped by a signal goes on
+//! kept in a [`LearnStore`] as they finish (and, beyond the GA, the spatial guide's training
+//! after each pass: `crate::integrators::pg`), so that learning stopped by a signal goes on
 //! where it stopped, and so that the GA splits over jobs (`genpath learn --shard K/N`):
 //! each job evolves its share of the first wave not yet complete, the waves being barriers
 //! between the steps of a job array, and a last job builds the plan from every share.
@@ -26,8 +27,9 @@ pub struct WaveEntry {
     pub counts: RayCounts,
 }
 
-/// Where the waves of a plan's GA pixels are kept between processes.
-pub trait WaveStore: Send + Sync + std::fmt::Debug {
+/// Where learning keeps what it finished between processes (`genpath learn`): the waves of
+/// a plan's GA pixels, and the spatial guide's training after its last finished pass.
+pub trait LearnStore: Send + Sync + std::fmt::Debug {
     /// Every result of wave `wave` saved so far, by this job or any other.
     fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, String>;
     /// Keeps `entries`, new results of wave `wave` (of `jobs` jobs) this job evolved.
@@ -38,6 +40,11 @@ pub trait WaveStore: Send + Sync + std::fmt::Debug {
     fn split(&self) -> bool;
     /// The signal that asked the learning to stop, if one did.
     fn stop_requested(&self) -> Option<usize>;
+    /// The spatial guide's training as [`Self::save_training`] last kept it, if it did.
+    fn load_training(&self) -> Result<Option<Vec<u8>>, String>;
+    /// Keeps the spatial guide's training after a finished pass (`pass`, counted from 1),
+    /// encoded as `state`.
+    fn save_training(&self, pass: u32, state: &[u8]) -> Result<(), String>;
 }
 
 /// Why a plan is not built.

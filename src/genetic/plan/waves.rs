@@ -5,7 +5,7 @@ use super::super::individual::Individual;
 use super::baseline::{baseline_choice, Origin};
 use super::config::PlanConfig;
 use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
-use super::stages::{PlanError, WaveEntry, WaveStore};
+use super::stages::{LearnStore, PlanError, WaveEntry};
 use super::{PlanFor, PlanStats};
 use crate::progress::progress_bar;
 use indicatif::ProgressBar;
@@ -122,7 +122,7 @@ impl<'a> Waves<'a> {
     /// shares are missing, and with [`PlanError::Stopped`] on a signal.
     fn evolve_stored(
         &mut self,
-        store: &dyn WaveStore,
+        store: &dyn LearnStore,
         number: usize,
         wave: &[Job],
     ) -> Result<(), PlanError> {

@@ -1,9 +1,9 @@
-//! The GA's waves kept between processes (`learn --waves`): `learn --shard K/N` split over
-//! three jobs, one step per wave, then `learn` without `--shard`, builds the plan that
-//! renders the in-process plan's image bit for bit (ga without the gate, whose first and
-//! warm-started waves it splits; ga-pt with the gate, whose pilot waves it splits too); a
-//! learn stopped by SIGTERM goes on to that plan; wave files of another render, or
-//! damaged, are refused.
+//! Learning kept between processes (`learn --learn-dir`): `learn --shard K/N` split over
+//! three jobs, one step per wave of the GA, then `learn` without `--shard`, builds the plan
+//! that renders the in-process plan's image bit for bit (ga without the gate, whose first
+//! and warm-started waves it splits; ga-pt with the gate, whose pilot waves it splits too);
+//! a learn stopped by SIGTERM in the GA, or by SIGINT in the spatial guide's training, goes
+//! on to the uninterrupted plan; kept files of another render, or damaged, are refused.
 
 use super::*;
 use std::process::Stdio;
@@ -67,9 +67,9 @@ fn a_split_ga_builds_the_in_process_plan() {
     for (method, flags) in methods() {
         let inline = d.join(format!("{method}-inline.exr"));
         ok("render", &inline, &flags);
-        let waves = d.join(format!("{method}.waves"));
+        let waves = d.join(format!("{method}.learning"));
         let plan = d.join(format!("{method}.plan"));
-        let with_waves = [&flags[..], &["--waves", waves.to_str().unwrap()]].concat();
+        let with_waves = [&flags[..], &["--learn-dir", waves.to_str().unwrap()]].concat();
         for step in 0..4 {
             for k in 0..3 {
                 let shard = format!("{k}/3");
@@ -99,13 +99,13 @@ fn a_split_ga_builds_the_in_process_plan() {
             pixel_bits(&inline),
             "{method}: the plan built from split waves renders another image"
         );
-        assert!(waves.is_dir(), "--waves DIR given: the folder stays");
+        assert!(waves.is_dir(), "--learn-dir DIR given: the folder stays");
     }
 }
 
-/// Starts `learn`, waits until its waves folder holds a file (its first chunk of GA pixels
-/// kept), then sends SIGTERM: the ended process.
-fn stop_mid_learning(args: &[String], waves: &Path) -> Output {
+/// Starts `learn`, waits until its learning folder holds a file (its first chunk of GA
+/// pixels, or its first training pass, kept), then sends `signal`: the ended process.
+fn stop_mid_learning(args: &[String], dir: &Path, signal: &str) -> Output {
     let child = Command::new(env!("CARGO_BIN_EXE_genpath"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(args)
@@ -113,11 +113,11 @@ fn stop_mid_learning(args: &[String], waves: &Path) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .expect("run genpath");
-    let kept = || !wave_files(waves).is_empty();
-    signal_when(child, kept, "TERM", "first kept wave")
+    let kept = || !wave_files(dir).is_empty();
+    signal_when(child, kept, signal, "first kept file")
 }
 
-/// SIGTERM mid-GA: exit 143, no plan, the finished GA pixels kept in the default waves
+/// SIGTERM mid-GA: exit 143, no plan, the finished GA pixels kept in the default learning
 /// folder; the same command goes on to the uninterrupted plan's image and removes the
 /// folder. The must-reject twin: the command with another seed refuses the kept waves,
 /// naming the seed.
@@ -138,7 +138,7 @@ fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
     ok("render", &inline, &flags);
 
     let plan = d.join("ga.plan");
-    let waves = d.join("ga.plan.waves");
+    let waves = d.join("ga.plan.learning");
     let scene = fig5();
     let args: Vec<String> = [
         "learn",
@@ -150,7 +150,7 @@ fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
     .chain(&flags)
     .map(|s| s.to_string())
     .collect();
-    let stopped = stop_mid_learning(&args, &waves);
+    let stopped = stop_mid_learning(&args, &waves, "TERM");
     let err = String::from_utf8_lossy(&stopped.stderr);
     assert_eq!(stopped.status.code(), Some(143), "{err}");
     assert!(err.contains("stopped by SIGTERM in wave"), "{err}");
@@ -170,7 +170,7 @@ fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
     ok("learn", &plan, &flags);
     assert!(
         !waves.exists(),
-        "the default waves folder stays after the plan"
+        "the default learning folder stays after the plan"
     );
     let saved = d.join("saved.exr");
     ok(
@@ -181,8 +181,73 @@ fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
     assert_eq!(pixel_bits(&saved), pixel_bits(&inline));
 }
 
+/// SIGINT in pg's training: exit 130, no plan, the finished passes kept; the same command
+/// goes on to the plan of the uninterrupted command (the same image with `--plan`, training
+/// samples included, bit for bit). The must-reject twin: the kept training of another
+/// render (another size) is refused.
+#[test]
+fn a_stopped_training_goes_on_to_the_uninterrupted_guide() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // fig5 at 96×80, 1024 spp on one thread: training passes of 1, 2, … 256 samples per
+    // pixel, the last ones seconds long.
+    let flags: Vec<&str> = vec![
+        "--method",
+        "pg",
+        "--threads",
+        "1",
+        "--spp",
+        "1024",
+        "--width",
+        "96",
+        "--height",
+        "80",
+    ];
+    let plan = d.join("pg.plan");
+    let kept = d.join("pg.plan.learning");
+    let scene = fig5();
+    let args: Vec<String> = [
+        "learn",
+        scene.to_str().unwrap(),
+        "-o",
+        plan.to_str().unwrap(),
+    ]
+    .iter()
+    .chain(&flags)
+    .map(|s| s.to_string())
+    .collect();
+    let stopped = stop_mid_learning(&args, &kept, "INT");
+    let err = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(130), "{err}");
+    assert!(err.contains("in the spatial guide's training"), "{err}");
+    assert!(!plan.exists() && kept.join("training.bin").exists());
+
+    let smaller = [&flags[..8], &["--height", "72"]].concat();
+    let refused = run("learn", &plan, &smaller);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success(), "another size took the training");
+    assert!(
+        err.contains("learned for another render") && err.contains("height"),
+        "{err}"
+    );
+
+    ok("learn", &plan, &flags);
+    let whole = d.join("whole.plan");
+    ok("learn", &whole, &flags);
+    let image = |plan: &Path, name: &str| {
+        let out = d.join(name);
+        ok(
+            "render",
+            &out,
+            &[&flags[..], &["--plan", plan.to_str().unwrap()]].concat(),
+        );
+        pixel_bits(&out)
+    };
+    assert_eq!(image(&plan, "resumed.exr"), image(&whole, "whole.exr"));
+}
+
 /// A truncated wave file and a file that is not one are refused, naming the file; `pg`
-/// refuses `--shard`; a time limit on the GA is refused where its waves are kept.
+/// refuses `--shard`; a time limit on the GA is refused (its waves are kept).
 #[test]
 fn damaged_wave_files_and_impossible_splits_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -190,7 +255,7 @@ fn damaged_wave_files_and_impossible_splits_are_refused() {
     let (_, flags) = methods().remove(0);
     let waves = d.join("w");
     let plan = d.join("ga.plan");
-    let with_waves = [&flags[..], &["--waves", waves.to_str().unwrap()]].concat();
+    let with_waves = [&flags[..], &["--learn-dir", waves.to_str().unwrap()]].concat();
     ok(
         "learn",
         &plan,
