@@ -15,10 +15,11 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{path}: cannot read: {source}")]
+    /// (Not `source`: anyhow's `{:#}` would print the reason twice.)
+    #[error("{path}: cannot read: {reason}")]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     #[error("{path}: {message}")]
     Toml { path: PathBuf, message: String },
@@ -430,9 +431,9 @@ pub const MAX_BOUNCES_LIMIT: u32 = 1000;
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
 
 fn read(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         path: path.to_path_buf(),
-        source,
+        reason,
     })
 }
 

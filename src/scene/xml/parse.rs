@@ -200,9 +200,9 @@ impl Parser {
         parent: Option<(usize, Option<String>)>,
         depth: usize,
     ) -> Result<(), SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
             path: path.to_path_buf(),
-            source,
+            reason,
         })?;
         let file = self.doc.files.len();
         self.doc.files.push(path.to_path_buf());

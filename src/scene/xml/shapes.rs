@@ -144,9 +144,9 @@ pub fn cube() -> RawMesh {
 /// A Wavefront OBJ as Mitsuba reads it: `v`, `vn`, `vt`, `f` (polygons as fans, negative
 /// indices relative); materials, groups and everything else ignored.
 pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         path: path.to_path_buf(),
-        source,
+        reason,
     })?;
     let err = |line: usize, message: String| SceneError::Syntax {
         path: path.to_path_buf(),
