@@ -12,6 +12,12 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// How often a store keeps a wave's new results while the wave is evolved (besides at
+/// once after its first chunk, at its end and on a stop): each keep rewrites the job's
+/// file of the wave, so keeping every chunk would write a large wave's results many times.
+/// A job killed outright (SIGKILL, a node lost) loses at most this much work.
+const KEEP_EVERY: std::time::Duration = std::time::Duration::from_secs(10);
+
 /// A GA pixel to evolve (an index into [`Waves::chosen`]) and how.
 pub(super) struct Job {
     pub(super) pixel: usize,
@@ -154,32 +160,38 @@ impl<'a> Waves<'a> {
             .collect();
         let chunk = 4 * rayon::current_num_threads();
         let mut evolved = 0;
-        for c in todo.chunks(chunk) {
+        // Results not yet kept, and when they were last kept (`None`: never, so that the
+        // first chunk is kept at once and an unwritable store fails early).
+        let mut pending: Vec<WaveEntry> = Vec::new();
+        let mut kept_at: Option<Instant> = None;
+        for (i, c) in todo.chunks(chunk).enumerate() {
             let this = &*self;
             let results: Vec<(usize, Evolved)> = c
                 .par_iter()
                 .filter(|_| store.stop_requested().is_none())
                 .map(|&k| (k, this.evolve_one(wave[k].pixel, &wave[k].run)))
                 .collect();
-            let entries: Vec<WaveEntry> = results
-                .iter()
-                .map(|(k, (pixel, counts))| WaveEntry {
-                    job: *k as u32,
-                    pixel: pixel.clone(),
-                    best: pixel.best.clone(),
-                    counts: *counts,
-                })
-                .collect();
-            if !entries.is_empty() {
-                store
-                    .save(number, wave.len(), &entries)
-                    .map_err(PlanError::Store)?;
-            }
+            pending.extend(results.iter().map(|(k, (pixel, counts))| WaveEntry {
+                job: *k as u32,
+                pixel: pixel.clone(),
+                best: pixel.best.clone(),
+                counts: *counts,
+            }));
             evolved += results.len();
             for (k, r) in results {
                 found[k] = Some(r);
             }
-            if let Some(signal) = store.stop_requested() {
+            let stop = store.stop_requested();
+            let last = (i + 1) * chunk >= todo.len();
+            let due = kept_at.is_none_or(|t| t.elapsed() >= KEEP_EVERY);
+            if !pending.is_empty() && (stop.is_some() || last || due) {
+                store
+                    .save(number, wave.len(), &pending)
+                    .map_err(PlanError::Store)?;
+                pending.clear();
+                kept_at = Some(Instant::now());
+            }
+            if let Some(signal) = stop {
                 return Err(PlanError::Stopped {
                     signal,
                     wave: number,
