@@ -6,7 +6,7 @@
 //! 1e-4 whose leaf box ends before that — all hits of a scene of scale 1e-4, and any-hit
 //! queries with `tmax < 1e-4`. The BVH2 node test has no such floor.
 
-use super::{Accel, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use super::{Accel, AnalyticShapes, Coherence, Hit, Ray, TriangleMesh, PACKET_SIZE};
 use obvhs::bvh2::{builder::build_bvh2_from_tris, Bvh2};
 use obvhs::ray::RayHit;
 use obvhs::rt_triangle::RtTriangle;
@@ -22,6 +22,8 @@ pub struct BvhAccel {
     tris: Vec<RtTriangle>,
     prim_ids: Vec<u32>,
     normals: Vec<glam::Vec3>,
+    /// Spheres and disks, tested after the triangles.
+    analytic: AnalyticShapes,
 }
 
 impl BvhAccel {
@@ -38,6 +40,7 @@ impl BvhAccel {
                 tris: Vec::new(),
                 prim_ids: Vec::new(),
                 normals: Vec::new(),
+                analytic: mesh.analytic_shapes(),
             };
         }
         // medium_build: about Embree's build time with faster traversal (obvhs's own advice).
@@ -56,6 +59,7 @@ impl BvhAccel {
             tris,
             prim_ids,
             normals: mesh.normals.clone(),
+            analytic: mesh.analytic_shapes(),
         }
     }
 }
@@ -64,11 +68,9 @@ fn obvhs_ray(ray: &Ray) -> obvhs::ray::Ray {
     obvhs::ray::Ray::new(ray.origin.into(), ray.dir.into(), ray.tmin, ray.tmax)
 }
 
-impl Accel for BvhAccel {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        if !ray.is_valid() {
-            return None;
-        }
+impl BvhAccel {
+    /// The closest triangle along a valid `ray`.
+    fn intersect_triangles(&self, ray: &Ray) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let ray = obvhs_ray(ray);
         let mut hit = RayHit::none();
@@ -88,6 +90,19 @@ impl Accel for BvhAccel {
             ng: self.normals[prim as usize],
         })
     }
+}
+
+impl Accel for BvhAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let hit = self.intersect_triangles(ray);
+        if self.analytic.is_empty() {
+            return hit;
+        }
+        self.analytic.closest(ray, hit)
+    }
 
     fn occluded(&self, ray: &Ray) -> bool {
         if !ray.is_valid() {
@@ -95,7 +110,7 @@ impl Accel for BvhAccel {
         }
         self.bvh.as_ref().is_some_and(|bvh| {
             !bvh.ray_traverse_miss(obvhs_ray(ray), |r, i| self.tris[i].intersect(r))
-        })
+        }) || self.analytic.occludes(ray)
     }
 
     fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], _: Coherence) {

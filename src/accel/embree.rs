@@ -4,7 +4,9 @@
 //! the padding its SIMD loads need). The scene is built robust (watertight along shared edges,
 //! which a renderer needs more than the last few percent of speed) and with high quality.
 
-use super::{Accel, AccelError, Coherence, EmbreeIsa, Hit, Ray, TriangleMesh, PACKET_SIZE};
+use super::{
+    Accel, AccelError, AnalyticShapes, Coherence, EmbreeIsa, Hit, Ray, TriangleMesh, PACKET_SIZE,
+};
 use embree4_sys as sys;
 use std::mem::size_of;
 
@@ -14,6 +16,9 @@ pub struct EmbreeAccel {
     /// Face normals indexed by primitive id: `Hit::ng` comes from the mesh, not from Embree's
     /// unnormalised `Ng`, so that both back-ends report identical normals.
     normals: Vec<glam::Vec3>,
+    /// Spheres and disks: not in Embree's scene, but tested after it by the same routine as
+    /// the obvhs back-end's, so that both answer them identically.
+    analytic: AnalyticShapes,
     /// Lanes per Embree packet call: 16 where the CPU traces 16-wide packets natively
     /// (AVX-512), else 8. Embree takes a 16-ray packet on an AVX2 CPU too, but splits it
     /// internally at a cost: cbox camera rays, one thread, AVX2, `genpath bench`: 19.6–20.2
@@ -95,6 +100,7 @@ impl EmbreeAccel {
             device,
             scene: std::ptr::null_mut(),
             normals: mesh.normals.clone(),
+            analytic: mesh.analytic_shapes(),
             lanes: lanes.unwrap_or(native),
             isa,
         };
@@ -350,8 +356,12 @@ impl Accel for EmbreeAccel {
         // SAFETY: `self.scene` is committed and lives as long as `self`.
         unsafe { sys::rtcIntersect1(self.scene, &mut rayhit, None) };
         let hit = &rayhit.hit;
-        (hit.geomID != sys::RTC_INVALID_GEOMETRY_ID)
-            .then(|| self.hit(rayhit.ray.tfar, hit.primID, hit.u, hit.v))
+        let hit = (hit.geomID != sys::RTC_INVALID_GEOMETRY_ID)
+            .then(|| self.hit(rayhit.ray.tfar, hit.primID, hit.u, hit.v));
+        if self.analytic.is_empty() {
+            return hit;
+        }
+        self.analytic.closest(ray, hit)
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
@@ -362,7 +372,7 @@ impl Accel for EmbreeAccel {
         // SAFETY: as in `intersect`.
         unsafe { sys::rtcOccluded1(self.scene, &mut shadow, None) };
         // Embree marks a blocked ray by setting tfar to -inf.
-        shadow.tfar == f32::NEG_INFINITY
+        shadow.tfar == f32::NEG_INFINITY || self.analytic.occludes(ray)
     }
 
     fn intersect_packet(&self, rays: &[Ray], hits: &mut [Option<Hit>], coherence: Coherence) {
@@ -378,6 +388,13 @@ impl Accel for EmbreeAccel {
             }
         } else {
             packet16::intersect(self, rays, hits, flags);
+        }
+        if !self.analytic.is_empty() {
+            for (ray, hit) in rays.iter().zip(hits) {
+                if ray.is_valid() {
+                    *hit = self.analytic.closest(ray, *hit);
+                }
+            }
         }
     }
 
@@ -396,6 +413,11 @@ impl Accel for EmbreeAccel {
             }
         } else {
             packet16::occluded(self, rays, blocked);
+        }
+        for (ray, blocked) in rays.iter().zip(blocked) {
+            if !*blocked && !self.analytic.is_empty() {
+                *blocked = self.analytic.occludes(ray);
+            }
         }
     }
 

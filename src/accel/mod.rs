@@ -1,4 +1,5 @@
-//! Ray queries against the scene's triangles: one interface, two back-ends.
+//! Ray queries against the scene's triangles and analytic shapes: one interface, two
+//! back-ends.
 //!
 //! `embree.rs` goes through Intel Embree (`embree4-sys`), `bvh.rs` through the pure-Rust
 //! `obvhs` crate. Both answer closest-hit and any-hit queries for single rays and for
@@ -7,14 +8,16 @@
 //! same `t` (through an edge they share) may get either from Embree's coherent packet
 //! traversal, which visits triangles in another order.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
+mod analytic;
 #[cfg(feature = "obvhs")]
 mod bvh;
 #[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 mod embree;
 
+pub use analytic::{Analytic, AnalyticError, AnalyticShapes};
 #[cfg(feature = "obvhs")]
 pub use bvh::BvhAccel;
 #[cfg(feature = "embree")]
@@ -72,22 +75,26 @@ impl Ray {
 pub struct Hit {
     /// Ray parameter of the hit.
     pub t: f32,
-    /// Index of the triangle in [`TriangleMesh::triangles`].
+    /// Index of the triangle in [`TriangleMesh::triangles`], or past them, of the analytic
+    /// shape in [`TriangleMesh::shapes`].
     pub prim: u32,
-    /// Barycentrics in Embree's convention: `p = (1−u−v)·v0 + u·v1 + v·v2`.
+    /// Barycentrics in Embree's convention: `p = (1−u−v)·v0 + u·v1 + v·v2`; on an analytic
+    /// shape, its parameterisation ([`Analytic::intersect`]).
     pub u: f32,
     pub v: f32,
-    /// Unit geometric normal `normalize(cross(v1 − v0, v2 − v0))`.
+    /// Unit geometric normal `normalize(cross(v1 − v0, v2 − v0))`, or the analytic shape's.
     pub ng: Vec3,
 }
 
-/// Triangles as the accelerators consume them: shared vertices and indices.
+/// Triangles as the accelerators consume them (shared vertices and indices), and the
+/// analytic shapes after them: primitive `triangles.len() + i` is `shapes[i]`.
 #[derive(Clone, Debug, Default)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     /// Unit geometric normal of each triangle (`cross(v1 − v0, v2 − v0)`, normalised).
     pub normals: Vec<Vec3>,
+    pub shapes: Vec<Analytic>,
 }
 
 impl TriangleMesh {
@@ -105,20 +112,63 @@ impl TriangleMesh {
             positions,
             triangles,
             normals,
+            shapes: Vec::new(),
         }
     }
 
+    /// The vertices of triangle `prim` (not of an analytic shape).
     pub fn vertices(&self, prim: u32) -> [Vec3; 3] {
         self.triangles[prim as usize].map(|i| self.positions[i as usize])
     }
 
-    /// Axis-aligned bounds of the vertices (`lo > hi` for a mesh without any).
+    /// Triangles and analytic shapes.
+    pub fn prim_count(&self) -> usize {
+        self.triangles.len() + self.shapes.len()
+    }
+
+    /// The analytic shape `prim` is, `None` for a triangle.
+    pub fn analytic(&self, prim: u32) -> Option<&Analytic> {
+        (prim as usize)
+            .checked_sub(self.triangles.len())
+            .and_then(|i| self.shapes.get(i))
+    }
+
+    /// The analytic shapes as the back-ends answer them.
+    pub fn analytic_shapes(&self) -> AnalyticShapes {
+        AnalyticShapes {
+            shapes: self.shapes.clone(),
+            first: self.triangles.len() as u32,
+        }
+    }
+
+    /// Area of primitive `prim`.
+    pub fn area(&self, prim: u32) -> f64 {
+        match self.analytic(prim) {
+            Some(shape) => shape.area(),
+            None => crate::scene::triangle_area(self.vertices(prim)),
+        }
+    }
+
+    /// Unit geometric normal of primitive `prim` at `p`, a point on it.
+    pub fn normal_at(&self, prim: u32, p: DVec3) -> DVec3 {
+        match self.analytic(prim) {
+            Some(shape) => shape.normal_at(p),
+            None => self.normals[prim as usize].as_dvec3(),
+        }
+    }
+
+    /// Axis-aligned bounds of the vertices and shapes (`lo > hi` for a mesh without any).
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions
+        let (lo, hi) = self
+            .positions
             .iter()
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
                 (lo.min(p), hi.max(p))
-            })
+            });
+        self.shapes.iter().fold((lo, hi), |(lo, hi), s| {
+            let (a, b) = s.bounds();
+            (lo.min(a.as_vec3()), hi.max(b.as_vec3()))
+        })
     }
 }
 

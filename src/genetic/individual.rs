@@ -15,7 +15,7 @@ use crate::path::mixture_file;
 use crate::sampling::anchor::AnchorSampler;
 use crate::sampling::light_point::{LightPointSampler, LightRegion};
 use crate::sampling::patch::PatchSampler;
-use crate::scene::{triangle_area, Scene};
+use crate::scene::Scene;
 use glam::DVec3;
 use rand::Rng as _;
 use std::f64::consts::PI;
@@ -151,9 +151,9 @@ fn log_uniform(rng: &mut crate::sampling::Rng, (lo, hi): (f64, f64)) -> f64 {
 impl<'a> GenePool<'a> {
     pub fn new(scene: &'a Scene, max_bounces: u32, config: &GaConfig) -> Self {
         let mut total = 0.0;
-        let area_cdf = (0..scene.mesh.triangles.len() as u32)
+        let area_cdf = (0..scene.mesh.prim_count() as u32)
             .map(|prim| {
-                total += triangle_area(scene.mesh.vertices(prim));
+                total += scene.mesh.area(prim);
                 total
             })
             .collect();
@@ -196,7 +196,7 @@ impl<'a> GenePool<'a> {
                 (0..paths.len())
                     .filter_map(|i| {
                         let (point, prim) = paths.step_target(i, k)?;
-                        let normal = self.normal(prim)?;
+                        let normal = self.normal(prim, point)?;
                         let weight = paths.f2_over_q[i].sqrt();
                         (weight > 0.0 && weight.is_finite()).then_some(Arrival {
                             point,
@@ -290,11 +290,15 @@ impl<'a> GenePool<'a> {
     fn random_patch(&self, k: usize, rng: &mut crate::sampling::Rng) -> Option<PatchSampler> {
         let (paths, i) = self.pick_path(rng)?;
         let (point, prim) = paths.step_target(i, k)?;
-        self.data_patch(k, (point, self.normal(prim)?), rng)
+        self.data_patch(k, (point, self.normal(prim, point)?), rng)
     }
 
-    /// The unit geometric normal of triangle `prim` (`None` for a degenerate one).
-    fn normal(&self, prim: u32) -> Option<DVec3> {
+    /// The unit geometric normal of triangle `prim` (`None` for a degenerate one); of an
+    /// analytic shape, its normal at `point`.
+    fn normal(&self, prim: u32, point: DVec3) -> Option<DVec3> {
+        if let Some(shape) = self.scene.mesh.analytic(prim) {
+            return shape.normal_at(point).try_normalize();
+        }
         let [a, b, c] = self.scene.mesh.vertices(prim).map(|v| v.as_dvec3());
         (b - a).cross(c - a).try_normalize()
     }
@@ -324,7 +328,7 @@ impl<'a> GenePool<'a> {
             let target = paths.step_target(i, k);
             let patch = target
                 .filter(|_| rng.random::<f64>() < self.patches)
-                .and_then(|(p, prim)| self.data_patch(k, (p, self.normal(prim)?), rng));
+                .and_then(|(p, prim)| self.data_patch(k, (p, self.normal(prim, p)?), rng));
             let (sampler, prim) = match (patch, target) {
                 (Some(patch), _) => (DirectionSampler::Patch(patch), None),
                 (None, Some((anchor, prim))) => {
@@ -378,6 +382,10 @@ impl<'a> GenePool<'a> {
             .area_cdf
             .partition_point(|&c| c <= target)
             .min(self.area_cdf.len() - 1) as u32;
+        if let Some(shape) = self.scene.mesh.analytic(prim) {
+            let u1 = rng.random::<f64>();
+            return (shape.sample_area(u1, rng.random::<f64>()), prim);
+        }
         let [a, b, c] = self.scene.mesh.vertices(prim).map(|v| v.as_dvec3());
         let su = rng.random::<f64>().sqrt();
         let u2 = rng.random::<f64>();
@@ -430,6 +438,11 @@ impl<'a> GenePool<'a> {
         let prim = emitters.pick(rng.random::<f64>());
         let level = rng.random_range(0..=MAX_LIGHT_LEVEL);
         let cell = rng.random_range(0..1u32 << (2 * u32::from(level)));
+        // An analytic emitter is one region (see `light_point`).
+        let (level, cell) = match self.scene.mesh.analytic(prim) {
+            Some(_) => (0, 0),
+            None => (level, cell),
+        };
         LightPointSampler {
             region: LightRegion { prim, level, cell },
             beta: range(rng, (0.0, BETA_MAX)),

@@ -45,8 +45,17 @@ fn perturb_probability(p: f64, rng: &mut Rng, lo: f64, hi: f64) -> f64 {
 }
 
 /// `anchor` on triangle `prim` moved by a Gaussian step in the triangle's plane and clamped
-/// back into the triangle (barycentrics clamped to ≥ 0 and renormalised).
+/// back into the triangle (barycentrics clamped to ≥ 0 and renormalised); on an analytic
+/// shape, projected back onto it.
 fn shift_anchor(pool: &GenePool, prim: u32, anchor: DVec3, sigma: f64, rng: &mut Rng) -> DVec3 {
+    if let Some(shape) = pool.scene.mesh.analytic(prim) {
+        // On a sphere or disk: a step in the tangent plane, projected back onto the shape.
+        let (e1, e2) = shape.tangents(anchor);
+        let step = sigma * f64::from(pool.scene.extent);
+        let moved = anchor + e1 * (step * normal(rng)) + e2 * (step * normal(rng));
+        let moved = shape.project(moved);
+        return if moved.is_finite() { moved } else { anchor };
+    }
     let tri = pool.scene.mesh.vertices(prim).map(|v| v.as_dvec3());
     let [a, b, c] = tri;
     let e1 = (b - a).normalize_or_zero();

@@ -15,7 +15,7 @@
 use super::generator::{DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN};
 use super::mixture::Mixture;
 use crate::sampling::anchor::AnchorSampler;
-use crate::sampling::light_point::LightPointSampler;
+use crate::sampling::light_point::{LightPointError, LightPointSampler};
 use crate::sampling::patch::PatchSampler;
 use crate::scene::Scene;
 use serde::Deserialize;
@@ -100,6 +100,12 @@ pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), String> {
     }
     LightPointSampler::new(g.light.region, g.light.beta, &scene.emitters)
         .map_err(|e| format!("light: {e}"))?;
+    if g.light.region.is_invalid_on(&scene.mesh) {
+        return Err(format!(
+            "light: {}",
+            LightPointError::AnalyticLevel(g.light.region.prim)
+        ));
+    }
     Ok(())
 }
 

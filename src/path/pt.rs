@@ -222,10 +222,10 @@ impl LightPoint {
         if scene.emitters.prims.is_empty() {
             return None;
         }
-        let ls = scene.emitters.sample(&scene.mesh, u);
+        let ls = scene.emitters.sample_seen_from(&scene.mesh, x.p, u);
         let y = SurfacePoint {
             p: ls.point,
-            ng: scene.mesh.normals[ls.prim as usize],
+            ng: ls.normal,
             prim: ls.prim,
         };
         let d = y.p - x.p;
@@ -355,10 +355,12 @@ fn emission_weight(
             1.0
         } else {
             let dist2 = (y.p - x.p).length_squared();
-            let total_area = view.scene.emitters.total_area;
-            let share = light_share * (1.0 - view.scene.environment_share());
-            let pdf_light =
-                share as f32 * light_pdf_solid_angle(total_area.recip(), dist2, cos_light);
+            let scene = view.scene;
+            let pdf_area = scene
+                .emitters
+                .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim);
+            let share = light_share * (1.0 - scene.environment_share());
+            let pdf_light = share as f32 * light_pdf_solid_angle(pdf_area, dist2, cos_light);
             power_heuristic(bs.pdf as f32, pdf_light)
         })
     } else {

@@ -260,7 +260,7 @@ impl Walk {
             });
             let y_point = SurfacePoint {
                 p: y.as_vec3(),
-                ng: scene.mesh.normals[prim as usize],
+                ng: scene.mesh.normal_at(prim, y).as_vec3(),
                 prim,
             };
             let d = y_point.p - x.p;
@@ -358,7 +358,7 @@ impl Walk {
         let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
         let y_point = SurfacePoint {
             p: y.as_vec3(),
-            ng: scene.mesh.normals[prim as usize],
+            ng: scene.mesh.normal_at(prim, y).as_vec3(),
             prim,
         };
         let x = self.x;

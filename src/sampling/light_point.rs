@@ -11,9 +11,13 @@
 //! `vi`. A cell index at level `k` is `k` base-4 digits, the coarsest level most significant.
 //! A point on an edge shared by children belongs to the middle child (a corner takes only the
 //! points with barycentric coordinate strictly above 1/2 at its vertex).
+//!
+//! An analytic emitter (a sphere or a disk) is one region of level 0, sampled uniformly by
+//! area like the rest: the density is the same simple one, and unbiased, though on a sphere
+//! half the points land on the side the shading point does not see.
 
 use crate::accel::TriangleMesh;
-use crate::scene::{triangle_area, Emitters};
+use crate::scene::Emitters;
 use glam::DVec3;
 
 /// Finest subdivision level: 4^16 cells still have `u32` indices.
@@ -28,6 +32,8 @@ pub enum LightPointError {
     Level(u8),
     #[error("cell {cell} does not exist at level {level} (4^level cells)")]
     Cell { level: u8, cell: u32 },
+    #[error("primitive {0} is an analytic shape: its only region is level 0")]
+    AnalyticLevel(u32),
     #[error("probability on the region {0} is not in [0, 1)")]
     Beta(f64),
 }
@@ -43,8 +49,16 @@ pub struct LightRegion {
 }
 
 impl LightRegion {
-    /// The region of `level` on triangle `prim` that contains `point` (a point on it).
+    /// The region of `level` on triangle `prim` that contains `point` (a point on it); on an
+    /// analytic shape, the shape (level 0).
     pub fn containing(mesh: &TriangleMesh, prim: u32, level: u8, point: DVec3) -> Self {
+        if mesh.analytic(prim).is_some() {
+            return Self {
+                prim,
+                level: 0,
+                cell: 0,
+            };
+        }
         Self {
             prim,
             level,
@@ -55,19 +69,33 @@ impl LightRegion {
     /// Area of the region: the triangle's area over 4^level, exactly.
     pub fn area(&self, mesh: &TriangleMesh) -> f64 {
         // 4^-level is a power of two: the division is exact.
-        triangle_area(mesh.vertices(self.prim)) / cells_at(self.level) as f64
+        mesh.area(self.prim) / cells_at(self.level) as f64
     }
 
-    /// The region's three vertices in space.
+    /// A point uniform by area in the region.
+    fn sample(&self, mesh: &TriangleMesh, u1: f64, u2: f64) -> DVec3 {
+        match mesh.analytic(self.prim) {
+            Some(shape) => shape.sample_area(u1, u2),
+            None => uniform_in_triangle(self.vertices(mesh), u1, u2),
+        }
+    }
+
+    /// The region's three vertices in space (of a triangle's region).
     pub fn vertices(&self, mesh: &TriangleMesh) -> [DVec3; 3] {
         let [a, b, c] = vertices(mesh, self.prim);
         cell_barycentrics(self.cell, self.level).map(|w| a * w.x + b * w.y + c * w.z)
     }
 
-    /// Whether `point`, a point on triangle `prim`, lies in the region.
+    /// Whether the region names an analytic shape below level 0 (there is no such cell).
+    pub fn is_invalid_on(&self, mesh: &TriangleMesh) -> bool {
+        self.level > 0 && mesh.analytic(self.prim).is_some()
+    }
+
+    /// Whether `point`, a point on primitive `prim`, lies in the region.
     pub fn contains(&self, mesh: &TriangleMesh, prim: u32, point: DVec3) -> bool {
         prim == self.prim
-            && cell_of(barycentric(vertices(mesh, prim), point), self.level) == self.cell
+            && (mesh.analytic(prim).is_some()
+                || cell_of(barycentric(vertices(mesh, prim), point), self.level) == self.cell)
     }
 }
 
@@ -118,21 +146,24 @@ impl LightPointSampler {
         Ok(Self { region, beta })
     }
 
-    /// A point on an emitter and its triangle, from three uniform numbers in [0, 1): `u[0]`
+    /// A point on an emitter and its primitive, from three uniform numbers in [0, 1): `u[0]`
     /// picks the region (probability β) or, rescaled, an emitter by area; `u[1..]` place the
     /// point uniformly in the chosen triangle.
     pub fn sample(&self, mesh: &TriangleMesh, emitters: &Emitters, u: [f64; 3]) -> (DVec3, u32) {
         if u[0] < self.beta {
-            let point = uniform_in_triangle(self.region.vertices(mesh), u[1], u[2]);
-            (point, self.region.prim)
+            (self.region.sample(mesh, u[1], u[2]), self.region.prim)
         } else {
             // `pick` clamps a rescaled number that rounds up to 1.
             let prim = emitters.pick((u[0] - self.beta) / (1.0 - self.beta));
-            (uniform_in_triangle(vertices(mesh, prim), u[1], u[2]), prim)
+            let point = match mesh.analytic(prim) {
+                Some(shape) => shape.sample_area(u[1], u[2]),
+                None => uniform_in_triangle(vertices(mesh, prim), u[1], u[2]),
+            };
+            (point, prim)
         }
     }
 
-    /// Area density of [`sample`](Self::sample) at `point`, a point on triangle `prim`:
+    /// Area density of [`sample`](Self::sample) at `point`, a point on primitive `prim`:
     /// `β·[point in region]/area(region) + (1−β)/total_area`, and 0 off the emitters.
     pub fn pdf_area(
         &self,

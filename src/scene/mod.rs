@@ -130,34 +130,37 @@ impl Material {
     }
 }
 
-/// The emitting triangles, sampled uniformly by area.
+/// The emitting primitives (triangles and analytic shapes), picked by area.
 #[derive(Clone, Debug)]
 pub struct Emitters {
-    /// Triangle index of each emitter triangle, increasing.
+    /// Primitive index of each emitter, increasing.
     pub prims: Vec<u32>,
     /// Running sum of areas, `cdf[i]` = area of emitters `0..=i`.
     cdf: Vec<f64>,
     pub total_area: f64,
 }
 
-/// A point on an emitter, sampled uniformly by area.
+/// A point on an emitter, sampled for next-event estimation at a reference point
+/// ([`Emitters::sample_seen_from`]).
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
     pub point: Vec3,
+    /// Unit geometric normal there.
+    pub normal: Vec3,
     pub prim: u32,
-    /// Density in area measure (1 / total emitter area).
+    /// Density in area measure ([`Emitters::pdf_area_seen_from`]).
     pub pdf_area: f64,
 }
 
 impl Emitters {
-    /// The triangles of `mesh` for which `is_emitter` holds, in increasing index order.
+    /// The primitives of `mesh` for which `is_emitter` holds, in increasing index order.
     pub fn new(mesh: &TriangleMesh, is_emitter: impl Fn(u32) -> bool) -> Self {
         let mut prims = Vec::new();
         let mut cdf = Vec::new();
         let mut total = 0.0f64;
-        for prim in 0..mesh.triangles.len() as u32 {
+        for prim in 0..mesh.prim_count() as u32 {
             if is_emitter(prim) {
-                total += triangle_area(mesh.vertices(prim));
+                total += mesh.area(prim);
                 prims.push(prim);
                 cdf.push(total);
             }
@@ -169,12 +172,12 @@ impl Emitters {
         }
     }
 
-    /// Whether triangle `prim` is an emitter (`prims` is sorted).
+    /// Whether primitive `prim` is an emitter (`prims` is sorted).
     pub fn contains(&self, prim: u32) -> bool {
         self.prims.binary_search(&prim).is_ok()
     }
 
-    /// The emitter triangle chosen with probability proportional to its area by a uniform
+    /// The emitter chosen with probability proportional to its area by a uniform
     /// `u` in [0, 1] (1, from rounding, picks the last). There must be at least one emitter.
     pub fn pick(&self, u: f64) -> u32 {
         let target = u * self.total_area;
@@ -185,19 +188,56 @@ impl Emitters {
         self.prims[i]
     }
 
-    /// Samples a point uniformly over all emitter area from three uniform numbers in [0, 1).
-    pub fn sample(&self, mesh: &TriangleMesh, u: [f32; 3]) -> LightSample {
+    /// A point on the emitters for next-event estimation at `x`, from three uniform numbers
+    /// in [0, 1): `u[0]` picks an emitter by area; on a triangle or a disk the point is
+    /// uniform by area, on a sphere that `x` lies outside of it is uniform in the cone of
+    /// directions the sphere subtends at `x` (Mitsuba's `Sphere::sample_direction`), else
+    /// uniform by area.
+    pub fn sample_seen_from(&self, mesh: &TriangleMesh, x: Vec3, u: [f32; 3]) -> LightSample {
         let prim = self.pick(u[0] as f64);
-        let [a, b, c] = mesh.vertices(prim);
-        // Uniform point in a triangle (square-root warp).
-        let su = u[1].sqrt();
-        let (b0, b1) = (1.0 - su, u[2] * su);
-        let point = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+        let Some(shape) = mesh.analytic(prim) else {
+            let [a, b, c] = mesh.vertices(prim);
+            // Uniform point in a triangle (square-root warp).
+            let su = u[1].sqrt();
+            let (b0, b1) = (1.0 - su, u[2] * su);
+            let point = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+            return LightSample {
+                point,
+                normal: mesh.normals[prim as usize],
+                prim,
+                pdf_area: 1.0 / self.total_area,
+            };
+        };
+        let (u1, u2) = (f64::from(u[1]), f64::from(u[2]));
+        let point = match shape.visible_cone(x.as_dvec3()) {
+            Some(cone) => cone.sample(u1, u2),
+            None => shape.sample_area(u1, u2),
+        }
+        .as_vec3();
         LightSample {
             point,
+            normal: shape.normal_at(point.as_dvec3()).as_vec3(),
             prim,
-            pdf_area: 1.0 / self.total_area,
+            pdf_area: self.pdf_area_seen_from(mesh, x, point, prim),
         }
+    }
+
+    /// The area density of [`Self::sample_seen_from`] at `x` for the point `y` on emitter
+    /// `prim`. On a sphere sampled by its cone it is `(area/total) · cos_y / (Ω·d²)`, valid
+    /// for the points `x` sees (the only ones a ray from `x` reaches first).
+    pub fn pdf_area_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
+        let Some(cone) = mesh
+            .analytic(prim)
+            .and_then(|s| s.visible_cone(x.as_dvec3()).map(|c| (s, c)))
+        else {
+            return self.total_area.recip();
+        };
+        let (shape, cone) = cone;
+        let (x, y) = (x.as_dvec3(), y.as_dvec3());
+        let d = x - y;
+        let dist2 = d.length_squared();
+        let cos_y = shape.normal_at(y).dot(d).abs() / dist2.sqrt();
+        shape.area() / self.total_area * cone.pdf_solid_angle() * cos_y / dist2
     }
 }
 
@@ -279,7 +319,7 @@ pub struct Scene {
     pub camera: Camera,
     pub mesh: TriangleMesh,
     pub materials: Vec<Material>,
-    /// Material index of each triangle.
+    /// Material index of each primitive (triangles, then analytic shapes).
     pub material_of: Vec<u32>,
     pub emitters: Emitters,
     /// Mitsuba's `constant` emitter, if any: what rays that escape the scene gather.
@@ -300,6 +340,7 @@ pub struct Scene {
 /// What a scene contains, for deciding what it does not need (design §8).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SceneAnalysis {
+    /// Primitives: triangles and analytic shapes (the counts below too).
     pub triangles: usize,
     /// Triangles by material kind: Lambertian only, with a Phong lobe, delta BSDFs (mirrors,
     /// conductors, dielectrics), emitters.
@@ -331,16 +372,16 @@ impl Scene {
         }
     }
 
-    /// Counts what the scene's triangles use.
+    /// Counts what the scene's primitives (triangles and analytic shapes) use.
     pub fn analysis(&self) -> SceneAnalysis {
-        let n = self.mesh.triangles.len();
+        let n = self.mesh.prim_count();
         let count =
             |f: &dyn Fn(&Material) -> bool| (0..n as u32).filter(|&p| f(self.material(p))).count();
         let smallest = self
             .emitters
             .prims
             .iter()
-            .map(|&p| triangle_area(self.mesh.vertices(p)))
+            .map(|&p| self.mesh.area(p))
             .fold(f64::INFINITY, f64::min);
         SceneAnalysis {
             triangles: n,

@@ -8,7 +8,7 @@ use super::props::Props;
 use super::shapes::{self, Placement};
 use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
-use crate::accel::TriangleMesh;
+use crate::accel::{Analytic, TriangleMesh};
 use crate::scene::{
     triangle_area, Camera, Dielectric, Emitters, Environment, Material, RenderDefaults, Scene,
     SceneError, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
@@ -24,6 +24,9 @@ struct Geometry {
     triangles: Vec<[u32; 3]>,
     material_of: Vec<u32>,
     materials: Vec<Material>,
+    /// Spheres and disks, with their materials: primitives after the triangles.
+    shapes: Vec<Analytic>,
+    shape_material: Vec<u32>,
     /// Material index of each (BSDF object, emitter object) pair already made.
     made: HashMap<(Option<usize>, Option<usize>), u32>,
     degenerate: usize,
@@ -80,15 +83,19 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let Geometry {
         positions,
         triangles,
-        material_of,
+        mut material_of,
         materials,
+        shapes,
+        shape_material,
         files,
         ..
     } = geometry;
-    if triangles.is_empty() {
-        return Err(doc.error(root.loc(), "the scene has no triangles"));
+    if triangles.is_empty() && shapes.is_empty() {
+        return Err(doc.error(root.loc(), "the scene has no shapes"));
     }
-    let mesh = TriangleMesh::new(positions, triangles);
+    let mut mesh = TriangleMesh::new(positions, triangles);
+    mesh.shapes = shapes;
+    material_of.extend(shape_material);
     let emitters = Emitters::new(&mesh, |prim| {
         materials[material_of[prim as usize] as usize].is_emitter()
     });
@@ -98,10 +105,15 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
             "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant` one)",
         ));
     }
-    let extent = mesh
-        .positions
-        .iter()
-        .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+    let extent = mesh.shapes.iter().fold(
+        mesh.positions
+            .iter()
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element())),
+        |m, s| {
+            let (lo, hi) = s.bounds();
+            m.max(lo.abs().max(hi.abs()).max_element() as f32)
+        },
+    );
     Ok(Scene {
         path: path.to_path_buf(),
         camera,
@@ -128,8 +140,15 @@ fn emitter_refusal(p: &Props) -> SceneError {
     }
 }
 
-/// One shape's triangles, with its material.
+/// One shape's triangles, or its analytic shape, with its material.
 fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), SceneError> {
+    if let Some(shape) = shapes::analytic(p, warnings)? {
+        let material = shape_material(p, g, warnings)?;
+        p.finish()?;
+        g.shapes.push(shape);
+        g.shape_material.push(material);
+        return Ok(());
+    }
     let how = Placement {
         to_world: p.transform("to_world")?,
         flip_normals: p.bool("flip_normals", false)?,
@@ -137,6 +156,30 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     };
     let raw = shapes::load(p, &mut g.files)?;
     raw.check_indices(&p.what()).map_err(|m| p.error(m))?;
+    let material = shape_material(p, g, warnings)?;
+    p.finish()?;
+    let (positions, triangles) = shapes::place(raw, &how, p.loc(), p)?;
+    let base = g.positions.len() as u32;
+    g.positions.extend(positions);
+    for t in triangles {
+        let t = t.map(|i| base + i);
+        if triangle_area(t.map(|i| g.positions[i as usize])) > 0.0 {
+            g.triangles.push(t);
+            g.material_of.push(material);
+        } else {
+            g.degenerate += 1;
+        }
+    }
+    Ok(())
+}
+
+/// The material of shape `p`: its BSDF (Mitsuba's default diffuse without one) and area
+/// emitter, made once per pair.
+fn shape_material(
+    p: &Props,
+    g: &mut Geometry,
+    warnings: &mut Vec<String>,
+) -> Result<u32, SceneError> {
     let bsdfs = p.children_of("bsdf");
     let emitters = p.children_of("emitter");
     if bsdfs.len() > 1 || emitters.len() > 1 {
@@ -159,20 +202,7 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
             index
         }
     };
-    p.finish()?;
-    let (positions, triangles) = shapes::place(raw, &how, p.loc(), p)?;
-    let base = g.positions.len() as u32;
-    g.positions.extend(positions);
-    for t in triangles {
-        let t = t.map(|i| base + i);
-        if triangle_area(t.map(|i| g.positions[i as usize])) > 0.0 {
-            g.triangles.push(t);
-            g.material_of.push(material);
-        } else {
-            g.degenerate += 1;
-        }
-    }
-    Ok(())
+    Ok(material)
 }
 
 fn diffuse(kd: DVec3, name: String) -> Material {

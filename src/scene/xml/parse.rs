@@ -29,8 +29,8 @@ pub enum Value {
     Float(f64),
     Bool(bool),
     Str(String),
-    /// `<point>` or `<vector>` (read by no plugin genpath implements yet: refused where given).
-    Vector(#[allow(dead_code)] DVec3),
+    /// `<point>` or `<vector>` (a sphere's `center`).
+    Vector(DVec3),
     Rgb(DVec3),
     Spectrum(Spectrum),
     Transform(DMat4),

@@ -101,6 +101,17 @@ impl<'d> Props<'d> {
         }
     }
 
+    /// A `<point>` or `<vector>`.
+    pub fn point(&self, name: &str, default: DVec3) -> Result<DVec3, SceneError> {
+        match self.get(name) {
+            None => Ok(default),
+            Some(p) => match p.value {
+                Value::Vector(v) => Ok(v),
+                _ => Err(self.wrong_type(p, "a <point>")),
+            },
+        }
+    }
+
     pub fn transform(&self, name: &str) -> Result<DMat4, SceneError> {
         match self.get(name) {
             None => Ok(DMat4::IDENTITY),

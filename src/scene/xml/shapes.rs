@@ -1,12 +1,15 @@
-//! Mitsuba's shapes as triangles: `obj`, `ply`, `serialized`, `rectangle`, `cube`, placed
+//! Mitsuba's shapes: as triangles `obj`, `ply`, `serialized`, `rectangle`, `cube`, placed
 //! by `to_world` the way Mitsuba places a mesh (`PackedMesh::set_transform`: the winding is
 //! reversed where the transform mirrors, and again for `flip_normals`; normals go through
-//! the inverse transpose). Analytic shapes (`sphere`, `disk`, `cylinder`) are refused:
-//! tessellating them would change the image.
+//! the inverse transpose); analytic `sphere` (`center`, `radius`, `to_world`,
+//! `flip_normals`) and `disk` (`to_world`, `flip_normals`), intersected exactly
+//! ([`crate::accel::Analytic`]). `cylinder` is refused: tessellating it would change the
+//! image.
 
 use super::parse::Loc;
 use super::props::Props;
 use super::{ply, serialized};
+use crate::accel::Analytic;
 use crate::scene::validate::MAX_COORDINATE;
 use crate::scene::SceneError;
 use glam::{DMat3, DMat4, DVec3, Vec3};
@@ -75,14 +78,14 @@ pub fn load(p: &Props, files: &mut Vec<std::path::PathBuf>) -> Result<RawMesh, S
                 .map_err(|_| p.error(format!("`shape_index` {index} is negative")))?;
             serialized::load(&path, index).map_err(|m| mesh_error(&path, m))?
         }
-        "sphere" | "disk" | "cylinder" => {
-            return Err(p.error(format!(
-                "analytic {plugin}s are not supported yet, and genpath does not tessellate them silently (that would change the image); give the shape as a mesh (obj, ply or serialized)"
-            )))
+        "cylinder" => {
+            return Err(p.error(
+                "analytic cylinders are not supported yet, and genpath does not tessellate them silently (that would change the image); give the shape as a mesh (obj, ply or serialized)",
+            ))
         }
         other => {
             return Err(p.error(format!(
-                "genpath does not implement the `{other}` shape (supported: obj, ply, serialized, rectangle, cube)"
+                "genpath does not implement the `{other}` shape (supported: obj, ply, serialized, rectangle, cube, sphere, disk)"
             )))
         }
     };
@@ -90,6 +93,68 @@ pub fn load(p: &Props, files: &mut Vec<std::path::PathBuf>) -> Result<RawMesh, S
         return Err(p.error("the shape has no triangles"));
     }
     Ok(mesh)
+}
+
+/// Shape `p` as an analytic shape in world space, `None` for a shape given as triangles.
+/// A sphere is placed as Mitsuba places it: `to_world · translate(center) · scale(radius)`,
+/// its radius the length of the image of the x axis (Mitsuba warns, as genpath does, where
+/// `to_world` scales unevenly or shears, and uses that length); a negative or zero radius,
+/// and a mirroring `to_world` (which Mitsuba turns into flipped normals), are refused.
+pub fn analytic(p: &Props, warnings: &mut Vec<String>) -> Result<Option<Analytic>, SceneError> {
+    let plugin = p.object().plugin.as_str();
+    if plugin != "sphere" && plugin != "disk" {
+        return Ok(None);
+    }
+    let to_world = p.transform("to_world")?;
+    let flip = p.bool("flip_normals", false)?;
+    if !to_world.is_finite() {
+        return Err(p.error("`to_world` is not finite"));
+    }
+    let linear = DMat3::from_mat4(to_world);
+    let shape = if plugin == "sphere" {
+        let center = p.point("center", DVec3::ZERO)?;
+        let radius = p.float("radius", 1.0)?;
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(p.error(format!(
+                "`radius` {radius} is not a positive finite number"
+            )));
+        }
+        if !center.is_finite() {
+            return Err(p.error(format!("`center` {center} is not finite")));
+        }
+        if linear.determinant() <= 0.0 {
+            return Err(p.error(
+                "`to_world` mirrors or collapses the sphere (Mitsuba would flip its normals instead; give `flip_normals`)",
+            ));
+        }
+        let axes = [linear.x_axis, linear.y_axis, linear.z_axis].map(|a| a.length());
+        let similar = axes.iter().all(|&l| (l - axes[0]).abs() <= 1e-5 * axes[0])
+            && linear.x_axis.dot(linear.y_axis).abs() <= 1e-5 * axes[0] * axes[1]
+            && linear.y_axis.dot(linear.z_axis).abs() <= 1e-5 * axes[1] * axes[2]
+            && linear.z_axis.dot(linear.x_axis).abs() <= 1e-5 * axes[2] * axes[0];
+        if !similar {
+            warnings.push(format!(
+                "{}: {}: `to_world` scales unevenly or shears; the sphere's radius is the length of its x axis, as in Mitsuba",
+                p.doc.at(p.loc()),
+                p.what()
+            ));
+        }
+        let world_center = to_world.transform_point3(center);
+        let world_radius = radius * axes[0];
+        Analytic::sphere(world_center, world_radius, flip)
+    } else {
+        let affine = glam::DAffine3::from_mat4(to_world);
+        Analytic::disk(affine, flip)
+    }
+    .map_err(|e| p.error(e.to_string()))?;
+    let (lo, hi) = shape.bounds();
+    if !(lo.is_finite() && hi.is_finite()) || lo.abs().max(hi.abs()).max_element() > MAX_COORDINATE
+    {
+        return Err(p.error(format!(
+            "the {plugin} reaches beyond ±{MAX_COORDINATE:e} (or is not finite)"
+        )));
+    }
+    Ok(Some(shape))
 }
 
 fn mesh_error(path: &Path, message: String) -> SceneError {
