@@ -5,7 +5,8 @@
 //! +x to the right instead of Mitsuba's left), for `glass.xml` (a `dielectric` cube and a
 //! `thindielectric` pane) a render with the cube's index of refraction 3 % off, for
 //! `env.xml` (a `constant` emitter and a small area light) a render with the sky's radiance
-//! 3 % off; and `hide_emitters`. And the
+//! 3 % off, for `spheres.xml` (analytic spheres, glass, diffuse and emitting, and a disk
+//! light) a render with the emitting sphere's radius 3 % off; and `hide_emitters`. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
 
@@ -169,6 +170,34 @@ fn pt_agrees_with_mitsuba_under_an_environment_and_a_sky_3_percent_off_does_not(
     );
 }
 
+/// The samples of the spheres test (its reference has 64 × as many).
+const SPHERES_SPP: u32 = 256;
+
+#[test]
+fn pt_agrees_with_mitsuba_on_spheres_and_a_disk_and_a_light_radius_3_percent_off_does_not() {
+    let path = scene_path("spheres.xml");
+    let reference = genpath::image::read(&scene_path("spheres.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(scene.mesh.shapes.len(), 4);
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, SPHERES_SPP);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "spheres.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let off = Scene::load_with(&path, &[("lr".into(), "0.1236".into())]).unwrap();
+    let (z_off, _) = max_z(&render(&off, SPHERES_SPP), &reference, false);
+    eprintln!(
+        "spheres.xml: max |z| {z:.2}, with the light's radius 3 % off {z_off:.2} (critical {critical:.2})"
+    );
+    assert!(
+        z_off > critical,
+        "spheres.xml with the light's radius 3 % off: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
+    );
+}
+
 /// `hide_emitters`: every method's camera rays that escape to the environment or see the
 /// light give 0, and the rest of the image is what it is without it (`env.xml` at 32², its
 /// camera moved back so that the sky and the light's face are in view).
@@ -284,6 +313,16 @@ fn every_method_renders_glass_as_pt_does_and_a_wrong_density_is_seen() {
 #[test]
 fn every_method_renders_env_as_pt_does_and_a_wrong_density_is_seen() {
     every_method_renders_as_pt_does("env.xml");
+}
+
+/// As for `glass.xml`: every method renders `spheres.xml` (an emitting sphere sampled by its
+/// cone in `pt`, by area in the mixtures' light points; a glass and a diffuse sphere; a disk
+/// light) at 32² without a bad pixel, with finite positive densities and `pt`'s image mean;
+/// and a mixture density 50 % off is seen.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_spheres_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("spheres.xml");
 }
 
 #[cfg(feature = "testing")]

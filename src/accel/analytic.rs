@@ -375,3 +375,112 @@ impl AnalyticShapes {
         self.shapes.is_empty()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
+        Ray::new(Vec3::from(o), Vec3::from(d), 0.0, f32::INFINITY)
+    }
+
+    #[test]
+    fn sphere_hits_from_outside_inside_tangent_and_behind() {
+        let s = Analytic::sphere(DVec3::new(1.0, 0.0, 0.0), 0.5, false).unwrap();
+        let inf = f64::INFINITY;
+        // From outside: the near side, normal towards the ray.
+        let (t, n, _, _) = s
+            .intersect(&ray([-2.0, 0.0, 0.0], [2.0, 0.0, 0.0]), inf)
+            .unwrap();
+        assert!((t - 1.25).abs() < 1e-12 && n == DVec3::NEG_X, "{t} {n}");
+        // From inside: the far side, normal along the ray.
+        let (t, n, _, _) = s
+            .intersect(&ray([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), inf)
+            .unwrap();
+        assert!((t - 0.5).abs() < 1e-12 && n == DVec3::Y, "{t} {n}");
+        // Behind, and cut short by tmax.
+        assert!(s
+            .intersect(&ray([2.0, 0.0, 0.0], [1.0, 0.0, 0.0]), inf)
+            .is_none());
+        assert!(s
+            .intersect(&ray([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]), 2.0)
+            .is_none());
+        // Tangent: grazing just inside hits, just outside misses, exactly is finite.
+        assert!(s
+            .intersect(&ray([0.0, 0.4999, 0.0], [1.0, 0.0, 0.0]), inf)
+            .is_some());
+        assert!(s
+            .intersect(&ray([0.0, 0.5001, 0.0], [1.0, 0.0, 0.0]), inf)
+            .is_none());
+        if let Some((t, n, u, v)) = s.intersect(&ray([0.0, 0.5, 0.0], [1.0, 0.0, 0.0]), inf) {
+            assert!(t.is_finite() && n.is_finite() && u.is_finite() && v.is_finite());
+        }
+        // Flipped normals point inwards.
+        let f = Analytic::sphere(DVec3::new(1.0, 0.0, 0.0), 0.5, true).unwrap();
+        let (_, n, _, _) = f
+            .intersect(&ray([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0]), inf)
+            .unwrap();
+        assert_eq!(n, DVec3::X);
+        // Far away and small: t keeps its relative precision.
+        let far = Analytic::sphere(DVec3::new(0.0, 0.0, -1e4), 1e-2, false).unwrap();
+        let (t, _, _, _) = far
+            .intersect(&ray([0.0, 0.0, 0.0], [0.0, 0.0, -1.0]), inf)
+            .unwrap();
+        assert!((t - (1e4 - 1e-2)).abs() < 1e-9, "{t}");
+    }
+
+    #[test]
+    fn disk_hits_inside_its_ellipse_only() {
+        let to_world = DAffine3::from_scale_rotation_translation(
+            DVec3::new(2.0, 1.0, 1.0),
+            glam::DQuat::IDENTITY,
+            DVec3::new(0.0, 0.0, 1.0),
+        );
+        let d = Analytic::disk(to_world, false).unwrap();
+        assert!((d.area() - 2.0 * PI).abs() < 1e-12);
+        let inf = f64::INFINITY;
+        let (t, n, r, _) = d
+            .intersect(&ray([1.9, 0.0, 3.0], [0.0, 0.0, -1.0]), inf)
+            .unwrap();
+        assert!((t - 2.0).abs() < 1e-12 && n == DVec3::Z && (r - 0.95).abs() < 1e-6);
+        // Outside the ellipse (inside its bounding box), parallel, behind.
+        assert!(d
+            .intersect(&ray([1.5, 0.8, 3.0], [0.0, 0.0, -1.0]), inf)
+            .is_none());
+        assert!(d
+            .intersect(&ray([0.0, 0.0, 3.0], [1.0, 0.0, 0.0]), inf)
+            .is_none());
+        assert!(d
+            .intersect(&ray([0.0, 0.0, 3.0], [0.0, 0.0, 1.0]), inf)
+            .is_none());
+        // Flipped, and as Mitsuba orients it under a mirroring transform (inverse transpose).
+        let f = Analytic::disk(to_world, true).unwrap();
+        assert_eq!(f.normal_at(DVec3::ZERO), DVec3::NEG_Z);
+        let mirror = Analytic::disk(DAffine3::from_scale(DVec3::new(-1.0, 1.0, 1.0)), false);
+        assert_eq!(mirror.unwrap().normal_at(DVec3::ZERO), DVec3::Z);
+        let down = Analytic::disk(DAffine3::from_scale(DVec3::new(1.0, 1.0, -1.0)), false);
+        assert_eq!(down.unwrap().normal_at(DVec3::ZERO), DVec3::NEG_Z);
+        assert!(Analytic::disk(DAffine3::from_scale(DVec3::new(1.0, 0.0, 1.0)), false).is_err());
+    }
+
+    #[test]
+    fn cone_samples_are_visible_points_of_the_sphere() {
+        let (c, r) = (DVec3::new(0.0, 3.0, 0.0), 0.7);
+        let s = Analytic::sphere(c, r, false).unwrap();
+        let x = DVec3::new(0.2, -1.0, 0.4);
+        let cone = s.visible_cone(x).unwrap();
+        for i in 0..1000 {
+            let (u1, u2) = ((i as f64 + 0.5) / 1000.0, (i * 37 % 1000) as f64 / 1000.0);
+            let y = cone.sample(u1, u2);
+            assert!(((y - c).length() - r).abs() < 1e-12);
+            assert!((y - c).dot(x - y) >= -1e-9);
+        }
+        // Ω = 2π (1 − cos θmax).
+        let sin2 = r * r / (c - x).length_squared();
+        let omega = 2.0 * PI * (1.0 - (1.0 - sin2).sqrt());
+        assert!((cone.pdf_solid_angle() * omega - 1.0).abs() < 1e-12);
+        assert!(s.visible_cone(c + DVec3::X * r).is_none());
+        assert!(s.visible_cone(c).is_none());
+    }
+}
