@@ -5,7 +5,10 @@
 //! computed from their sample variances; and the same comparison must reject a mixture whose
 //! one component's density is off by 10 %, an `srt` and a `ga` whose light technique's
 //! densities were left out of the balance heuristic, and a `ga` render whose interpolation
-//! weights were left unnormalised.
+//! weights were left unnormalised. On `spheres.xml` (an emitting sphere, which `pt` samples
+//! by its visible cone and the mixtures' light points by area, a disk light, glass and
+//! diffuse spheres) the same agreement, and an `srt` without its light technique's density
+//! rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -96,8 +99,16 @@ fn small_plan(
     Plan::build(view, &inputs, seed, false).unwrap()
 }
 
+/// The scene `name`: `scenes/<name>/scene.toml`, or `scenes/mitsuba/<name>` for an XML one.
+fn scene_file(name: &str) -> PathBuf {
+    match name.ends_with(".xml") {
+        true => scene_dir("mitsuba").join(name),
+        false => scene_dir(name).join("scene.toml"),
+    }
+}
+
 fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
-    let mut scene = Scene::load(&scene_dir(name).join("scene.toml")).unwrap();
+    let mut scene = Scene::load(&scene_file(name)).unwrap();
     scene.resize(SIZE, SIZE);
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
@@ -414,4 +425,56 @@ fn fig5_rejects_a_wrong_component_density() {
 #[test]
 fn fig1_rejects_a_wrong_component_density() {
     check_rejects_wrong_pdf("fig1");
+}
+
+/// Spheres and a disk: `srt` (either estimator), `ga`, `ga-pt` and `pg` estimate what `pt`
+/// does, and an `srt` whose light technique's densities were left out of the balance
+/// heuristic does not.
+#[test]
+fn spheres_methods_agree_and_a_dropped_light_density_does_not() {
+    let name = "spheres.xml";
+    let spp = SPP / 4;
+    let pt = render_with(name, Which::Pt, 4, spp, 11);
+    let srt = |nee, light_dropped| Which::Srt { nee, light_dropped };
+    for (label, which) in [
+        ("srt", srt(Nee::Every, false)),
+        ("srt, nee end", srt(Nee::End, false)),
+        (
+            "ga",
+            Which::Ga {
+                nee: Nee::Every,
+                unnormalised: false,
+                light_dropped: false,
+            },
+        ),
+        ("ga-pt", Which::GaPt { spatial: false }),
+        (
+            "pg",
+            Which::Pg {
+                every_cell_dark: false,
+            },
+        ),
+    ] {
+        let film = render_with(name, which, 4, spp, 23);
+        let (z, rel, n) = compare(&film, &pt);
+        let zc = z_critical(n);
+        eprintln!(
+            "{name}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}"
+        );
+        assert!(z <= zc, "{name}: {label} vs pt: max |z| {z:.2} > {zc:.2}");
+        assert!(
+            rel < 0.025,
+            "{name}: {label}: relative standard error {rel:.4} too wide"
+        );
+    }
+    let wrong = render_with(name, srt(Nee::Every, true), 4, spp, 23);
+    let (z, _, n) = compare(&wrong, &pt);
+    eprintln!(
+        "{name}: srt without the light technique's density: max |z| {z:.2} (critical {:.2})",
+        z_critical(n)
+    );
+    assert!(
+        z > z_critical(n),
+        "{name}: the light technique's density left out went unnoticed (max |z| {z:.2})"
+    );
 }
