@@ -28,9 +28,10 @@ const FAMILY: Family = Family { tests: 3 };
 const SAMPLES: u64 = 1_000_000;
 
 fn mesh_of(shapes: Vec<Analytic>) -> TriangleMesh {
-    let mut mesh = TriangleMesh::default();
-    mesh.shapes = shapes;
-    mesh
+    TriangleMesh {
+        shapes,
+        ..Default::default()
+    }
 }
 
 /// The solid-angle density at `x` of the direction `d` under the emitters' light sampling

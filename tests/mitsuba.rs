@@ -187,7 +187,7 @@ fn pt_agrees_with_mitsuba_on_spheres_and_a_disk_and_a_light_radius_3_percent_off
     let (z, n) = max_z(&film, &reference, false);
     let critical = z_critical(n);
     assert!(z < critical, "spheres.xml: max |z| {z:.2} ≥ {critical:.2}");
-    let off = Scene::load_with(&path, &[("lr".into(), "0.1236".into())]).unwrap();
+    let off = Scene::load_with(&path, &[("lr".into(), "0.206".into())]).unwrap();
     let (z_off, _) = max_z(&render(&off, SPHERES_SPP), &reference, false);
     eprintln!(
         "spheres.xml: max |z| {z:.2}, with the light's radius 3 % off {z_off:.2} (critical {critical:.2})"

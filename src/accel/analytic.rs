@@ -161,7 +161,9 @@ impl Analytic {
         };
         let to_center = center - x;
         let dist2 = to_center.length_squared();
-        if !(dist2 > (radius * (1.0 + 1e-3)).powi(2)) {
+        // Also `None` for a NaN.
+        if dist2.partial_cmp(&(radius * (1.0 + 1e-3)).powi(2)) != Some(std::cmp::Ordering::Greater)
+        {
             return None;
         }
         let dist = dist2.sqrt();
@@ -290,7 +292,7 @@ fn orthonormal_basis(n: DVec3) -> (DVec3, DVec3) {
 /// cancellation of `b² − 4ac`) and the roots without subtracting nearly equal numbers.
 fn sphere_crossing(o: DVec3, d: DVec3, r: f64, tmin: f64, tmax: f64) -> Option<f64> {
     let a = d.length_squared();
-    if !(a > 0.0) {
+    if a.is_nan() || a <= 0.0 {
         return None;
     }
     let b = o.dot(d);
