@@ -13,7 +13,7 @@
 mod chi2;
 
 use chi2::{chi2, chi2_test, Family, SphereBins};
-use genpath::accel::{self, Accel, AccelKind, Analytic, Ray, TriangleMesh};
+use genpath::accel::{self, AccelKind, Analytic, Ray, TriangleMesh};
 use genpath::integrators::{Method, RenderSettings};
 use genpath::path::{SceneView, SurfacePoint};
 use genpath::scene::{Emitters, Scene};
@@ -339,7 +339,7 @@ fn a_glass_sphere_under_a_constant_sky_is_invisible_and_grey_or_absorbing_ones_a
 #[cfg(all(feature = "embree", feature = "obvhs"))]
 #[test]
 fn embree_and_obvhs_agree_on_spheres_and_disks() {
-    use genpath::accel::{BvhAccel, Coherence, EmbreeAccel, PACKET_SIZE};
+    use genpath::accel::{Accel, BvhAccel, Coherence, EmbreeAccel, PACKET_SIZE};
     let mut mesh = TriangleMesh::new(
         vec![
             Vec3::new(-2.0, -1.0, -2.0),
