@@ -3,8 +3,9 @@
 //! sheared disk by area), each with a wrong density it must reject; rays leaving a glass
 //! sphere from inside and outside; a smooth glass sphere under a `constant` emitter is
 //! invisible (it neither creates nor loses energy), and a grey diffuse sphere or a slightly
-//! absorbing glass one in its place is seen; and Embree and obvhs give the same answers on
-//! them, single rays and packets alike. Run with `cargo test --release --test analytic`
+//! absorbing glass one in its place is seen; XML spheres and disks are placed as Mitsuba
+//! places them; and Embree and obvhs give the same answers on them, single rays and packets
+//! alike. Run with `cargo test --release --test analytic`
 //! (`-- --nocapture` prints every statistic).
 
 // The shared harness, of which this file uses the sphere binning only.
@@ -436,4 +437,65 @@ fn embree_and_obvhs_agree_on_spheres_and_disks() {
             }
         }
     }
+}
+
+/// The shapes of an XML scene whose shapes are `shapes` (beside a constant sky), and its
+/// warnings.
+fn xml_shapes(dir: &Path, shapes: &str) -> (Vec<Analytic>, Vec<String>) {
+    let text = format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 9" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    {shapes}
+</scene>
+"#
+    );
+    let path = dir.join("shapes.xml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    (scene.mesh.shapes.clone(), scene.warnings.clone())
+}
+
+/// Spheres and disks are placed as Mitsuba places them: a sphere by
+/// `to_world · translate(center) · scale(radius)`, its radius the image of the x axis (with
+/// Mitsuba's warning where `to_world` scales unevenly); a disk's normal is `to_world`'s
+/// inverse transpose applied to +z, flipped by `flip_normals`.
+#[test]
+fn xml_spheres_and_disks_are_placed_as_mitsuba_places_them() {
+    let dir = scene_dir();
+    let (shapes, warnings) = xml_shapes(
+        dir.path(),
+        r#"<shape type="sphere">
+            <point name="center" x="1" y="0" z="0"/><float name="radius" value="0.5"/>
+            <transform name="to_world"><scale value="2"/><translate y="1"/></transform>
+        </shape>"#,
+    );
+    let expected = Analytic::sphere(DVec3::new(2.0, 1.0, 0.0), 1.0, false).unwrap();
+    assert_eq!(shapes, vec![expected]);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let (shapes, warnings) = xml_shapes(
+        dir.path(),
+        r#"<shape type="sphere"><transform name="to_world"><scale x="3"/></transform><boolean name="flip_normals" value="true"/></shape>"#,
+    );
+    assert_eq!(
+        shapes,
+        vec![Analytic::sphere(DVec3::ZERO, 3.0, true).unwrap()]
+    );
+    assert!(
+        warnings.iter().any(|w| w.contains("unevenly")),
+        "{warnings:?}"
+    );
+    let (shapes, _) = xml_shapes(
+        dir.path(),
+        r#"<shape type="disk"><transform name="to_world"><scale x="2" y="0.5"/><rotate x="1" angle="90"/></transform></shape>
+           <shape type="disk"><boolean name="flip_normals" value="true"/></shape>"#,
+    );
+    assert_eq!(shapes.len(), 2);
+    // Rotating +z by 90° about x gives −y.
+    assert!((shapes[0].normal_at(DVec3::ZERO) - DVec3::NEG_Y).length() < 1e-12);
+    assert!((shapes[0].area() - PI).abs() < 1e-12);
+    assert_eq!(shapes[1].normal_at(DVec3::ZERO), DVec3::NEG_Z);
 }
