@@ -189,7 +189,7 @@ mod tests {
                 material: &m,
                 n: N,
                 wo: wo(),
-                ng: N,
+                ns: N,
             };
             let mut cases = vec![
                 (GuidedBsdf::new(bsdf, None), 1.0),
@@ -235,7 +235,7 @@ mod tests {
                 material: &m,
                 n: N,
                 wo: wo(),
-                ng: N,
+                ns: N,
             };
             for k in 0..3 {
                 let v = guide.vertex(k, Vec3::ZERO, bsdf, false);

@@ -105,7 +105,7 @@ impl PixelEstimator for NeeOnly {
                 break;
             };
             let wo = -ray.dir;
-            let n = brdf::facing_normal(x.ng, wo);
+            let n = brdf::facing_normal(x.ns, wo);
             let material = view.scattering_material(&x, wo);
             if !material.scatters() {
                 break;
@@ -115,7 +115,7 @@ impl PixelEstimator for NeeOnly {
             }
             let u = [0; 3].map(|_| f64::from(uniform(rng)));
             let s = if material.mirror {
-                specular::sample(material, x.ng, wo, u[0])
+                specular::sample(material, x.ns, wo, u[0])
             } else {
                 brdf::sample(material, n, wo, u)
             };

@@ -19,9 +19,25 @@ use pt::{PathGuide, NO_RECORDER};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct SurfacePoint {
     pub p: Vec3,
-    /// Unit geometric normal as stored (`cross(v1 − v0, v2 − v0)`): emission leaves on its side.
+    /// Unit geometric normal as stored (`cross(v1 − v0, v2 − v0)`): emission leaves on its
+    /// side, and rays leave off it.
     pub ng: Vec3,
+    /// Unit shading normal (Mitsuba's `sh_frame.n`): the interpolated vertex normals, or
+    /// `ng`. BSDFs scatter in its frame, and one-sided ones on its side.
+    pub ns: Vec3,
     pub prim: u32,
+}
+
+impl SurfacePoint {
+    /// A point on a surface that shades flat (a light point: emitters shade flat).
+    pub fn flat(p: Vec3, ng: Vec3, prim: u32) -> Self {
+        Self {
+            p,
+            ng,
+            ns: ng,
+            prim,
+        }
+    }
 }
 
 /// A scene together with the ray queries over it.
@@ -77,10 +93,11 @@ impl<'a> SceneView<'a> {
     }
 
     /// The material that scatters at `x` towards `wo`: [`crate::scene::BLACK`] where a
-    /// one-sided material is seen from behind its normal.
+    /// one-sided material is seen from behind its shading normal (as Mitsuba's BSDFs tell
+    /// their sides apart in the shading frame).
     pub fn scattering_material(&self, x: &SurfacePoint, wo: Vec3) -> &Material {
         let m = self.scene.material(x.prim);
-        if m.two_sided || x.ng.dot(wo) > 0.0 {
+        if m.two_sided || x.ns.dot(wo) > 0.0 {
             m
         } else {
             &crate::scene::BLACK
@@ -91,6 +108,7 @@ impl<'a> SceneView<'a> {
         SurfacePoint {
             p: ray.origin + ray.dir * hit.t,
             ng: hit.ng,
+            ns: self.scene.shading_normal(hit.prim, (hit.u, hit.v), hit.ng),
             prim: hit.prim,
         }
     }

@@ -53,16 +53,17 @@ pub trait VertexBsdf {
     }
 }
 
-/// The BSDF of `material` at a vertex whose normal `n` faces `wo` ([`brdf::facing_normal`]):
-/// [`brdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
+/// The BSDF of `material` at a vertex whose shading normal `n` faces `wo`
+/// ([`brdf::facing_normal`]): [`brdf`]'s evaluation, density and sampling, and
+/// [`specular`]'s sampling of a delta BSDF.
 #[derive(Clone, Copy)]
 pub struct Bsdf<'a> {
     pub material: &'a Material,
     pub n: Vec3,
     pub wo: Vec3,
-    /// The geometric normal as stored (`n` or `−n`): a dielectric tells its sides apart by
+    /// The shading normal as stored (`n` or `−n`): a dielectric tells its sides apart by
     /// it.
-    pub ng: Vec3,
+    pub ns: Vec3,
 }
 
 impl VertexBsdf for Bsdf<'_> {
@@ -83,7 +84,7 @@ impl VertexBsdf for Bsdf<'_> {
             uniform(rng) as f64,
         ];
         if self.material.mirror {
-            specular::sample(self.material, self.ng, self.wo, u[0])
+            specular::sample(self.material, self.ns, self.wo, u[0])
         } else {
             brdf::sample(self.material, self.n, self.wo, u)
         }
@@ -223,11 +224,7 @@ impl LightPoint {
             return None;
         }
         let ls = scene.emitters.sample_seen_from(&scene.mesh, x.p, u);
-        let y = SurfacePoint {
-            p: ls.point,
-            ng: ls.normal,
-            prim: ls.prim,
-        };
+        let y = SurfacePoint::flat(ls.point, ls.normal, ls.prim);
         let d = y.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
@@ -413,7 +410,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         if !material.scatters() {
             break;
         }
-        let n = brdf::facing_normal(x.ng, wo);
+        let n = brdf::facing_normal(x.ns, wo);
         let last = bounce == max_bounces;
         // At a diffuse vertex the spatial guide's records leave out the direct light, which
         // next-event estimation samples well there (see `guiding::field`).
@@ -425,7 +422,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
                 material,
                 n,
                 wo,
-                ng: x.ng,
+                ns: x.ns,
             },
             last,
         );
@@ -457,7 +454,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         beta *= bs.weight;
         let wi = bs.wi;
         if material.dielectric.is_some() {
-            unscale /= specular::radiance_scale(material, x.ng, wo, wi);
+            unscale /= specular::radiance_scale(material, x.ns, wo, wi);
         }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
             let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;

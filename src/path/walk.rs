@@ -226,7 +226,7 @@ impl Walk {
     ) -> Option<Query> {
         let scene = view.scene;
         let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
-        let n = brdf::facing_normal(x.ng, wo);
+        let n = brdf::facing_normal(x.ns, wo);
         let mut vertex = PathVertex {
             point: x,
             wo,
@@ -258,11 +258,8 @@ impl Walk {
                 prim,
                 pdf_sampled: absorption * pdf_area,
             });
-            let y_point = SurfacePoint {
-                p: y.as_vec3(),
-                ng: scene.mesh.normal_at(prim, y).as_vec3(),
-                prim,
-            };
+            let y_point =
+                SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
             let d = y_point.p - x.p;
             let dist2 = d.length_squared();
             let wi = d / dist2.sqrt();
@@ -300,7 +297,7 @@ impl Walk {
         material: &Material,
     ) -> Option<Query> {
         let (x, wo) = (self.x, self.wo);
-        let n = brdf::facing_normal(x.ng, wo);
+        let n = brdf::facing_normal(x.ns, wo);
         // Pushed first: the light point's contribution ends here whatever follows.
         path.vertices.push(PathVertex {
             point: x,
@@ -356,11 +353,8 @@ impl Walk {
             uniform(rng) as f64,
         ];
         let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
-        let y_point = SurfacePoint {
-            p: y.as_vec3(),
-            ng: scene.mesh.normal_at(prim, y).as_vec3(),
-            prim,
-        };
+        let y_point =
+            SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
         let x = self.x;
         let d = y_point.p - x.p;
         let dist2 = d.length_squared();
@@ -411,7 +405,7 @@ impl Walk {
                 Some(_) => f64::from(uniform(rng)),
                 None => 0.0,
             };
-            let s = specular::sample(material, x.ng, wo, u)?;
+            let s = specular::sample(material, x.ns, wo, u)?;
             self.throughput *= s.weight.as_dvec3();
             return Some((s.wi, s.pdf));
         }

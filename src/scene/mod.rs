@@ -3,11 +3,13 @@
 
 mod camera;
 mod file;
+mod shading;
 mod validate;
 pub mod xml;
 
 pub use camera::Camera;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
+pub use shading::Shading;
 
 use crate::accel::TriangleMesh;
 use glam::Vec3;
@@ -318,6 +320,8 @@ pub struct Scene {
     pub path: PathBuf,
     pub camera: Camera,
     pub mesh: TriangleMesh,
+    /// The vertices' shading normals and texture coordinates (Mitsuba XML meshes).
+    pub shading: Shading,
     pub materials: Vec<Material>,
     /// Material index of each primitive (triangles, then analytic shapes).
     pub material_of: Vec<u32>,
@@ -358,6 +362,17 @@ pub struct SceneAnalysis {
 impl Scene {
     pub fn material(&self, prim: u32) -> &Material {
         &self.materials[self.material_of[prim as usize] as usize]
+    }
+
+    /// The unit shading normal of primitive `prim` at `(u, v)`: for a triangle (at
+    /// barycentrics in Embree's convention) its interpolated vertex normals, or `ng`, its
+    /// geometric normal, where it shades flat; for an analytic shape `ng` (a sphere's and a
+    /// disk's shading frame is their geometric one, as in Mitsuba).
+    pub fn shading_normal(&self, prim: u32, (u, v): (f32, f32), ng: Vec3) -> Vec3 {
+        match self.mesh.triangles.get(prim as usize) {
+            Some(&t) => self.shading.normal(t, u, v).unwrap_or(ng),
+            None => ng,
+        }
     }
 
     /// The probability with which light sampling (`pt`'s next-event estimation) picks the
@@ -453,6 +468,7 @@ impl Scene {
             path: path.to_path_buf(),
             camera,
             mesh,
+            shading: Shading::default(),
             materials,
             material_of,
             emitters,

@@ -64,7 +64,7 @@ impl Guided {
             material: &self.v.m,
             n: self.v.n,
             wo: self.v.wo,
-            ng: self.v.n,
+            ns: self.v.n,
         };
         guide.vertex(k, self.x, bsdf, false).bsdf
     }

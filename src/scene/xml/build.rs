@@ -11,7 +11,7 @@ use super::tables::CONDUCTORS;
 use crate::accel::{Analytic, TriangleMesh};
 use crate::scene::{
     triangle_area, Camera, Dielectric, Emitters, Environment, Material, RenderDefaults, Scene,
-    SceneError, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -118,6 +118,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         camera,
         mesh,
+        shading: Shading::default(),
         materials,
         material_of,
         emitters,
