@@ -1,10 +1,10 @@
 //! Mitsuba's shapes: as triangles `obj`, `ply`, `serialized`, `rectangle`, `cube`, placed
-//! by `to_world` the way Mitsuba places a mesh (`PackedMesh::set_transform`: the winding is
-//! reversed where the transform mirrors, and again for `flip_normals`; normals go through
-//! the inverse transpose); analytic `sphere` (`center`, `radius`, `to_world`,
-//! `flip_normals`) and `disk` (`to_world`, `flip_normals`), intersected exactly
-//! ([`crate::accel::Analytic`]). `cylinder` is refused: tessellating it would change the
-//! image.
+//! by `to_world` the way Mitsuba 3.9.1 places a mesh (the winding is kept where the
+//! transform mirrors, so that the faces' normals turn over while given vertex normals,
+//! through the inverse transpose, do not; `flip_normals` turns both over); analytic
+//! `sphere` (`center`, `radius`, `to_world`, `flip_normals`) and `disk` (`to_world`,
+//! `flip_normals`), intersected exactly ([`crate::accel::Analytic`]). `cylinder` is refused:
+//! tessellating it would change the image.
 
 use super::parse::Loc;
 use super::props::Props;
@@ -316,7 +316,6 @@ pub fn place(
     p: &Props,
 ) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), SceneError> {
     let linear = DMat3::from_mat4(how.to_world);
-    let mirrored = linear.determinant() < 0.0;
     let normal_matrix = linear.inverse().transpose();
     let positions: Vec<DVec3> = mesh
         .positions
@@ -336,7 +335,9 @@ pub fn place(
         ));
     }
     let mut triangles = mesh.triangles;
-    if mirrored != how.flip_normals {
+    // Mitsuba 3.9.1 negates both normals at each hit for `flip_normals`: the same as the
+    // other winding (and the angle-weighted normals of that winding) and negated given ones.
+    if how.flip_normals {
         for t in &mut triangles {
             t.swap(1, 2);
         }
