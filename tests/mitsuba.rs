@@ -388,7 +388,7 @@ const QUAD: [[f32; 3]; 4] = [
     [-0.5, 1.2, 0.0],
 ];
 
-fn ply(encoding: &str) -> Vec<u8> {
+fn ply_quad(encoding: &str) -> Vec<u8> {
     let mut out = format!("ply\nformat {encoding} 1.0\ncomment a quad\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n").into_bytes();
     if encoding == "ascii" {
         for v in QUAD {
@@ -431,8 +431,8 @@ fn serialized() -> Vec<u8> {
 fn ply_ascii_binary_obj_and_serialized_give_the_same_triangles() {
     let dir = tempfile::tempdir().unwrap();
     let files: [(&str, Vec<u8>); 4] = [
-        ("a.ply", ply("ascii")),
-        ("b.ply", ply("binary_little_endian")),
+        ("a.ply", ply_quad("ascii")),
+        ("b.ply", ply_quad("binary_little_endian")),
         ("c.serialized", serialized()),
         ("d.obj", {
             let mut s = String::new();
@@ -515,4 +515,239 @@ fn constant_emitter_refusals_name_file_and_line() {
             "{emitters}: {error}"
         );
     }
+}
+
+/// `box.xml` with the cube replaced by `smooth_sphere.obj` or `smooth_blob.ply` (radius
+/// 0.3 around `CENTRE`) with the given extra XML inside the shape.
+fn with_sphere(dir: &Path, file: &str, inside: &str) -> Scene {
+    let file = scene_path(file);
+    let shape = format!(
+        r#"<shape type="{}"><string name="filename" value="{}"/>{inside}</shape>"#,
+        file.extension().unwrap().to_string_lossy(),
+        file.display()
+    );
+    with_mesh(dir, &shape)
+}
+
+const CENTRE: Vec3 = Vec3::new(0.1, 0.5, -0.2);
+
+/// The placed sphere's triangles (before the light's two) with their geometric and vertex
+/// normals, and the outward direction at each vertex.
+fn sphere_normals(scene: &Scene, faces: usize) -> Vec<(Vec3, [(Vec3, Vec3); 3])> {
+    let n = scene.mesh.triangles.len();
+    (n - 2 - faces..n - 2)
+        .map(|p| {
+            let t = scene.mesh.triangles[p];
+            let ng = scene.mesh.normals[p];
+            let corners = t.map(|i| {
+                let radial = (scene.mesh.positions[i as usize] - CENTRE).normalize();
+                (scene.shading.normals[i as usize], radial)
+            });
+            (ng, corners)
+        })
+        .collect()
+}
+
+/// Vertex normals as Mitsuba 3.9.1 places them: given ones through the inverse transpose
+/// (outward under a mirroring transform, whose faces turn inward), both turned over by
+/// `flip_normals`; angle-weighted ones (a PLY without normals) on the faces' side; none
+/// with `face_normals`. At a hit, the shading normal is the vertices' interpolated.
+#[test]
+fn vertex_normals_are_placed_as_mitsuba_places_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let place = |mirror: bool, flip: bool| {
+        format!(
+            r#"<boolean name="flip_normals" value="{flip}"/><transform name="to_world"><scale x="{}" y="0.3" z="0.3"/><translate x="0.1" y="0.5" z="-0.2"/></transform>"#,
+            if mirror { -0.3 } else { 0.3 }
+        )
+    };
+    // (mirror, flip): the sign of the given normals and of the faces' against outward.
+    for (mirror, flip, given, faces) in [
+        (false, false, 1.0, 1.0),
+        (true, false, 1.0, -1.0),
+        (false, true, -1.0, -1.0),
+        (true, true, -1.0, 1.0),
+    ] {
+        let obj = with_sphere(dir.path(), "smooth_sphere.obj", &place(mirror, flip));
+        let ply = with_sphere(dir.path(), "smooth_blob.ply", &place(mirror, flip));
+        for (name, scene, count, sign, cos) in [
+            ("obj", &obj, 100, given, 0.9999),
+            ("ply", &ply, 80, faces, 0.98),
+        ] {
+            for (ng, corners) in sphere_normals(scene, count) {
+                let centroid = corners.iter().map(|c| c.1).sum::<Vec3>();
+                assert!(
+                    ng.dot(centroid) * faces > 0.0,
+                    "{name} mirror {mirror} flip {flip}: face normal {ng}"
+                );
+                for (ns, radial) in corners {
+                    assert!(
+                        ns.dot(radial) * sign > cos,
+                        "{name} mirror {mirror} flip {flip}: vertex normal {ns} at {radial}"
+                    );
+                }
+            }
+        }
+    }
+    // A hit on the sphere's front, between its vertices: the interpolated normal.
+    let scene = with_sphere(dir.path(), "smooth_sphere.obj", &place(false, false));
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let origin = CENTRE + Vec3::new(0.13, 0.07, 2.0);
+    let ray = genpath::accel::Ray::new(origin, Vec3::new(0.0, 0.0, -1.0), 0.0, f32::INFINITY);
+    let x = view.trace(&ray, &mut Default::default()).unwrap();
+    let hit = accel.intersect(&ray).unwrap();
+    let t = scene.mesh.triangles[hit.prim as usize].map(|i| scene.shading.normals[i as usize]);
+    let expected = (t[0] * (1.0 - hit.u - hit.v) + t[1] * hit.u + t[2] * hit.v).normalize();
+    assert!((x.ns - expected).length() < 1e-6, "{} {expected}", x.ns);
+    assert!(x.ns != x.ng && x.ng == hit.ng);
+    let radial = (x.p - CENTRE).normalize();
+    assert!(
+        x.ns.dot(radial) > x.ng.dot(radial),
+        "{} {} {radial}",
+        x.ns,
+        x.ng
+    );
+    // Face normals: nothing to interpolate.
+    let flat = with_sphere(
+        dir.path(),
+        "smooth_sphere.obj",
+        r#"<boolean name="face_normals" value="true"/>"#,
+    );
+    assert!(flat.shading.normals.is_empty());
+}
+
+/// Area emitters on smooth-shaded meshes are refused (with `face_normals` the mesh loads);
+/// a zero vertex normal shades its triangles flat, with a warning.
+#[test]
+fn smooth_emitters_are_refused_and_zero_normals_shade_flat() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = scene_path("smooth_sphere.obj");
+    let text = std::fs::read_to_string(scene_path("box.xml")).unwrap();
+    for (face_normals, ok) in [(false, false), (true, true)] {
+        let shape = format!(
+            r#"<shape type="obj"><string name="filename" value="{}"/><boolean name="face_normals" value="{face_normals}"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#,
+            file.display()
+        );
+        let path = dir.path().join("e.xml");
+        std::fs::write(&path, text.replace("</scene>", &format!("{shape}</scene>"))).unwrap();
+        match Scene::load(&path) {
+            Ok(_) => assert!(ok),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(
+                    !ok && e.contains("face_normals") && e.contains("e.xml:"),
+                    "{e}"
+                );
+            }
+        }
+    }
+    let obj = "v -0.5 0.2 0\nv 0.5 0.2 0\nv 0.5 1.2 0\nv -0.5 1.2 0\nvn 0 0 1\nvn 0 0 0\nvn 0.3 0 1\nf 1//1 2//2 3//3\nf 1//1 3//3 4//3\n";
+    std::fs::write(dir.path().join("z.obj"), obj).unwrap();
+    let scene = with_mesh(
+        dir.path(),
+        r#"<shape type="obj"><string name="filename" value="z.obj"/></shape>"#,
+    );
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("1 vertices have no usable normal")),
+        "{:?}",
+        scene.warnings
+    );
+    let n = scene.mesh.triangles.len();
+    let (zero, smooth) = ((n - 4) as u32, (n - 3) as u32);
+    let ng = scene.mesh.normals[zero as usize];
+    assert_eq!(scene.shading_normal(zero, (0.3, 0.3), ng), ng);
+    let ng = scene.mesh.normals[smooth as usize];
+    assert_ne!(scene.shading_normal(smooth, (0.3, 0.3), ng), ng);
+}
+
+/// Texture coordinates as Mitsuba reads them: OBJ `vt` with `v` turned into `1 − v`
+/// (`flip_tex_coords`, default true), PLY `u v`, `texture_u texture_v` or `s t` (flipped
+/// only when asked), serialized meshes' UVs; and from a hit's barycentrics.
+#[test]
+fn texture_coordinates_are_kept_as_mitsuba_reads_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let uv = [[0.0, 0.25], [1.0, 0.25], [1.0, 0.75], [0.0, 1.0f32]];
+    let flipped = uv.map(|[s, t]| [s, 1.0 - t]);
+    let mut obj = String::new();
+    for (v, t) in QUAD.iter().zip(uv) {
+        obj += &format!("v {} {} {}\nvt {} {}\n", v[0], v[1], v[2], t[0], t[1]);
+    }
+    obj += "f 1/1 2/2 3/3 4/4\n";
+    std::fs::write(dir.path().join("q.obj"), obj).unwrap();
+    let ply = |names: [&str; 2]| {
+        let mut s = format!("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float {}\nproperty float {}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n", names[0], names[1]);
+        for (v, t) in QUAD.iter().zip(uv) {
+            s += &format!("{} {} {} {} {}\n", v[0], v[1], v[2], t[0], t[1]);
+        }
+        s + "4 0 1 2 3\n"
+    };
+    std::fs::write(dir.path().join("uv.ply"), ply(["u", "v"])).unwrap();
+    std::fs::write(dir.path().join("tu.ply"), ply(["texture_u", "texture_v"])).unwrap();
+    std::fs::write(dir.path().join("st.ply"), ply(["s", "t"])).unwrap();
+    std::fs::write(dir.path().join("q.serialized"), serialized_with_uvs(&uv)).unwrap();
+    let shape = |file: &str, extra: &str| {
+        let plugin = file.rsplit('.').next().unwrap();
+        format!(r#"<shape type="{plugin}"><string name="filename" value="{file}"/>{extra}</shape>"#)
+    };
+    let flip = |on: bool| format!(r#"<boolean name="flip_tex_coords" value="{on}"/>"#);
+    for (file, extra, expected) in [
+        ("q.obj", String::new(), flipped),
+        ("q.obj", flip(false), uv),
+        ("uv.ply", String::new(), uv),
+        ("tu.ply", String::new(), uv),
+        ("st.ply", String::new(), uv),
+        ("uv.ply", flip(true), flipped),
+        ("q.serialized", String::new(), uv),
+    ] {
+        let scene = with_mesh(dir.path(), &shape(file, &extra));
+        // The quad's four vertices come before the light's.
+        let k = scene.mesh.positions.len() - 8;
+        let got: Vec<[f32; 2]> = scene.shading.uvs[k..k + 4]
+            .iter()
+            .map(|uv| uv.unwrap().to_array())
+            .collect();
+        assert_eq!(got, expected, "{file} {extra}");
+        // Interpolated at the first triangle's barycentrics (0.25, 0.5).
+        let n = scene.mesh.triangles.len();
+        let t = scene.mesh.triangles[n - 4];
+        let at = scene.shading.uv(t, 0.25, 0.5);
+        let e = t.map(|i| glam::Vec2::from(expected[i as usize - k]));
+        let want = e[0] * 0.25 + e[1] * 0.25 + e[2] * 0.5;
+        assert!((at - want).length() < 1e-6, "{file}: {at} {want}");
+    }
+    // Without texture coordinates: none kept for the quad, and a hit's are its barycentrics
+    // (Mitsuba's default).
+    std::fs::write(dir.path().join("b.ply"), ply_quad("ascii")).unwrap();
+    let scene = with_mesh(dir.path(), &shape("b.ply", ""));
+    let k = scene.mesh.positions.len() - 8;
+    assert!(scene.shading.uvs[k..k + 4].iter().all(Option::is_none));
+    let t = scene.mesh.triangles[scene.mesh.triangles.len() - 4];
+    assert_eq!(scene.shading.uv(t, 0.25, 0.5), glam::Vec2::new(0.25, 0.5));
+}
+
+/// [`serialized`]'s quad with texture coordinates.
+fn serialized_with_uvs(uv: &[[f32; 2]; 4]) -> Vec<u8> {
+    let mut body = Vec::new();
+    body.extend(0x1002u32.to_le_bytes()); // single precision, texture coordinates
+    body.extend(b"quad\0");
+    body.extend(4u64.to_le_bytes());
+    body.extend(2u64.to_le_bytes());
+    for v in QUAD.iter().flatten() {
+        body.extend(v.to_le_bytes());
+    }
+    for t in uv.iter().flatten() {
+        body.extend(t.to_le_bytes());
+    }
+    for i in [0u32, 1, 2, 0, 2, 3] {
+        body.extend(i.to_le_bytes());
+    }
+    let mut z = ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+    z.write_all(&body).unwrap();
+    let mut out = vec![0x1C, 0x04, 0x04, 0x00];
+    out.extend(z.finish().unwrap());
+    out
 }

@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 struct Geometry {
     positions: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
+    shading: Shading,
     material_of: Vec<u32>,
     materials: Vec<Material>,
     /// Spheres and disks, with their materials: primitives after the triangles.
@@ -83,6 +84,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let Geometry {
         positions,
         triangles,
+        shading,
         mut material_of,
         materials,
         shapes,
@@ -118,7 +120,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         path: path.to_path_buf(),
         camera,
         mesh,
-        shading: Shading::default(),
+        shading,
         materials,
         material_of,
         emitters,
@@ -159,10 +161,30 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     raw.check_indices(&p.what()).map_err(|m| p.error(m))?;
     let material = shape_material(p, g, warnings)?;
     p.finish()?;
-    let (positions, triangles) = shapes::place(raw, &how, p.loc(), p)?;
+    let placed = shapes::place(raw, &how, p.loc(), p)?;
+    if placed.normals.is_some() && g.materials[material as usize].is_emitter() {
+        // Mitsuba's area emitter then emits, and converts its light samples' densities, by
+        // the shading normal, while a ray that finds it converts by the geometric one.
+        return Err(p.error(
+            "an area emitter on a shape shaded with vertex normals that differ from its faces' normals: genpath emits by the faces' normals, where Mitsuba mixes both; add <boolean name=\"face_normals\" value=\"true\"/>",
+        ));
+    }
+    if placed.zero_normals > 0 {
+        warnings.push(format!(
+            "{}: {} vertices have no usable normal (zero, or around degenerate faces only); their triangles shade flat",
+            p.what(),
+            placed.zero_normals
+        ));
+    }
     let base = g.positions.len() as u32;
-    g.positions.extend(positions);
-    for t in triangles {
+    g.shading.push_shape(
+        g.positions.len(),
+        placed.positions.len(),
+        placed.normals.as_deref(),
+        placed.uvs.as_deref(),
+    );
+    g.positions.extend(placed.positions);
+    for t in placed.triangles {
         let t = t.map(|i| base + i);
         if triangle_area(t.map(|i| g.positions[i as usize])) > 0.0 {
             g.triangles.push(t);

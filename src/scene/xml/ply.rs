@@ -1,9 +1,10 @@
 //! PLY meshes (ASCII and binary, through `ply-rs-bw`) as Mitsuba's `ply` shape reads them:
-//! the `vertex` element's `x y z` (and `nx ny nz`, when all three are there), the `face`
-//! element's `vertex_indices` (or `vertex_index`) lists as fans; other elements skipped.
+//! the `vertex` element's `x y z` (and `nx ny nz`, when all three are there; texture
+//! coordinates `u v`, else `texture_u texture_v`, else `s t`), the `face` element's
+//! `vertex_indices` (or `vertex_index`) lists as fans; other elements skipped.
 
 use super::shapes::RawMesh;
-use glam::DVec3;
+use glam::{DVec3, Vec2};
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{Property, PropertyAccess};
 use std::io::BufReader;
@@ -13,7 +14,12 @@ use std::path::Path;
 struct Vertex {
     p: [f64; 3],
     n: [f64; 3],
+    /// `u v`, `texture_u texture_v`, `s t`: the first pair the file has is used.
+    uv: [[f64; 2]; 3],
 }
+
+/// The names of a PLY vertex's texture coordinates, in Mitsuba's order of preference.
+const UV_NAMES: [[&str; 2]; 3] = [["u", "v"], ["texture_u", "texture_v"], ["s", "t"]];
 
 #[derive(Default)]
 struct Face {
@@ -49,6 +55,12 @@ impl PropertyAccess for Vertex {
             "nx" => &mut self.n[0],
             "ny" => &mut self.n[1],
             "nz" => &mut self.n[2],
+            "u" => &mut self.uv[0][0],
+            "v" => &mut self.uv[0][1],
+            "texture_u" => &mut self.uv[1][0],
+            "texture_v" => &mut self.uv[1][1],
+            "s" => &mut self.uv[2][0],
+            "t" => &mut self.uv[2][1],
             _ => return,
         };
         *slot = scalar(&property).unwrap_or(f64::NAN);
@@ -81,8 +93,9 @@ impl PropertyAccess for Skipped {
     }
 }
 
-/// Reads a PLY file; errors are messages for the caller to place.
-pub fn load(path: &Path) -> Result<RawMesh, String> {
+/// Reads a PLY file (its `v` turned into `1 − v` with `flip_tex_coords`); errors are
+/// messages for the caller to place.
+pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut reader = BufReader::new(file);
@@ -92,6 +105,7 @@ pub fn load(path: &Path) -> Result<RawMesh, String> {
     let mut mesh = RawMesh::default();
     let mut normals = Vec::new();
     let mut has_normals = false;
+    let mut uvs = None;
     for (name, def) in &header.elements {
         // Every element takes at least one byte: a count beyond the file is a lie.
         if def.count as u64 > size {
@@ -107,6 +121,9 @@ pub fn load(path: &Path) -> Result<RawMesh, String> {
                 has_normals = ["nx", "ny", "nz"]
                     .iter()
                     .all(|n| def.properties.contains_key(*n));
+                let uv_names = UV_NAMES
+                    .iter()
+                    .position(|pair| pair.iter().all(|n| def.properties.contains_key(*n)));
                 let vertices = Parser::<Vertex>::new()
                     .read_payload_for_element(&mut reader, def, &header)
                     .map_err(truncated)?;
@@ -118,6 +135,17 @@ pub fn load(path: &Path) -> Result<RawMesh, String> {
                     mesh.positions.push(p);
                     normals.push(DVec3::from(v.n));
                 }
+                uvs = uv_names.map(|k| {
+                    vertices
+                        .iter()
+                        .map(|v| {
+                            let [s, t] = v.uv[k].map(|x| x as f32);
+                            let t = if flip_tex_coords { 1.0 - t } else { t };
+                            // A non-finite coordinate is no texture coordinate.
+                            Some(Vec2::new(s, t)).filter(|uv| uv.is_finite())
+                        })
+                        .collect()
+                });
             }
             "face" => {
                 let faces = Parser::<Face>::new()
@@ -152,5 +180,6 @@ pub fn load(path: &Path) -> Result<RawMesh, String> {
     if has_normals {
         mesh.normals = Some(normals);
     }
+    mesh.uvs = uvs;
     Ok(mesh)
 }

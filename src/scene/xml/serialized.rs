@@ -5,7 +5,7 @@
 
 use super::shapes::RawMesh;
 use flate2::read::ZlibDecoder;
-use glam::DVec3;
+use glam::{DVec3, Vec2};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
@@ -123,9 +123,11 @@ pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
     } else {
         None
     };
-    if flags & HAS_TEXCOORDS != 0 {
-        read_floats(&mut z, vertices, 2, double).map_err(io)?;
-    }
+    let uvs = if flags & HAS_TEXCOORDS != 0 {
+        Some(read_floats(&mut z, vertices, 2, double).map_err(io)?)
+    } else {
+        None
+    };
     if flags & HAS_COLORS != 0 {
         read_floats(&mut z, vertices, 3, double).map_err(io)?;
     }
@@ -148,6 +150,11 @@ pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
         positions,
         triangles,
         normals: normals.as_deref().map(vec3),
+        uvs: uvs.map(|uv| {
+            uv.chunks_exact(2)
+                .map(|c| Some(Vec2::new(c[0] as f32, c[1] as f32)).filter(|uv| uv.is_finite()))
+                .collect()
+        }),
     };
     mesh.check_indices("serialized mesh")?;
     Ok(mesh)

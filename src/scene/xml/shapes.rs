@@ -1,10 +1,11 @@
 //! Mitsuba's shapes: as triangles `obj`, `ply`, `serialized`, `rectangle`, `cube`, placed
 //! by `to_world` the way Mitsuba 3.9.1 places a mesh (the winding is kept where the
 //! transform mirrors, so that the faces' normals turn over while given vertex normals,
-//! through the inverse transpose, do not; `flip_normals` turns both over); analytic
-//! `sphere` (`center`, `radius`, `to_world`, `flip_normals`) and `disk` (`to_world`,
-//! `flip_normals`), intersected exactly ([`crate::accel::Analytic`]). `cylinder` is refused:
-//! tessellating it would change the image.
+//! through the inverse transpose, do not; `flip_normals` turns both over), with their
+//! vertex normals (shading normals) and texture coordinates; analytic `sphere` (`center`,
+//! `radius`, `to_world`, `flip_normals`) and `disk` (`to_world`, `flip_normals`),
+//! intersected exactly ([`crate::accel::Analytic`]). `cylinder` is refused: tessellating it
+//! would change the image.
 
 use super::parse::Loc;
 use super::props::Props;
@@ -12,7 +13,7 @@ use super::{ply, serialized};
 use crate::accel::Analytic;
 use crate::scene::validate::MAX_COORDINATE;
 use crate::scene::SceneError;
-use glam::{DMat3, DMat4, DVec3, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -23,6 +24,9 @@ pub struct RawMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Per-vertex normals, when the mesh has them.
     pub normals: Option<Vec<DVec3>>,
+    /// Per-vertex texture coordinates, when the mesh has them (`None` for a vertex that has
+    /// none in a mesh whose other vertices do).
+    pub uvs: Option<Vec<Option<Vec2>>>,
 }
 
 impl RawMesh {
@@ -63,13 +67,12 @@ pub fn load(p: &Props, files: &mut Vec<std::path::PathBuf>) -> Result<RawMesh, S
         "cube" => cube(),
         "obj" => {
             let path = file(p)?;
-            // UVs are read by the next issue's textures; the flag changes nothing before.
-            p.bool("flip_tex_coords", true)?;
-            obj(&path)?
+            obj(&path, p.bool("flip_tex_coords", true)?)?
         }
         "ply" => {
             let path = file(p)?;
-            ply::load(&path).map_err(|m| mesh_error(&path, m))?
+            let flip = p.bool("flip_tex_coords", false)?;
+            ply::load(&path, flip).map_err(|m| mesh_error(&path, m))?
         }
         "serialized" => {
             let path = file(p)?;
@@ -169,15 +172,19 @@ pub fn rectangle() -> RawMesh {
     let positions = [(-1., -1.), (1., -1.), (1., 1.), (-1., 1.)]
         .map(|(x, y)| DVec3::new(x, y, 0.0))
         .to_vec();
+    let uvs = [(0., 0.), (1., 0.), (1., 1.), (0., 1.)].map(|(u, v)| Some(Vec2::new(u, v)));
     RawMesh {
         positions,
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         normals: Some(vec![DVec3::Z; 4]),
+        uvs: Some(uvs.to_vec()),
     }
 }
 
 /// Mitsuba's cube: [-1, 1]³, four vertices per face with the face's outward normal.
 pub fn cube() -> RawMesh {
+    // Mitsuba's cube has texture coordinates too; genpath's, whose vertices come in
+    // another order, has none yet.
     let mut mesh = RawMesh {
         normals: Some(Vec::new()),
         ..RawMesh::default()
@@ -206,9 +213,11 @@ pub fn cube() -> RawMesh {
     mesh
 }
 
-/// A Wavefront OBJ as Mitsuba reads it: `v`, `vn`, `vt`, `f` (polygons as fans, negative
-/// indices relative); materials, groups and everything else ignored.
-pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
+/// A Wavefront OBJ as Mitsuba reads it: `v`, `vn`, `vt` (its `v` turned into `1 − v` with
+/// `flip_tex_coords`), `f` (polygons as fans, negative indices relative; a vertex for each
+/// distinct position, texture coordinate and normal triple); materials, groups and
+/// everything else ignored.
+pub fn obj(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|reason| SceneError::Io {
         path: path.to_path_buf(),
         reason,
@@ -218,25 +227,30 @@ pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
         line,
         message,
     };
-    let (mut v, mut vn) = (Vec::new(), Vec::new());
+    let (mut v, mut vn, mut vt) = (Vec::new(), Vec::new(), Vec::new());
     let mut mesh = RawMesh::default();
-    let mut normals = Vec::new();
-    let mut any_normal = false;
-    let mut vertex_of: HashMap<(usize, Option<usize>), u32> = HashMap::new();
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    let (mut any_normal, mut any_uv) = (false, false);
+    let mut vertex_of: HashMap<(usize, Option<usize>, Option<usize>), u32> = HashMap::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let mut words = raw.split('#').next().unwrap_or("").split_whitespace();
         match words.next() {
-            Some(kind @ ("v" | "vn")) => {
+            Some(kind @ ("v" | "vn" | "vt")) => {
                 let numbers: Vec<f64> = words
-                    .take(3)
+                    .take(if kind == "vt" { 2 } else { 3 })
                     .map(|w| super::parse::parse_f64(w).ok_or(w))
                     .collect::<Result<_, _>>()
                     .map_err(|w| err(line, format!("`{kind}`: `{w}` is not a finite number")))?;
-                let [x, y, z] = numbers[..] else {
-                    return Err(err(line, format!("`{kind}` needs 3 numbers")));
-                };
-                if kind == "v" { &mut v } else { &mut vn }.push(DVec3::new(x, y, z));
+                match (kind, &numbers[..]) {
+                    ("vt", &[s]) => vt.push(Vec2::new(s as f32, 0.0)),
+                    ("vt", &[s, t]) => vt.push(Vec2::new(s as f32, t as f32)),
+                    ("vt", _) => return Err(err(line, "`vt` needs 1 or 2 numbers".into())),
+                    (_, &[x, y, z]) => {
+                        if kind == "v" { &mut v } else { &mut vn }.push(DVec3::new(x, y, z))
+                    }
+                    _ => return Err(err(line, format!("`{kind}` needs 3 numbers"))),
+                }
             }
             Some("f") => {
                 let mut corners = Vec::new();
@@ -247,13 +261,22 @@ pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
                     };
                     let p = index(parts.next(), v.len(), "vertex")?
                         .ok_or_else(|| err(line, format!("`f`: `{w}` has no vertex index")))?;
-                    let _uv = parts.next();
+                    let t = index(parts.next(), vt.len(), "texture coordinate")?;
                     let n = index(parts.next(), vn.len(), "normal")?;
                     any_normal |= n.is_some();
+                    any_uv |= t.is_some();
                     let next = mesh.positions.len() as u32;
-                    let id = *vertex_of.entry((p, n)).or_insert_with(|| {
+                    let id = *vertex_of.entry((p, t, n)).or_insert_with(|| {
                         mesh.positions.push(v[p]);
-                        normals.push(n.map_or(DVec3::ZERO, |n| vn[n]));
+                        normals.push(n.map(|n| vn[n]));
+                        uvs.push(t.map(|t| {
+                            let uv: Vec2 = vt[t];
+                            if flip_tex_coords {
+                                Vec2::new(uv.x, 1.0 - uv.y)
+                            } else {
+                                uv
+                            }
+                        }));
                         next
                     });
                     corners.push(id);
@@ -270,13 +293,16 @@ pub fn obj(path: &Path) -> Result<RawMesh, SceneError> {
         }
     }
     if any_normal {
-        if normals.contains(&DVec3::ZERO) {
-            return Err(mesh_error(
+        let normals: Option<Vec<DVec3>> = normals.into_iter().collect();
+        mesh.normals = Some(normals.ok_or_else(|| {
+            mesh_error(
                 path,
                 "some faces give vertex normals and some do not".into(),
-            ));
-        }
-        mesh.normals = Some(normals);
+            )
+        })?);
+    }
+    if any_uv {
+        mesh.uvs = Some(uvs);
     }
     Ok(mesh)
 }
@@ -305,16 +331,31 @@ pub struct Placement {
     pub face_normals: bool,
 }
 
-/// The mesh in world space, wound so that its geometric normals are Mitsuba's. Where
-/// Mitsuba would shade with vertex normals that differ from the faces' (given ones, or the
-/// angle-weighted ones it computes for a mesh without any), the shape is refused: genpath
-/// does not implement shading normals yet.
+/// A shape in world space, as the scene keeps it.
+#[derive(Debug)]
+pub struct PlacedMesh {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Unit shading normal of each vertex, where Mitsuba shades with vertex normals that
+    /// differ from the faces' (given ones, or the angle-weighted ones it computes for a mesh
+    /// without any); `None` where the shape shades with its faces' normals (`face_normals`,
+    /// or vertex normals equal to them). Zero for a vertex without a usable normal (a zero
+    /// one in the file, or one around degenerate faces only): its triangles shade flat.
+    pub normals: Option<Vec<Vec3>>,
+    /// Vertices whose normal is zero.
+    pub zero_normals: usize,
+    /// Texture coordinates of each vertex, as the mesh gives them.
+    pub uvs: Option<Vec<Option<Vec2>>>,
+}
+
+/// The mesh in world space, wound so that its geometric normals are Mitsuba's, with
+/// Mitsuba's shading normals.
 pub fn place(
     mesh: RawMesh,
     how: &Placement,
     loc: Loc,
     p: &Props,
-) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), SceneError> {
+) -> Result<PlacedMesh, SceneError> {
     let linear = DMat3::from_mat4(how.to_world);
     let normal_matrix = linear.inverse().transpose();
     let positions: Vec<DVec3> = mesh
@@ -342,18 +383,31 @@ pub fn place(
             t.swap(1, 2);
         }
     }
+    let mut normals = None;
     if !how.face_normals {
         let sign = if how.flip_normals { -1.0 } else { 1.0 };
-        let normals = match &mesh.normals {
+        let n = match &mesh.normals {
             Some(n) => n
                 .iter()
                 .map(|&n| (normal_matrix * n).normalize_or_zero() * sign)
                 .collect(),
             None => angle_weighted_normals(&positions, &triangles),
         };
-        check_flat(&positions, &triangles, &normals, p)?;
+        if !is_flat(&positions, &triangles, &n) {
+            normals = Some(n);
+        }
     }
-    Ok((positions.iter().map(|x| x.as_vec3()).collect(), triangles))
+    Ok(PlacedMesh {
+        positions: positions.iter().map(|x| x.as_vec3()).collect(),
+        triangles,
+        zero_normals: normals
+            .iter()
+            .flatten()
+            .filter(|n| **n == DVec3::ZERO)
+            .count(),
+        normals: normals.map(|n| n.iter().map(|n| n.as_vec3()).collect()),
+        uvs: mesh.uvs,
+    })
 }
 
 /// Mitsuba's `recompute_vertex_normals`: each face's normal weighted by its angle at the
@@ -373,31 +427,18 @@ fn angle_weighted_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DV
     normals.iter().map(|n| n.normalize_or_zero()).collect()
 }
 
-/// Largest angle (its cosine) between a vertex normal and its face's normal that still
-/// shades as the flat face: 0.25°.
-const FLAT_COS: f64 = 0.999_990_5;
+/// Smallest cosine between a vertex normal and its face's normal that still shades as the
+/// flat face: 1e-5 rad, far below what an f32 shading normal resolves.
+const FLAT_COS: f64 = 1.0 - 5e-11;
 
-fn check_flat(
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
-    normals: &[DVec3],
-    p: &Props,
-) -> Result<(), SceneError> {
-    let curved = triangles
-        .iter()
-        .filter(|t| {
-            let v = t.map(|i| positions[i as usize]);
-            let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
-            ng != DVec3::ZERO && t.iter().any(|&i| normals[i as usize].dot(ng) < FLAT_COS)
-        })
-        .count();
-    if curved == 0 {
-        return Ok(());
-    }
-    Err(p.error(format!(
-        "Mitsuba shades {curved} of its {} triangles with vertex normals that differ from the faces' normals; genpath does not implement shading normals yet. Add <boolean name=\"face_normals\" value=\"true\"/> to render the faces flat (Mitsuba then renders them the same way)",
-        triangles.len()
-    )))
+/// Whether every vertex normal equals the normals of its (non-degenerate) faces: the shape
+/// then shades flat, as fast and with the same numbers as a mesh without vertex normals.
+fn is_flat(positions: &[DVec3], triangles: &[[u32; 3]], normals: &[DVec3]) -> bool {
+    triangles.iter().all(|t| {
+        let v = t.map(|i| positions[i as usize]);
+        let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+        ng == DVec3::ZERO || t.iter().all(|&i| normals[i as usize].dot(ng) >= FLAT_COS)
+    })
 }
 
 #[cfg(test)]
