@@ -7,7 +7,7 @@ itself. Run by hand, never by the build or CI:
 Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for each named scene (default: every
 scenes/mitsuba/*.xml), rendered with the `scalar_rgb` variant (the box filter and independent
 sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
-(box: 16384 spp at 64², glass, env and spheres: 16384 spp at 128², the tests' 256 spp).
+(box and smooth: 16384 spp at 64², glass, env and spheres: 16384 spp at 128², the tests' 256 spp).
 --spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
 e.g. Mitsuba's own render at the test's samples, to compare genpath's error with.
 --variant llvm_ad_rgb (with `apt-get install libllvm19`) is much faster; it renders in
@@ -22,7 +22,13 @@ import time
 import mitsuba as mi
 
 # (spp, res) of each scene's reference: 64 × its test's samples, at the test's size.
-REFERENCES = {"box": (16384, 64), "glass": (16384, 128), "env": (16384, 128), "spheres": (16384, 128)}
+REFERENCES = {
+    "box": (16384, 64),
+    "glass": (16384, 128),
+    "env": (16384, 128),
+    "spheres": (16384, 128),
+    "smooth": (16384, 64),
+}
 
 parser = argparse.ArgumentParser()
 parser.add_argument("names", nargs="*")

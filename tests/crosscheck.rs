@@ -420,6 +420,39 @@ fn cbox_scene_agrees() {
     shipped_scene_agrees("cbox");
 }
 
+/// Shading normals depend on a hit's barycentrics, not only its triangle and `t`: on the
+/// smooth-shaded `scenes/mitsuba/smooth.xml`, every camera ray at 128² that both back-ends
+/// send to the same triangle gets the same interpolated normal (≤ 1e-4); the same normals
+/// with `u` and `v` swapped (the other barycentric convention) must differ.
+#[test]
+fn smooth_scene_shading_normals_agree() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mitsuba/smooth.xml");
+    let scene = Scene::load(&path).unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+    let camera = scene.camera.resized(128, 128);
+    let bvh = BvhAccel::new(&scene.mesh);
+    let embree = EmbreeAccel::with_lanes(&scene.mesh, 8).expect("Embree builds the scene");
+    let (mut smooth, mut swapped_apart, mut worst) = (0, 0, 0.0f32);
+    for i in 0..128 * 128 {
+        let ray = camera.ray((i % 128) as f32 + 0.5, (i / 128) as f32 + 0.5);
+        let (Some(a), Some(b)) = (embree.intersect(&ray), bvh.intersect(&ray)) else {
+            continue;
+        };
+        let t = scene.mesh.triangles[a.prim as usize];
+        if a.prim != b.prim || scene.shading.normal(t, 0.0, 0.0).is_none() {
+            continue;
+        }
+        smooth += 1;
+        let ns = |h: &Hit| scene.shading_normal(h.prim, (h.u, h.v), h.ng);
+        worst = worst.max((ns(&a) - ns(&b)).length());
+        let swapped = scene.shading_normal(b.prim, (b.v, b.u), b.ng);
+        swapped_apart += usize::from((swapped - ns(&a)).length() > 1e-3);
+    }
+    println!("{smooth} smooth hits, largest difference {worst:e}, {swapped_apart} apart with u and v swapped");
+    assert!(smooth > 1000, "{smooth}");
+    assert!(worst <= 1e-4, "{worst}");
+    assert!(swapped_apart > smooth / 2, "{swapped_apart} of {smooth}");
+}
+
 /// A two-triangle quad in z = 0 sharing the diagonal v0–v2.
 fn quad() -> TriangleMesh {
     let positions = vec![

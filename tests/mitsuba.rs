@@ -6,7 +6,9 @@
 //! `thindielectric` pane) a render with the cube's index of refraction 3 % off, for
 //! `env.xml` (a `constant` emitter and a small area light) a render with the sky's radiance
 //! 3 % off, for `spheres.xml` (analytic spheres, glass, diffuse and emitting, and a disk
-//! light) a render with the emitting sphere's radius 3 % off; and `hide_emitters`. And the
+//! light) a render with the emitting sphere's radius 3 % off, for `smooth.xml` (smooth-shaded
+//! meshes) a render with `face_normals`; and `hide_emitters`. Vertex normals and texture
+//! coordinates as Mitsuba places them. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
 
@@ -515,6 +517,45 @@ fn constant_emitter_refusals_name_file_and_line() {
             "{emitters}: {error}"
         );
     }
+}
+
+/// The samples of the smooth-shading test (its reference has 64 × as many).
+const SMOOTH_SPP: u32 = 256;
+
+/// Shading normals: `smooth.xml` (a diffuse OBJ sphere with vertex normals, placed by a
+/// mirroring transform, and a copper PLY icosphere whose normals Mitsuba computes) agrees
+/// with Mitsuba's render; the same scene with `face_normals` (faceted) must not.
+#[test]
+fn pt_agrees_with_mitsuba_on_smooth_shading_and_face_normals_do_not() {
+    let path = scene_path("smooth.xml");
+    let reference = genpath::image::read(&scene_path("smooth.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert!(!scene.shading.normals.is_empty());
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, SMOOTH_SPP);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "smooth.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let flat = Scene::load_with(&path, &[("face_normals".into(), "true".into())]).unwrap();
+    assert!(flat.shading.normals.is_empty());
+    let (z_flat, _) = max_z(&render(&flat, SMOOTH_SPP), &reference, false);
+    eprintln!("smooth.xml: max |z| {z:.2}, with face normals {z_flat:.2} (critical {critical:.2})");
+    assert!(
+        z_flat > critical,
+        "smooth.xml with face normals: max |z| {z_flat:.2} < {critical:.2}, the test cannot see them"
+    );
+}
+
+/// As for `glass.xml`: every method renders `smooth.xml` at 32² without a bad pixel, with
+/// finite positive densities (the BRDF sampler's in the shading frame) and `pt`'s image
+/// mean; and a mixture density 50 % off is seen.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_smooth_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("smooth.xml");
 }
 
 /// `box.xml` with the cube replaced by `smooth_sphere.obj` or `smooth_blob.ply` (radius
