@@ -211,11 +211,7 @@ fn rays_leave_a_sphere_without_meeting_it_again_where_they_leave() {
         let mut counts = Default::default();
         for _ in 0..20_000 {
             let n = genpath::sampling::uniform_sphere(rng.random(), rng.random()).as_dvec3();
-            let x = SurfacePoint {
-                p: (c + n * radius).as_vec3(),
-                ng: n.as_vec3(),
-                prim: 0,
-            };
+            let x = SurfacePoint::flat((c + n * radius).as_vec3(), n.as_vec3(), 0);
             let mut d = genpath::sampling::uniform_sphere(rng.random(), rng.random());
             if d.dot(x.ng).abs() < 1e-3 {
                 continue;

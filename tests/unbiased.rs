@@ -8,7 +8,10 @@
 //! weights were left unnormalised. On `spheres.xml` (an emitting sphere, which `pt` samples
 //! by its visible cone and the mixtures' light points by area, a disk light, glass and
 //! diffuse spheres) the same agreement, and an `srt` without its light technique's density
-//! rejected.
+//! rejected. On a smooth-shaded scene (`scenes/mitsuba/smooth.xml`), the methods agree with
+//! `pt` in the shading frame, and `srt` with the shading normals dropped (geometric normals:
+//! another image) or with its densities evaluated in the geometric frame (a biased
+//! estimator) must be rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -44,6 +47,12 @@ fn scene_dir(name: &str) -> PathBuf {
 
 enum Which {
     Pt,
+    /// `srt` (next-event estimation at every vertex) whose densities are evaluated in the
+    /// geometric frame, while its paths are sampled in the shading frame.
+    SrtGeometricDensity,
+    /// `srt` (next-event estimation at every vertex) on the scene with its shading normals
+    /// dropped: every vertex shades with its geometric normal.
+    SrtShadedFlat,
     /// `srt` with the estimator `nee`, optionally with the light technique's densities left
     /// out of the balance heuristic's denominator.
     Srt {
@@ -110,6 +119,20 @@ fn scene_file(name: &str) -> PathBuf {
 fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
     let mut scene = Scene::load(&scene_file(name)).unwrap();
     scene.resize(SIZE, SIZE);
+    let which = match which {
+        Which::SrtShadedFlat => {
+            assert!(
+                !scene.shading.normals.is_empty(),
+                "{name} has no shading normals"
+            );
+            scene.shading.normals.clear();
+            Which::Srt {
+                nee: Nee::Every,
+                light_dropped: false,
+            }
+        }
+        which => which,
+    };
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
     let mut plan = None;
@@ -199,6 +222,19 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
                 false => srt,
             })
         }
+        Which::SrtShadedFlat => unreachable!("replaced above"),
+        Which::SrtGeometricDensity => Some(
+            Mixture::new(
+                vec![PathGenerator::srt(
+                    max_bounces,
+                    SRT_ABSORPTION,
+                    mixture_file::uniform_light(&scene),
+                )],
+                vec![1.0],
+            )
+            .with_nee(Nee::Every)
+            .with_geometric_frame_density(),
+        ),
         Which::Anchors { pdf_error } => {
             let m = mixture_file::load(
                 &scene_dir(name).join("anchors.toml"),
@@ -477,4 +513,68 @@ fn spheres_methods_agree_and_a_dropped_light_density_does_not() {
         z > z_critical(n),
         "{name}: the light technique's density left out went unnoticed (max |z| {z:.2})"
     );
+}
+
+/// Shading normals: on `smooth.xml` (a diffuse sphere and a copper icosphere, smooth-shaded)
+/// `srt` and `ga` with either estimator, `ga-pt` with the spatial guide and `pg` agree with
+/// `pt`, every one sampling and weighing BSDFs in the shading frame; `srt` on the scene
+/// shaded flat (its shading normals dropped) must not, nor `srt` whose mixture densities
+/// are evaluated in the geometric frame (the balance heuristic's frame not the sampler's).
+#[test]
+fn smooth_shading_methods_agree_and_a_wrong_frame_does_not() {
+    let name = "smooth.xml";
+    let bounces = 3;
+    let pt = render_with(name, Which::Pt, bounces, SPP / 2, 11);
+    let srt = |nee| Which::Srt {
+        nee,
+        light_dropped: false,
+    };
+    let ga = |nee| Which::Ga {
+        nee,
+        unnormalised: false,
+        light_dropped: false,
+    };
+    for (label, which) in [
+        ("srt", srt(Nee::Every)),
+        ("srt, nee end", srt(Nee::End)),
+        ("ga", ga(Nee::Every)),
+        ("ga, nee end", ga(Nee::End)),
+        ("ga-pt, spatial", Which::GaPt { spatial: true }),
+        (
+            "pg",
+            Which::Pg {
+                every_cell_dark: false,
+            },
+        ),
+    ] {
+        let film = render_with(name, which, bounces, SPP / 2, 23);
+        let (z, rel, n) = compare(&film, &pt);
+        let zc = z_critical(n);
+        eprintln!(
+            "{name}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}"
+        );
+        assert!(z <= zc, "{name}: {label} vs pt: max |z| {z:.2} > {zc:.2}");
+        assert!(
+            rel < 0.025,
+            "{name}: {label}: relative standard error {rel:.4} too wide"
+        );
+    }
+    for (label, which) in [
+        ("srt shaded flat", Which::SrtShadedFlat),
+        (
+            "srt with densities in the geometric frame",
+            Which::SrtGeometricDensity,
+        ),
+    ] {
+        let wrong = render_with(name, which, bounces, SPP / 2, 23);
+        let (z, _, n) = compare(&wrong, &pt);
+        eprintln!(
+            "{name}: {label} vs pt: max |z| {z:.2} (critical {:.2})",
+            z_critical(n)
+        );
+        assert!(
+            z > z_critical(n),
+            "{name}: {label} went unnoticed (max |z| {z:.2})"
+        );
+    }
 }

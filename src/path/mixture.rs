@@ -24,6 +24,21 @@ pub struct Mixture {
     /// leaves the light technique's densities out.
     #[serde(skip)]
     light_density_dropped: bool,
+    /// Fault injection for statistical tests: [`Mixture::pdf_path`] evaluates the BSDF
+    /// densities in the geometric frame (each vertex's shading normal replaced by its
+    /// geometric one), while paths are sampled in the shading frame.
+    #[serde(skip)]
+    geometric_frame: bool,
+}
+
+/// `path` with each vertex's shading normal replaced by its geometric one (the fault of
+/// [`Mixture::with_geometric_frame_density`]).
+fn in_geometric_frame(path: &PathVertices) -> PathVertices {
+    let mut flat = path.clone();
+    for v in &mut flat.vertices {
+        v.point.ns = v.point.ng;
+    }
+    flat
 }
 
 /// Reusable buffers of one worker, so that sampling allocates nothing per path.
@@ -44,6 +59,7 @@ impl Mixture {
             nee: Nee::default(),
             pdf_error: None,
             light_density_dropped: false,
+            geometric_frame: false,
         }
     }
 
@@ -67,6 +83,15 @@ impl Mixture {
     #[cfg(any(test, feature = "testing"))]
     pub fn with_light_density_dropped(mut self) -> Self {
         self.light_density_dropped = true;
+        self
+    }
+
+    /// This mixture with its densities evaluated in the geometric frame where paths were
+    /// sampled in the shading frame: a wrong input that unbiasedness tests on smooth-shaded
+    /// scenes must reject.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn with_geometric_frame_density(mut self) -> Self {
+        self.geometric_frame = true;
         self
     }
 
@@ -102,6 +127,7 @@ impl Mixture {
             nee: parts.first().map_or_else(Nee::default, |(_, m)| m.nee),
             pdf_error: None,
             light_density_dropped: parts.iter().any(|(_, m)| m.light_density_dropped),
+            geometric_frame: parts.iter().any(|(_, m)| m.geometric_frame),
         }
     }
 
@@ -114,6 +140,14 @@ impl Mixture {
         c: &Contribution,
         max_bounces: u32,
     ) -> f64 {
+        let flat;
+        let path = match self.geometric_frame {
+            true => {
+                flat = in_geometric_frame(path);
+                &flat
+            }
+            false => path,
+        };
         let mut pdf = 0.0;
         for (i, (g, &w)) in self.generators.iter().zip(&self.weights).enumerate() {
             if w > 0.0 {
