@@ -2,8 +2,9 @@
 //! normalised modified-Phong lobe (chosen by albedo), or a delta BSDF (an ideal mirror or
 //! conductor here; dielectrics, which tell their sides apart, in [`super::specular`]).
 //!
-//! Directions are unit vectors pointing away from the surface; `n` is the geometric normal
-//! turned to the side of `wo` ([`facing_normal`]). Densities are solid-angle densities over
+//! Directions are unit vectors pointing away from the surface; `n` is the shading normal (the
+//! geometric one where a mesh has no vertex normals) turned to the side of `wo`
+//! ([`facing_normal`]). Densities are solid-angle densities over
 //! the full sphere (zero below the surface for the Lambertian lobe), in `f64`.
 
 use super::specular;
@@ -11,12 +12,12 @@ use crate::scene::Material;
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 
-/// The geometric normal turned towards `wo`: the side a two-sided surface scatters on.
-pub fn facing_normal(ng: Vec3, wo: Vec3) -> Vec3 {
-    if ng.dot(wo) >= 0.0 {
-        ng
+/// The (shading) normal `ns` turned towards `wo`: the side a two-sided surface scatters on.
+pub fn facing_normal(ns: Vec3, wo: Vec3) -> Vec3 {
+    if ns.dot(wo) >= 0.0 {
+        ns
     } else {
-        -ng
+        -ns
     }
 }
 
@@ -124,7 +125,7 @@ pub fn sample_direction(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
 /// (below the surface, or a black material), and for a dielectric, whose sampling needs the
-/// geometric normal's side: [`specular::sample`] samples every delta BSDF.
+/// stored (not facing) normal's side: [`specular::sample`] samples every delta BSDF.
 pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
     if m.mirror {
         return match m.dielectric {

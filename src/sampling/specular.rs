@@ -52,7 +52,7 @@ pub fn fresnel_dielectric(cos_theta_i: f64, eta: f64) -> (f64, f64, f64, f64) {
     (r, cos_theta_t, eta_it, eta_ti)
 }
 
-/// The probability that `d` reflects light arriving at `cos_theta_i` against its geometric
+/// The probability that `d` reflects light arriving at `cos_theta_i` against its shading
 /// normal (negative from inside): the Fresnel reflectance, with a thin sheet's internal
 /// reflections.
 pub fn reflect_probability(d: &Dielectric, cos_theta_i: f64) -> f64 {
@@ -66,26 +66,26 @@ pub fn reflect_probability(d: &Dielectric, cos_theta_i: f64) -> f64 {
 }
 
 /// The direction a dielectric `d` sends light into when it does not reflect: refracted
-/// through the interface (normal `ng`, unit `wo`), or straight through a thin sheet; with
-/// the weight's factor `η_ti²` (1 for a thin sheet).
-fn transmitted(d: &Dielectric, ng: DVec3, wo: DVec3) -> (DVec3, f64) {
+/// through the interface (shading normal `ns`, unit `wo`), or straight through a thin sheet;
+/// with the weight's factor `η_ti²` (1 for a thin sheet).
+fn transmitted(d: &Dielectric, ns: DVec3, wo: DVec3) -> (DVec3, f64) {
     if d.thin {
         return (-wo, 1.0);
     }
-    let cos_i = ng.dot(wo);
+    let cos_i = ns.dot(wo);
     let (_, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, f64::from(d.eta));
-    let wi = -eta_ti * wo + (eta_ti * cos_i + cos_t) * ng;
+    let wi = -eta_ti * wo + (eta_ti * cos_i + cos_t) * ns;
     (wi.normalize(), eta_ti * eta_ti)
 }
 
 /// The factor `η_ti²` by which `m`'s weight scales radiance that crossed its interface
-/// from `wi` to `wo` (geometric normal `ng`): for a smooth dielectric's refraction, 1
+/// from `wi` to `wo` (shading normal `ns`): for a smooth dielectric's refraction, 1
 /// otherwise. A path tracer's Russian roulette undoes it (as Mitsuba's does with its
 /// `eta`), so that a path inside glass is not ended for the compression alone.
-pub fn radiance_scale(m: &Material, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     match &m.dielectric {
-        Some(d) if !d.thin && ng.dot(wo) * ng.dot(wi) < 0.0 => {
-            let eta_ti = if ng.dot(wo) >= 0.0 {
+        Some(d) if !d.thin && ns.dot(wo) * ns.dot(wi) < 0.0 => {
+            let eta_ti = if ns.dot(wo) >= 0.0 {
                 d.eta.recip()
             } else {
                 d.eta
@@ -96,13 +96,13 @@ pub fn radiance_scale(m: &Material, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     }
 }
 
-/// Samples the delta BSDF of `m` (a mirror: [`Material::mirror`]) at a vertex of geometric
-/// normal `ng` (as stored, either orientation for a mirror; a dielectric tells its sides
-/// apart by it) seen from unit `wo`. `u` (uniform in [0, 1)) picks a dielectric's
+/// Samples the delta BSDF of `m` (a mirror: [`Material::mirror`]) at a vertex of shading
+/// normal `ns` (as stored, either orientation for a mirror; a dielectric tells its sides
+/// apart by it, as Mitsuba's in its shading frame) seen from unit `wo`. `u` (uniform in [0, 1)) picks a dielectric's
 /// reflection (`u < F`) or transmission; a mirror does not use it. The sample's `pdf` is 1
 /// (see the module documentation); `None` where it carries nothing.
-pub fn sample(m: &Material, ng: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
-    let n = facing_normal(ng, wo);
+pub fn sample(m: &Material, ns: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
+    let n = facing_normal(ns, wo);
     let Some(d) = &m.dielectric else {
         return (m.ks.max_element() > 0.0).then(|| BrdfSample {
             wi: reflect(wo, n).normalize(),
@@ -111,11 +111,11 @@ pub fn sample(m: &Material, ng: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
             delta: true,
         });
     };
-    let (ng64, wo64) = (ng.as_dvec3().normalize(), wo.as_dvec3().normalize());
-    let (wi, weight) = if u < reflect_probability(d, ng64.dot(wo64)) {
+    let (ns64, wo64) = (ns.as_dvec3().normalize(), wo.as_dvec3().normalize());
+    let (wi, weight) = if u < reflect_probability(d, ns64.dot(wo64)) {
         (reflect(wo, n).normalize(), m.ks)
     } else {
-        let (wi, scale) = transmitted(d, ng64, wo64);
+        let (wi, scale) = transmitted(d, ns64, wo64);
         (wi.as_vec3(), d.transmittance * scale as f32)
     };
     (weight.max_element() > 0.0).then_some(BrdfSample {

@@ -78,7 +78,7 @@ pub struct Material {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dielectric {
     /// η = interior / exterior index of refraction; the exterior is on the side of the
-    /// geometric normal.
+    /// (shading) normal.
     pub eta: f32,
     /// What transmission passes (Mitsuba's `specular_transmittance`).
     pub transmittance: Vec3,
@@ -369,6 +369,9 @@ impl Scene {
     /// geometric normal, where it shades flat; for an analytic shape `ng` (a sphere's and a
     /// disk's shading frame is their geometric one, as in Mitsuba).
     pub fn shading_normal(&self, prim: u32, (u, v): (f32, f32), ng: Vec3) -> Vec3 {
+        if self.shading.normals.is_empty() {
+            return ng;
+        }
         match self.mesh.triangles.get(prim as usize) {
             Some(&t) => self.shading.normal(t, u, v).unwrap_or(ng),
             None => ng,
