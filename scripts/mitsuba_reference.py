@@ -5,10 +5,10 @@ itself. Run by hand, never by the build or CI:
     python3 scripts/mitsuba_reference.py [NAME ...] [--spp N] [--res N] [--seed S] [--out FILE]
 
 Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for each named scene (default: every
-scenes/mitsuba/*.xml), rendered with the `scalar_rgb` variant (the box filter and independent
+scenes/mitsuba/*.xml with a sensor), rendered with the `scalar_rgb` variant (the box filter and independent
 sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
-(box and smooth: 16384 spp at 64², glass, env and spheres: 16384 spp at 128², the tests' 256 spp).
---spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
+(box and smooth: 16384 spp at 64², glass, env and spheres: 16384 spp at 128², legacy and params:
+16384 spp at their own 64 × 48; the tests' 256 spp). --spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
 e.g. Mitsuba's own render at the test's samples, to compare genpath's error with.
 --variant llvm_ad_rgb (with `apt-get install libllvm19`) is much faster; it renders in
 passes of at most 256 spp (seeds seed·1000 + pass) and averages them, to bound its memory.
@@ -28,6 +28,9 @@ REFERENCES = {
     "env": (16384, 128),
     "spheres": (16384, 128),
     "smooth": (16384, 64),
+    # 64 × 48, fixed in the files (their film is not square: no `res` parameter).
+    "legacy": (16384, None),
+    "params": (16384, None),
 }
 
 parser = argparse.ArgumentParser()
@@ -41,7 +44,12 @@ args = parser.parse_args()
 
 mi.set_variant(args.variant)
 here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "mitsuba")
-names = args.names or [os.path.basename(p)[:-4] for p in sorted(glob.glob(os.path.join(here, "*.xml")))]
+# Every scene with a sensor (not legacy_room.xml, which legacy.xml includes).
+names = args.names or [
+    os.path.basename(p)[:-4]
+    for p in sorted(glob.glob(os.path.join(here, "*.xml")))
+    if "<sensor" in open(p).read()
+]
 if args.out and len(names) != 1:
     parser.error("--out takes one scene")
 for name in names:
@@ -49,14 +57,15 @@ for name in names:
     spp, res = REFERENCES.get(name, (16384, 64))
     spp, res = args.spp or spp, args.res or res
     start = time.time()
+    size = {} if res is None else {"res": res}
     if args.variant.startswith("scalar"):
-        scene = mi.load_file(path, spp=spp, res=res)
+        scene = mi.load_file(path, spp=spp, **size)
         image = mi.render(scene, seed=args.seed)
     else:
         per_pass = min(spp, 256)
         if spp % per_pass:
             parser.error(f"{spp} spp is not a multiple of {per_pass}")
-        scene = mi.load_file(path, spp=per_pass, res=res)
+        scene = mi.load_file(path, spp=per_pass, **size)
         passes = spp // per_pass
         image = None
         for i in range(passes):
@@ -66,4 +75,5 @@ for name in names:
     seconds = time.time() - start
     out = args.out or path[:-4] + ".ref.exr"
     mi.Bitmap(image).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, False).write(out)
-    print(f"{name}.xml: {spp} spp at {res}², seed {args.seed}, in {seconds:.1f} s -> {out}")
+    size = f"{res}²" if res else "its own size"
+    print(f"{name}.xml: {spp} spp at {size}, seed {args.seed}, in {seconds:.1f} s -> {out}")
