@@ -7,7 +7,11 @@
 //! `env.xml` (a `constant` emitter and a small area light) a render with the sky's radiance
 //! 3 % off, for `spheres.xml` (analytic spheres, glass, diffuse and emitting, and a disk
 //! light) a render with the emitting sphere's radius 3 % off, for `smooth.xml` (smooth-shaded
-//! meshes) a render with `face_normals`; and `hide_emitters`. Vertex normals and texture
+//! meshes) a render with `face_normals`, for `legacy.xml` (Mitsuba 0.6's format, upgraded;
+//! `<include>`, `<alias>`, `fovAxis`, `nearClip`) a render with the field of view 3 % wide,
+//! for `params.xml` (`<matrix>`, `focal_length`, `far_clip`, `<path>`, a serialized file
+//! with `flip_normals`, a conductor's `eta`/`k`) a render with a 3 × 3 matrix transposed;
+//! and `hide_emitters`. Vertex normals and texture
 //! coordinates as Mitsuba places them. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
@@ -546,6 +550,100 @@ fn pt_agrees_with_mitsuba_on_smooth_shading_and_face_normals_do_not() {
     assert!(
         z_flat > critical,
         "smooth.xml with face normals: max |z| {z_flat:.2} < {critical:.2}, the test cannot see them"
+    );
+}
+
+/// The samples of the `legacy.xml` and `params.xml` tests (their references have 64 × as
+/// many).
+const PARAMS_SPP: u32 = 256;
+
+/// Mitsuba 0.6's format: `legacy.xml` (version 0.6.0, its camelCase names upgraded: maxDepth,
+/// rrDepth, fovAxis, nearClip, toWorld, sampleCount, diffuseReflectance, intIOR, extIOR,
+/// specularTransmittance; its room `<include>`d from `legacy_room.xml`, whose BSDF it uses
+/// under an `<alias>`; a 64 × 48 film with the field of view on the smaller axis and a near
+/// clip plane through the floor) agrees with Mitsuba's render; the same scene with the field
+/// of view 3 % wide must not.
+#[test]
+fn pt_agrees_with_mitsuba_on_a_version_0_6_file_and_a_fov_3_percent_wide_does_not() {
+    let path = scene_path("legacy.xml");
+    let reference = genpath::image::read(&scene_path("legacy.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    let files: Vec<_> = scene
+        .files
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(files, ["legacy.xml", "legacy_room.xml"]);
+    // maxDepth 5 and sampleCount 16, upgraded.
+    assert_eq!((scene.render.max_bounces, scene.render.spp), (4, Some(16)));
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("rr_depth 3")),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, PARAMS_SPP);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "legacy.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let wide = Scene::load_with(&path, &[("fov".into(), "39.14".into())]).unwrap();
+    let (z_wide, _) = max_z(&render(&wide, PARAMS_SPP), &reference, false);
+    eprintln!(
+        "legacy.xml: max |z| {z:.2}, with the fov 3 % wide {z_wide:.2} (critical {critical:.2})"
+    );
+    assert!(
+        z_wide > critical,
+        "legacy.xml with the fov 3 % wide: max |z| {z_wide:.2} < {critical:.2}, the test cannot see it"
+    );
+}
+
+/// `params.xml` (a camera placed by a 16-value `<matrix>` with a `focal_length` and a far
+/// clip plane; a `<path>` folder holding a two-mesh serialized file: a wedge placed by a
+/// 9-value `<matrix>`, and the light, turned to face down by `flip_normals`, its radiance
+/// wavelength:value pairs; a conductor with explicit `eta`, `k` (pairs) and
+/// `specular_reflectance`; a sphere centred by a `<vector>`; `rr_depth`) agrees with
+/// Mitsuba's render; the same scene with the wedge's 3 × 3 matrix transposed must not.
+#[test]
+fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_transposed_matrix_does_not(
+) {
+    let path = scene_path("params.xml");
+    let reference = genpath::image::read(&scene_path("params.ref.exr")).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    let files: Vec<_> = scene
+        .files
+        .iter()
+        .map(|p| p.strip_prefix(scene_path("")).unwrap().to_owned())
+        .collect();
+    assert_eq!(
+        files,
+        [
+            Path::new("params.xml"),
+            Path::new("meshes/params.serialized"),
+            Path::new("meshes/params.serialized")
+        ]
+    );
+    // The wedge's 8 triangles, the light's 2 among them; the sphere.
+    assert_eq!(scene.mesh.shapes.len(), 1);
+    assert_eq!(
+        (scene.camera.width, scene.camera.height),
+        (reference.width, reference.height)
+    );
+    let film = render(&scene, PARAMS_SPP);
+    let (z, n) = max_z(&film, &reference, false);
+    let critical = z_critical(n);
+    assert!(z < critical, "params.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let transposed = "0.573406, 0, -0.401503, 0, 0.9, 0, 0.286788, 0, 0.409576";
+    let off = Scene::load_with(&path, &[("rot".into(), transposed.into())]).unwrap();
+    let (z_off, _) = max_z(&render(&off, PARAMS_SPP), &reference, false);
+    eprintln!(
+        "params.xml: max |z| {z:.2}, with the wedge's matrix transposed {z_off:.2} (critical {critical:.2})"
+    );
+    assert!(
+        z_off > critical,
+        "params.xml with the wedge's matrix transposed: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
     );
 }
 
