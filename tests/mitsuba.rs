@@ -647,6 +647,49 @@ fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_trans
     );
 }
 
+/// The horizontal field of view of every `fov_axis` and of `focal_length` (given with and
+/// without `mm`, and Mitsuba's default 50 mm) on a landscape and a portrait film, as Mitsuba
+/// 3.9.1 computes it (its `x_fov`, printed by `mi.load_string(…).sensors()[0]`).
+#[test]
+fn every_fov_axis_and_focal_length_give_mitsubas_horizontal_field_of_view() {
+    let fov = |axis: &str| {
+        format!(r#"<float name="fov" value="38"/><string name="fov_axis" value="{axis}"/>"#)
+    };
+    let focal = |f: &str| format!(r#"<string name="focal_length" value="{f}"/>"#);
+    // (lens, x_fov at 64 × 48, x_fov at 48 × 64), in degrees.
+    let cases = [
+        (fov("x"), 38.0, 38.0),
+        (fov("y"), 49.320_04, 28.960_054),
+        (fov("diagonal"), 30.801_725, 23.345_772),
+        (fov("smaller"), 49.320_04, 38.0),
+        (fov("larger"), 38.0, 28.960_054),
+        (focal("35mm"), 52.622_543, 40.695_274),
+        (focal("50"), 38.184_84, 29.105_461),
+        (String::new(), 38.184_84, 29.105_461),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (lens, landscape, portrait) in &cases {
+        for ((w, h), expected) in [((64, 48), landscape), ((48, 64), portrait)] {
+            let text = format!(
+                r#"<scene version="3.0.0">
+<sensor type="perspective">{lens}<film type="hdrfilm"><integer name="width" value="{w}"/><integer name="height" value="{h}"/><rfilter type="box"/></film></sensor>
+<shape type="cube"/>
+<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+</scene>
+"#
+            );
+            let path = dir.path().join("fov.xml");
+            std::fs::write(&path, text).unwrap();
+            let scene = Scene::load(&path).unwrap();
+            let x = scene.camera.fov_x.to_degrees();
+            assert!(
+                (x - expected).abs() < 1e-4,
+                "{lens} at {w} × {h}: {x}° where Mitsuba has {expected}°"
+            );
+        }
+    }
+}
+
 /// As for `glass.xml`: every method renders `smooth.xml` at 32² without a bad pixel, with
 /// finite positive densities (the BRDF sampler's in the shading frame) and `pt`'s image
 /// mean; and a mixture density 50 % off is seen.
