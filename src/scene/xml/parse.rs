@@ -505,8 +505,10 @@ impl Parser {
                 }
             }
         }
-        // Top-level objects with an id are only reachable by reference.
-        self.push_prop(parent, name, Value::Object(index), el.loc, false)
+        // Top-level objects with an id are only reachable by reference. A nested object's
+        // `name` is upgraded as a property's is (Mitsuba upgrades every `name` but
+        // `<default>`'s).
+        self.push_prop(parent, name, Value::Object(index), el.loc, ctx.old)
     }
 
     fn include(&mut self, ctx: &Ctx, el: &Element, parent: usize) -> Result<(), SceneError> {
@@ -654,6 +656,40 @@ mod tests {
         assert_eq!(camel_to_snake("sampleCount"), "sample_count");
         assert_eq!(camel_to_snake("max_depth"), "max_depth");
         assert_eq!(camel_to_snake("fovAxis"), "fov_axis");
+    }
+
+    /// In a 0.x file a nested object's `name` is upgraded too: a `diffuse`'s
+    /// `<texture name="diffuseReflectance">` becomes its `reflectance` (which the builder
+    /// then refuses as a texture, instead of as an unknown parameter).
+    #[test]
+    fn old_files_upgrade_nested_objects_names() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("old.xml");
+        let text = r#"<scene version="0.5.0"><bsdf type="diffuse" id="d">
+            <texture type="bitmap" name="diffuseReflectance"/>
+            <ref name="someThing" id="d2"/></bsdf>
+            <bsdf type="diffuse" id="d2"><float name="fooBar" value="1"/></bsdf></scene>"#;
+        std::fs::write(&path, text).unwrap();
+        let doc = parse(&path, &[]).unwrap();
+        let names = |i: usize| -> Vec<&str> {
+            doc.objects[i]
+                .props
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect()
+        };
+        let diffuse = doc
+            .objects
+            .iter()
+            .position(|o| o.id.as_deref() == Some("d"))
+            .unwrap();
+        assert_eq!(names(diffuse), ["reflectance", "some_thing"]);
+        let other = doc
+            .objects
+            .iter()
+            .position(|o| o.id.as_deref() == Some("d2"))
+            .unwrap();
+        assert_eq!(names(other), ["foo_bar"]);
     }
 
     #[test]
