@@ -604,7 +604,8 @@ fn pt_agrees_with_mitsuba_on_a_version_0_6_file_and_a_fov_3_percent_wide_does_no
 /// clip plane; a `<path>` folder holding a two-mesh serialized file: a wedge placed by a
 /// 9-value `<matrix>`, and the light, turned to face down by `flip_normals`, its radiance
 /// wavelength:value pairs; a conductor with explicit `eta`, `k` (pairs) and
-/// `specular_reflectance`; a sphere centred by a `<vector>`; `rr_depth`) agrees with
+/// `specular_reflectance`; a sphere centred by a `<vector>`; a disk turned to the room by
+/// `flip_normals`; a `<float>` reflectance; `rr_depth`) agrees with
 /// Mitsuba's render; the same scene with the wedge's 3 × 3 matrix transposed must not.
 #[test]
 fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_transposed_matrix_does_not(
@@ -625,8 +626,8 @@ fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_trans
             Path::new("meshes/params.serialized")
         ]
     );
-    // The wedge's 8 triangles, the light's 2 among them; the sphere.
-    assert_eq!(scene.mesh.shapes.len(), 1);
+    // The sphere and the disk.
+    assert_eq!(scene.mesh.shapes.len(), 2);
     assert_eq!(
         (scene.camera.width, scene.camera.height),
         (reference.width, reference.height)
