@@ -105,18 +105,49 @@ fn block_z(film: &Film, reference: &Image, mirrored: bool) -> Vec<f64> {
     out
 }
 
-#[test]
-fn pt_agrees_with_mitsuba_and_a_mirrored_camera_does_not() {
-    let scene = Scene::load(&scene_path("box.xml")).unwrap();
-    let reference = genpath::image::read(&scene_path("box.ref.exr")).unwrap();
+/// `pt`'s render of `scene` (the file `scenes/mitsuba/NAME`) at `spp` against NAME's
+/// Mitsuba reference (`NAME.ref.exr`): of one size, and every block inside its interval.
+/// Returns the render, the reference, and the largest |z| with its critical value.
+fn agrees_with_reference(name: &str, scene: &Scene, spp: u32) -> (Film, Image, (f64, f64)) {
+    let reference = genpath::image::read(&scene_path(&name.replace(".xml", ".ref.exr"))).unwrap();
     assert_eq!(
         (scene.camera.width, scene.camera.height),
         (reference.width, reference.height)
     );
-    let film = render(&scene, SPP);
+    let film = render(scene, spp);
     let (z, n) = max_z(&film, &reference, false);
     let critical = z_critical(n);
-    assert!(z < critical, "box.xml: max |z| {z:.2} ≥ {critical:.2}");
+    assert!(z < critical, "{name}: max |z| {z:.2} ≥ {critical:.2}");
+    (film, reference, (z, critical))
+}
+
+/// The must-reject twin of [`agrees_with_reference`]: the file NAME loaded with `defines`
+/// (a deliberate error, `what`) and rendered alike must be outside the interval somewhere.
+fn twin_is_rejected(
+    name: &str,
+    defines: &[(&str, &str)],
+    spp: u32,
+    reference: &Image,
+    (z, critical): (f64, f64),
+    what: &str,
+) {
+    let defines: Vec<(String, String)> = defines
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    let twin = Scene::load_with(&scene_path(name), &defines).unwrap();
+    let (z_twin, _) = max_z(&render(&twin, spp), reference, false);
+    eprintln!("{name}: max |z| {z:.2}, {what} {z_twin:.2} (critical {critical:.2})");
+    assert!(
+        z_twin > critical,
+        "{name} {what}: max |z| {z_twin:.2} < {critical:.2}, the test cannot see it"
+    );
+}
+
+#[test]
+fn pt_agrees_with_mitsuba_and_a_mirrored_camera_does_not() {
+    let scene = Scene::load(&scene_path("box.xml")).unwrap();
+    let (film, reference, (_, critical)) = agrees_with_reference("box.xml", &scene, SPP);
     let (z_mirrored, _) = max_z(&film, &reference, true);
     assert!(
         z_mirrored > critical,
@@ -129,31 +160,22 @@ const GLASS_SPP: u32 = 256;
 
 #[test]
 fn pt_agrees_with_mitsuba_through_glass_and_an_index_3_percent_off_does_not() {
-    let path = scene_path("glass.xml");
-    let reference = genpath::image::read(&scene_path("glass.ref.exr")).unwrap();
-    let scene = Scene::load(&path).unwrap();
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, GLASS_SPP);
+    let scene = Scene::load(&scene_path("glass.xml")).unwrap();
+    let (film, reference, z) = agrees_with_reference("glass.xml", &scene, GLASS_SPP);
     assert!(film
         .image
         .pixels
         .iter()
         .flatten()
         .all(|v| v.is_finite() && *v >= 0.0));
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "glass.xml: max |z| {z:.2} ≥ {critical:.2}");
-    let off = Scene::load_with(&path, &[("ior".into(), "1.545".into())]).unwrap();
-    let (z_off, _) = max_z(&render(&off, GLASS_SPP), &reference, false);
-    eprintln!(
-        "glass.xml: max |z| {z:.2}, with the index 3 % off {z_off:.2} (critical {critical:.2})"
-    );
-    assert!(
-        z_off > critical,
-        "glass.xml with the index 3 % off: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
+    let index = [("ior", "1.545")];
+    twin_is_rejected(
+        "glass.xml",
+        &index,
+        GLASS_SPP,
+        &reference,
+        z,
+        "with the index 3 % off",
     );
 }
 
@@ -162,26 +184,18 @@ const ENV_SPP: u32 = 256;
 
 #[test]
 fn pt_agrees_with_mitsuba_under_an_environment_and_a_sky_3_percent_off_does_not() {
-    let path = scene_path("env.xml");
-    let reference = genpath::image::read(&scene_path("env.ref.exr")).unwrap();
-    let scene = Scene::load(&path).unwrap();
+    let scene = Scene::load(&scene_path("env.xml")).unwrap();
     assert!(scene.environment.is_some() && !scene.emitters.prims.is_empty());
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, ENV_SPP);
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "env.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let (_, reference, z) = agrees_with_reference("env.xml", &scene, ENV_SPP);
     // The sky's radiance 3 % high.
-    let sky = [("env".into(), "0.515, 0.618, 0.824".into())];
-    let off = Scene::load_with(&path, &sky).unwrap();
-    let (z_off, _) = max_z(&render(&off, ENV_SPP), &reference, false);
-    eprintln!("env.xml: max |z| {z:.2}, with the sky 3 % off {z_off:.2} (critical {critical:.2})");
-    assert!(
-        z_off > critical,
-        "env.xml with the sky 3 % off: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
+    let sky = [("env", "0.515, 0.618, 0.824")];
+    twin_is_rejected(
+        "env.xml",
+        &sky,
+        ENV_SPP,
+        &reference,
+        z,
+        "with the sky 3 % off",
     );
 }
 
@@ -191,17 +205,9 @@ const SPHERES_SPP: u32 = 256;
 #[test]
 fn pt_agrees_with_mitsuba_on_spheres_and_a_disk_and_a_light_radius_3_percent_off_does_not() {
     let path = scene_path("spheres.xml");
-    let reference = genpath::image::read(&scene_path("spheres.ref.exr")).unwrap();
     let scene = Scene::load(&path).unwrap();
     assert_eq!(scene.mesh.shapes.len(), 4);
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, SPHERES_SPP);
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "spheres.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let (_, reference, (z, critical)) = agrees_with_reference("spheres.xml", &scene, SPHERES_SPP);
     let off = Scene::load_with(&path, &[("lr".into(), "0.206".into())]).unwrap();
     // Over the blocks with variance only: the light's own blocks, whose outline the larger
     // radius moves, would reject it alone.
@@ -532,24 +538,19 @@ const SMOOTH_SPP: u32 = 256;
 #[test]
 fn pt_agrees_with_mitsuba_on_smooth_shading_and_face_normals_do_not() {
     let path = scene_path("smooth.xml");
-    let reference = genpath::image::read(&scene_path("smooth.ref.exr")).unwrap();
     let scene = Scene::load(&path).unwrap();
     assert!(!scene.shading.normals.is_empty());
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, SMOOTH_SPP);
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "smooth.xml: max |z| {z:.2} ≥ {critical:.2}");
+    let (_, reference, z) = agrees_with_reference("smooth.xml", &scene, SMOOTH_SPP);
+    let face_normals = [("face_normals", "true")];
     let flat = Scene::load_with(&path, &[("face_normals".into(), "true".into())]).unwrap();
     assert!(flat.shading.normals.is_empty());
-    let (z_flat, _) = max_z(&render(&flat, SMOOTH_SPP), &reference, false);
-    eprintln!("smooth.xml: max |z| {z:.2}, with face normals {z_flat:.2} (critical {critical:.2})");
-    assert!(
-        z_flat > critical,
-        "smooth.xml with face normals: max |z| {z_flat:.2} < {critical:.2}, the test cannot see them"
+    twin_is_rejected(
+        "smooth.xml",
+        &face_normals,
+        SMOOTH_SPP,
+        &reference,
+        z,
+        "with face normals",
     );
 }
 
@@ -566,7 +567,6 @@ const PARAMS_SPP: u32 = 256;
 #[test]
 fn pt_agrees_with_mitsuba_on_a_version_0_6_file_and_a_fov_3_percent_wide_does_not() {
     let path = scene_path("legacy.xml");
-    let reference = genpath::image::read(&scene_path("legacy.ref.exr")).unwrap();
     let scene = Scene::load(&path).unwrap();
     let files: Vec<_> = scene
         .files
@@ -581,22 +581,15 @@ fn pt_agrees_with_mitsuba_on_a_version_0_6_file_and_a_fov_3_percent_wide_does_no
         "{:?}",
         scene.warnings
     );
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, PARAMS_SPP);
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "legacy.xml: max |z| {z:.2} ≥ {critical:.2}");
-    let wide = Scene::load_with(&path, &[("fov".into(), "39.14".into())]).unwrap();
-    let (z_wide, _) = max_z(&render(&wide, PARAMS_SPP), &reference, false);
-    eprintln!(
-        "legacy.xml: max |z| {z:.2}, with the fov 3 % wide {z_wide:.2} (critical {critical:.2})"
-    );
-    assert!(
-        z_wide > critical,
-        "legacy.xml with the fov 3 % wide: max |z| {z_wide:.2} < {critical:.2}, the test cannot see it"
+    let (_, reference, z) = agrees_with_reference("legacy.xml", &scene, PARAMS_SPP);
+    let wide = [("fov", "39.14")];
+    twin_is_rejected(
+        "legacy.xml",
+        &wide,
+        PARAMS_SPP,
+        &reference,
+        z,
+        "with the fov 3 % wide",
     );
 }
 
@@ -611,7 +604,6 @@ fn pt_agrees_with_mitsuba_on_a_version_0_6_file_and_a_fov_3_percent_wide_does_no
 fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_transposed_matrix_does_not(
 ) {
     let path = scene_path("params.xml");
-    let reference = genpath::image::read(&scene_path("params.ref.exr")).unwrap();
     let scene = Scene::load(&path).unwrap();
     let files: Vec<_> = scene
         .files
@@ -628,24 +620,13 @@ fn pt_agrees_with_mitsuba_on_matrices_serialized_meshes_and_clipping_and_a_trans
     );
     // The sphere and the disk.
     assert_eq!(scene.mesh.shapes.len(), 2);
-    assert_eq!(
-        (scene.camera.width, scene.camera.height),
-        (reference.width, reference.height)
-    );
-    let film = render(&scene, PARAMS_SPP);
-    let (z, n) = max_z(&film, &reference, false);
-    let critical = z_critical(n);
-    assert!(z < critical, "params.xml: max |z| {z:.2} ≥ {critical:.2}");
-    let transposed = "0.573406, 0, -0.401503, 0, 0.9, 0, 0.286788, 0, 0.409576";
-    let off = Scene::load_with(&path, &[("rot".into(), transposed.into())]).unwrap();
-    let (z_off, _) = max_z(&render(&off, PARAMS_SPP), &reference, false);
-    eprintln!(
-        "params.xml: max |z| {z:.2}, with the wedge's matrix transposed {z_off:.2} (critical {critical:.2})"
-    );
-    assert!(
-        z_off > critical,
-        "params.xml with the wedge's matrix transposed: max |z| {z_off:.2} < {critical:.2}, the test cannot see it"
-    );
+    let (_, reference, z) = agrees_with_reference("params.xml", &scene, PARAMS_SPP);
+    let transposed = [(
+        "rot",
+        "0.573406, 0, -0.401503, 0, 0.9, 0, 0.286788, 0, 0.409576",
+    )];
+    let what = "with the wedge's matrix transposed";
+    twin_is_rejected("params.xml", &transposed, PARAMS_SPP, &reference, z, what);
 }
 
 /// The horizontal field of view of every `fov_axis` and of `focal_length` (given with and
