@@ -245,16 +245,23 @@ impl LearnDir {
         Ok(files)
     }
 
-    /// A wave file's results, refused where it is of another render or another wave.
-    fn read(&self, path: &Path, wave: usize) -> Result<Vec<WaveEntry>, String> {
-        let (header, entries) = plan_file::read_waves(path).map_err(|e| e.to_string())?;
-        if let Some((what, theirs, ours)) = header.identity.difference(&self.identity) {
-            return Err(format!(
+    /// Refuses the file at `path`, kept for the render of `identity`, where that is not
+    /// this learning's render.
+    fn check(&self, path: &Path, identity: &Identity) -> Result<(), String> {
+        match identity.difference(&self.identity) {
+            Some((what, theirs, ours)) => Err(format!(
                 "{}: it was learned for another render: {what} is {theirs} there and {ours} \
                  here (every job of a split GA must run the same command but for --shard)",
                 path.display()
-            ));
+            )),
+            None => Ok(()),
         }
+    }
+
+    /// A wave file's results, refused where it is of another render or another wave.
+    fn read(&self, path: &Path, wave: usize) -> Result<Vec<WaveEntry>, String> {
+        let (header, entries) = plan_file::read_waves(path).map_err(|e| e.to_string())?;
+        self.check(path, &header.identity)?;
         if header.wave != wave {
             return Err(format!(
                 "{}: it holds wave {}, not {wave}",
@@ -312,12 +319,7 @@ impl LearnStore for LearnDir {
             return Ok(None);
         }
         let (header, state) = plan_file::read_training(&path).map_err(|e| e.to_string())?;
-        if let Some((what, theirs, ours)) = header.identity.difference(&self.identity) {
-            return Err(format!(
-                "{}: it was learned for another render: {what} is {theirs} there and {ours} here",
-                path.display()
-            ));
-        }
+        self.check(&path, &header.identity)?;
         Ok(Some(state))
     }
 

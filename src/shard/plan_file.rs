@@ -132,6 +132,22 @@ fn encode_framed(
     ))
 }
 
+/// [`write_framed`] of `value` encoded as the payload.
+fn write_serialized(
+    kind: &Kind,
+    path: &Path,
+    header: &impl serde::Serialize,
+    value: &(impl serde::Serialize + ?Sized),
+) -> Result<(), PlanFileError> {
+    let payload = codec()
+        .serialize(value)
+        .map_err(|e| PlanFileError::Payload {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+    write_framed(kind, path, header, &payload)
+}
+
 fn write_framed(
     kind: &Kind,
     path: &Path,
@@ -270,13 +286,7 @@ pub fn write_waves(
     header: &WaveHeader,
     entries: &[WaveEntry],
 ) -> Result<(), PlanFileError> {
-    let payload = codec()
-        .serialize(entries)
-        .map_err(|e| PlanFileError::Payload {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-    write_framed(&WAVES, path, header, &payload)
+    write_serialized(&WAVES, path, header, entries)
 }
 
 /// Reads and checks the wave file at `path`.
@@ -309,13 +319,7 @@ pub fn write_training(
     header: &TrainingHeader,
     state: &[u8],
 ) -> Result<(), PlanFileError> {
-    let payload = codec()
-        .serialize(state)
-        .map_err(|e| PlanFileError::Payload {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-    write_framed(&TRAINING, path, header, &payload)
+    write_serialized(&TRAINING, path, header, state)
 }
 
 /// Reads and checks the training file at `path`.

@@ -24,18 +24,23 @@ fn methods() -> Vec<(&'static str, Vec<&'static str>)> {
     ]
 }
 
-/// `genpath COMMAND fig5 -o OUT --quiet FLAGS…`.
-fn run(command: &str, out: &Path, flags: &[&str]) -> Output {
+/// `genpath COMMAND fig5 -o OUT --quiet FLAGS…`'s arguments.
+fn args(command: &str, out: &Path, flags: &[&str]) -> Vec<String> {
     let scene = fig5();
-    let mut args = vec![
+    let head = [
         command,
         scene.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
         "--quiet",
     ];
-    args.extend_from_slice(flags);
-    genpath(&args)
+    head.iter().chain(flags).map(|s| s.to_string()).collect()
+}
+
+/// Runs `genpath COMMAND fig5 -o OUT --quiet FLAGS…`.
+fn run(command: &str, out: &Path, flags: &[&str]) -> Output {
+    let args = args(command, out, flags);
+    genpath(&args.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
 fn ok(command: &str, out: &Path, flags: &[&str]) -> Output {
@@ -103,17 +108,19 @@ fn a_split_ga_builds_the_in_process_plan() {
     }
 }
 
-/// Starts `learn`, waits until its learning folder holds a file (its first chunk of GA
-/// pixels, or its first training pass, kept), then sends `signal`: the ended process.
-fn stop_mid_learning(args: &[String], dir: &Path, signal: &str) -> Output {
+/// Starts `learn` of fig5 with `flags` into `plan`, waits until its learning folder holds a
+/// file (its first chunk of GA pixels, or its first training pass, kept), then sends
+/// `signal`: the ended process.
+fn stop_mid_learning(plan: &Path, flags: &[&str], signal: &str) -> Output {
+    let dir = plan.with_extension("plan.learning");
     let child = Command::new(env!("CARGO_BIN_EXE_genpath"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
+        .args(args("learn", plan, flags))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .expect("run genpath");
-    let kept = || !wave_files(dir).is_empty();
+    let kept = || !wave_files(&dir).is_empty();
     signal_when(child, kept, signal, "first kept file")
 }
 
@@ -139,18 +146,7 @@ fn a_stopped_learn_goes_on_to_the_uninterrupted_plan() {
 
     let plan = d.join("ga.plan");
     let waves = d.join("ga.plan.learning");
-    let scene = fig5();
-    let args: Vec<String> = [
-        "learn",
-        scene.to_str().unwrap(),
-        "-o",
-        plan.to_str().unwrap(),
-    ]
-    .iter()
-    .chain(&flags)
-    .map(|s| s.to_string())
-    .collect();
-    let stopped = stop_mid_learning(&args, &waves, "TERM");
+    let stopped = stop_mid_learning(&plan, &flags, "TERM");
     let err = String::from_utf8_lossy(&stopped.stderr);
     assert_eq!(stopped.status.code(), Some(143), "{err}");
     assert!(err.contains("stopped by SIGTERM in wave"), "{err}");
@@ -205,18 +201,7 @@ fn a_stopped_training_goes_on_to_the_uninterrupted_guide() {
     ];
     let plan = d.join("pg.plan");
     let kept = d.join("pg.plan.learning");
-    let scene = fig5();
-    let args: Vec<String> = [
-        "learn",
-        scene.to_str().unwrap(),
-        "-o",
-        plan.to_str().unwrap(),
-    ]
-    .iter()
-    .chain(&flags)
-    .map(|s| s.to_string())
-    .collect();
-    let stopped = stop_mid_learning(&args, &kept, "INT");
+    let stopped = stop_mid_learning(&plan, &flags, "INT");
     let err = String::from_utf8_lossy(&stopped.stderr);
     assert_eq!(stopped.status.code(), Some(130), "{err}");
     assert!(err.contains("in the spatial guide's training"), "{err}");
