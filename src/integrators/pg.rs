@@ -282,8 +282,12 @@ pub fn train_spatial(
     let store = settings.control.learning.as_deref();
     let kept = |e: String| PrepareError::Kept(e);
     let mut at = match store.map(|s| s.load_training()).transpose().map_err(kept)? {
-        Some(Some(bytes)) => bincode::deserialize::<Between>(&bytes)
-            .map_err(|e| kept(format!("the spatial guide's training: {e}")))?,
+        Some(Some(bytes)) => {
+            let (at, seconds, dark): (Between, f64, Vec<bool>) = bincode::deserialize(&bytes)
+                .map_err(|e| kept(format!("the spatial guide's training: {e}")))?;
+            records.set_dark(dark).map_err(kept)?;
+            Between { seconds, ..at }
+        }
         // Before the first pass: no samples, and a guide that has learned nothing.
         _ => Between {
             passes: 0,
@@ -297,7 +301,6 @@ pub fn train_spatial(
             recorded_in_all: 0,
             seconds: 0.0,
             last: 0.0,
-            dark: Vec::new(),
         },
     };
     if at.training.samples.sum.len() != pixels {
@@ -305,10 +308,6 @@ pub fn train_spatial(
             "the spatial guide's kept training is of {} pixels, not {pixels}",
             at.training.samples.sum.len()
         )));
-    }
-    if at.passes > 0 {
-        let dark = std::mem::take(&mut at.dark);
-        records.set_dark(dark).map_err(kept)?;
     }
     let bar = progress_bar(0, "guide", settings.progress);
     let stop = &settings.control.stop;
@@ -392,12 +391,11 @@ pub fn train_spatial(
         at.last = t0.elapsed().as_secs_f64();
         at.passes += 1;
         if let Some(store) = store {
-            let seconds = at.seconds;
-            at.seconds = elapsed(&at);
-            at.dark = records.dark().to_vec();
-            let bytes = bincode::serialize(&at).map_err(|e| kept(e.to_string()))?;
+            // Kept beside it: the seconds so far, and the records' dark cells
+            // ([`SampleStorage::dark`]), which the next guide keeps.
+            let kept_state = (&at, elapsed(&at), records.dark());
+            let bytes = bincode::serialize(&kept_state).map_err(|e| kept(e.to_string()))?;
             store.save_training(at.passes, &bytes).map_err(kept)?;
-            (at.seconds, at.dark) = (seconds, Vec::new());
         }
     }
     bar.finish_and_clear();
@@ -424,8 +422,9 @@ pub fn train_spatial(
 }
 
 /// The training between two passes: what the next pass starts from, which `genpath learn`
-/// keeps after each pass ([`crate::genetic::plan::LearnStore::save_training`]), so that
-/// learning stopped by a signal goes on from the next pass to the same guide.
+/// keeps after each pass ([`crate::genetic::plan::LearnStore::save_training`], with the
+/// seconds so far and the records' dark cells beside it), so that learning stopped by a
+/// signal goes on from the next pass to the same guide.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Between {
     /// Passes finished.
@@ -436,12 +435,10 @@ struct Between {
     trialling: bool,
     recorded_in_all: usize,
     /// Seconds of the passes of earlier processes (a time schedule's clock goes on from
-    /// them), and of the last pass.
+    /// them; kept beside the state), and of the last pass.
+    #[serde(skip)]
     seconds: f64,
     last: f64,
-    /// The training records' dark cells ([`SampleStorage::dark`]), which the next guide
-    /// keeps (empty but where kept between processes).
-    dark: Vec<bool>,
 }
 
 /// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
