@@ -313,6 +313,28 @@ fn compare(a: &Film, b: &Film) -> (f64, f64, usize) {
     (max_z, max_rel, a.len())
 }
 
+/// `film` (`what`) estimates what `pt` does: every block inside its interval, and sharp
+/// enough to mean something (every block known to 2.5 % or better).
+fn assert_agrees(what: &str, film: &Film, pt: &Film) {
+    let (z, rel, n) = compare(film, pt);
+    let zc = z_critical(n);
+    eprintln!("{what} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}");
+    assert!(z <= zc, "{what} vs pt: max |z| {z:.2} > {zc:.2}");
+    assert!(
+        rel < 0.025,
+        "{what}: relative standard error {rel:.4} too wide"
+    );
+}
+
+/// A deliberately wrong `film` (`what`) is told apart from `pt`: some block outside its
+/// interval.
+fn assert_rejected(what: &str, film: &Film, pt: &Film) {
+    let (z, _, n) = compare(film, pt);
+    let zc = z_critical(n);
+    eprintln!("{what}: max |z| {z:.2} (critical {zc:.2})");
+    assert!(z > zc, "{what} went unnoticed (max |z| {z:.2})");
+}
+
 fn check_agree(name: &str, max_bounces: u32) {
     let pt = render_with(name, Which::Pt, max_bounces, SPP, 11);
     let srt = |nee| Which::Srt {
@@ -348,18 +370,7 @@ fn check_agree(name: &str, max_bounces: u32) {
         ),
     ] {
         let film = render_with(name, which, max_bounces, spp, 23);
-        let (z, rel, n) = compare(&film, &pt);
-        let zc = z_critical(n);
-        eprintln!("{name} n={max_bounces}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}");
-        assert!(
-            z <= zc,
-            "{name} n={max_bounces}: {label} vs pt: max |z| {z:.2} > {zc:.2}"
-        );
-        // Sharp enough to mean something: every block known to 2.5 % or better.
-        assert!(
-            rel < 0.025,
-            "{name} n={max_bounces}: {label}: relative standard error {rel:.4} too wide"
-        );
+        assert_agrees(&format!("{name} n={max_bounces}: {label}"), &film, &pt);
     }
 }
 
@@ -374,15 +385,7 @@ fn check_rejects_wrong_pdf(name: &str) {
         SPP,
         23,
     );
-    let (z, _, n) = compare(&wrong, &pt);
-    eprintln!(
-        "{name}: density ×1.1: max |z| {z:.2} (critical {:.2})",
-        z_critical(n)
-    );
-    assert!(
-        z > z_critical(n),
-        "{name}: a component density off by 10 % went unnoticed (max |z| {z:.2})"
-    );
+    assert_rejected(&format!("{name}: a component density ×1.1"), &wrong, &pt);
 }
 
 #[test]
@@ -394,15 +397,7 @@ fn fig5_rejects_unnormalised_interpolation_weights() {
         light_dropped: false,
     };
     let wrong = render_with("fig5", which, 5, SPP / 8, 23);
-    let (z, _, n) = compare(&wrong, &pt);
-    eprintln!(
-        "fig5: ga with unnormalised interpolation: max |z| {z:.2} (critical {:.2})",
-        z_critical(n)
-    );
-    assert!(
-        z > z_critical(n),
-        "fig5: unnormalised interpolation weights went unnoticed (max |z| {z:.2})"
-    );
+    assert_rejected("fig5: ga with unnormalised interpolation", &wrong, &pt);
 }
 
 /// With next-event estimation at every vertex, `srt` and `ga` whose mixtures leave the light
@@ -429,15 +424,8 @@ fn fig5_rejects_a_dropped_light_density() {
         ),
     ] {
         let wrong = render_with("fig5", which, 5, SPP / 8, 23);
-        let (z, _, n) = compare(&wrong, &pt);
-        eprintln!(
-            "fig5: {label} without the light technique's density: max |z| {z:.2} (critical {:.2})",
-            z_critical(n)
-        );
-        assert!(
-            z > z_critical(n),
-            "fig5: {label}: the light technique's density left out went unnoticed (max |z| {z:.2})"
-        );
+        let what = format!("fig5: {label} without the light technique's density");
+        assert_rejected(&what, &wrong, &pt);
     }
 }
 
@@ -492,27 +480,11 @@ fn spheres_methods_agree_and_a_dropped_light_density_does_not() {
         ),
     ] {
         let film = render_with(name, which, 4, spp, 23);
-        let (z, rel, n) = compare(&film, &pt);
-        let zc = z_critical(n);
-        eprintln!(
-            "{name}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}"
-        );
-        assert!(z <= zc, "{name}: {label} vs pt: max |z| {z:.2} > {zc:.2}");
-        assert!(
-            rel < 0.025,
-            "{name}: {label}: relative standard error {rel:.4} too wide"
-        );
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
     let wrong = render_with(name, srt(Nee::Every, true), 4, spp, 23);
-    let (z, _, n) = compare(&wrong, &pt);
-    eprintln!(
-        "{name}: srt without the light technique's density: max |z| {z:.2} (critical {:.2})",
-        z_critical(n)
-    );
-    assert!(
-        z > z_critical(n),
-        "{name}: the light technique's density left out went unnoticed (max |z| {z:.2})"
-    );
+    let what = format!("{name}: srt without the light technique's density");
+    assert_rejected(&what, &wrong, &pt);
 }
 
 /// Shading normals: on `smooth.xml` (a diffuse sphere and a copper icosphere, smooth-shaded)
@@ -548,16 +520,7 @@ fn smooth_shading_methods_agree_and_a_wrong_frame_does_not() {
         ),
     ] {
         let film = render_with(name, which, bounces, SPP / 2, 23);
-        let (z, rel, n) = compare(&film, &pt);
-        let zc = z_critical(n);
-        eprintln!(
-            "{name}: {label} vs pt: max |z| {z:.2} (critical {zc:.2}), worst relative se {rel:.4}"
-        );
-        assert!(z <= zc, "{name}: {label} vs pt: max |z| {z:.2} > {zc:.2}");
-        assert!(
-            rel < 0.025,
-            "{name}: {label}: relative standard error {rel:.4} too wide"
-        );
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
     for (label, which) in [
         ("srt shaded flat", Which::SrtShadedFlat),
@@ -567,14 +530,6 @@ fn smooth_shading_methods_agree_and_a_wrong_frame_does_not() {
         ),
     ] {
         let wrong = render_with(name, which, bounces, SPP / 2, 23);
-        let (z, _, n) = compare(&wrong, &pt);
-        eprintln!(
-            "{name}: {label} vs pt: max |z| {z:.2} (critical {:.2})",
-            z_critical(n)
-        );
-        assert!(
-            z > z_critical(n),
-            "{name}: {label} went unnoticed (max |z| {z:.2})"
-        );
+        assert_rejected(&format!("{name}: {label}"), &wrong, &pt);
     }
 }
