@@ -12,7 +12,7 @@
 
 use super::args::{MethodArgs, SceneArgs};
 use super::check_dir;
-use super::session::{shard_path, write_stats, Session};
+use super::session::{beside, shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{LearnStore, PlanError, WaveEntry};
@@ -85,7 +85,7 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         &config,
     )?;
     let stop = super::resume::stop_on_signals()?;
-    let dir = (args.learn_dir.clone()).unwrap_or_else(|| suffixed(&args.output, "learning"));
+    let dir = (args.learn_dir.clone()).unwrap_or_else(|| beside(&args.output, ".learning"));
     let store = LearnDir::open(dir.clone(), identity.clone(), shard, stop.clone())?;
     let settings = genpath::integrators::RenderSettings {
         control: genpath::integrators::Control {
@@ -189,14 +189,6 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// `path` with `.suffix` added after its name.
-fn suffixed(path: &Path, suffix: &str) -> PathBuf {
-    let mut name = path.as_os_str().to_owned();
-    name.push(".");
-    name.push(suffix);
-    PathBuf::from(name)
 }
 
 /// What learning finished, kept as files in a folder: `wave-W.K-of-N.bin`, the GA pixels of

@@ -128,9 +128,15 @@ impl Session {
 
 /// `<output>.shard`, where a shard of a render to `output` keeps its sums.
 pub fn shard_path(output: &Path) -> PathBuf {
-    let mut path = output.as_os_str().to_owned();
-    path.push(".shard");
-    PathBuf::from(path)
+    beside(output, ".shard")
+}
+
+/// `path` with `suffix` added after its whole name (`plan.bin` → `plan.bin.json`): the files
+/// that go with an output.
+pub fn beside(path: &Path, suffix: &str) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(suffix);
+    PathBuf::from(name)
 }
 
 pub fn rays_json(rays: RayCounts) -> serde_json::Value {
@@ -144,9 +150,7 @@ pub fn rays_json(rays: RayCounts) -> serde_json::Value {
 pub fn write_stats(outputs: &[PathBuf], stats: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(stats)?;
     for output in outputs {
-        let mut json_path = output.clone().into_os_string();
-        json_path.push(".json");
-        genpath::image::write_bytes_atomic(Path::new(&json_path), text.as_bytes())?;
+        genpath::image::write_bytes_atomic(&beside(output, ".json"), text.as_bytes())?;
     }
     Ok(())
 }

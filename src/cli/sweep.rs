@@ -193,9 +193,7 @@ struct Part {
 fn read_part(csv: &Path) -> Result<Part> {
     let text = std::fs::read_to_string(csv).with_context(|| csv.display().to_string())?;
     let rows = genpath::report::parse_csv(&text).map_err(|e| anyhow!("{}: {e}", csv.display()))?;
-    let mut json_path = csv.as_os_str().to_owned();
-    json_path.push(".json");
-    let json_path = PathBuf::from(json_path);
+    let json_path = super::session::beside(csv, ".json");
     let json: serde_json::Value = std::fs::read_to_string(&json_path)
         .map_err(|e| {
             anyhow!(
