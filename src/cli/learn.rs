@@ -59,20 +59,8 @@ pub struct LearnArgs {
 pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     check_dir(&args.output)?;
     let method = args.method.method;
-    if !method.learns() {
-        bail!(
-            "--method {} learns nothing (learn is for pg, ga and ga-pt): render it, with \
-             --shard K/N to split it",
-            method.name()
-        );
-    }
     let shard = args.shard.unwrap_or(Shard::WHOLE);
-    if !shard.is_whole() && method == Method::Pg {
-        bail!(
-            "--shard {shard}: pg learns no GA plan to split (its spatial guide's training passes \
-             run in one job): learn it without --shard"
-        );
-    }
+    check_learns(method, shard)?;
     let config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
@@ -99,27 +87,7 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     let t_learn = Instant::now();
     let prepared = match session.pool.install(|| prepare(&view, &config, &settings)) {
         Ok(prepared) => prepared,
-        Err(PrepareError::Plan(done @ PlanError::ShareDone { .. })) => {
-            if !args.scene.quiet {
-                eprintln!(
-                    "genpath: learn --shard {shard}: {done} ({:.2} s; kept in {})",
-                    t_learn.elapsed().as_secs_f64(),
-                    dir.display()
-                );
-            }
-            return Ok(());
-        }
-        Err(PrepareError::Plan(PlanError::Stopped {
-            signal,
-            wave,
-            done,
-            jobs,
-        })) => {
-            let detail =
-                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved");
-            return Err(super::resume::LearnInterrupted::new(signal, dir, detail).into());
-        }
-        Err(e) => return Err(e.into()),
+        Err(e) => return learning_ended(e, shard, &dir, t_learn, args.scene.quiet),
     };
     if let Some(signal) = stop.requested() {
         let detail = "in the spatial guide's training, with its finished passes".to_string();
@@ -189,6 +157,59 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Refuses a `method` that learns nothing, and a split (`shard`) of one without a GA.
+fn check_learns(method: Method, shard: Shard) -> Result<()> {
+    if !method.learns() {
+        bail!(
+            "--method {} learns nothing (learn is for pg, ga and ga-pt): render it, with \
+             --shard K/N to split it",
+            method.name()
+        );
+    }
+    if !shard.is_whole() && method == Method::Pg {
+        bail!(
+            "--shard {shard}: pg learns no GA plan to split (its spatial guide's training passes \
+             run in one job): learn it without --shard"
+        );
+    }
+    Ok(())
+}
+
+/// What a learning that `prepare` ended with `e` reports: `Ok` where this job of a split GA
+/// (`shard`) finished its share of a wave, [`super::resume::LearnInterrupted`] where a signal
+/// stopped the GA (what it finished is kept in `dir`), else `e`.
+fn learning_ended(
+    e: PrepareError,
+    shard: Shard,
+    dir: &Path,
+    t_learn: Instant,
+    quiet: bool,
+) -> Result<()> {
+    match e {
+        PrepareError::Plan(done @ PlanError::ShareDone { .. }) => {
+            if !quiet {
+                eprintln!(
+                    "genpath: learn --shard {shard}: {done} ({:.2} s; kept in {})",
+                    t_learn.elapsed().as_secs_f64(),
+                    dir.display()
+                );
+            }
+            Ok(())
+        }
+        PrepareError::Plan(PlanError::Stopped {
+            signal,
+            wave,
+            done,
+            jobs,
+        }) => {
+            let detail =
+                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved");
+            Err(super::resume::LearnInterrupted::new(signal, dir.to_path_buf(), detail).into())
+        }
+        e => Err(e.into()),
+    }
 }
 
 /// What learning finished, kept as files in a folder: `wave-W.K-of-N.bin`, the GA pixels of

@@ -8,12 +8,12 @@
 
 use super::ga_pt::GuideEstimator;
 use super::settings::SpatialConfig;
-use super::tiles::{self, render_tile, PixelSums};
+use super::tiles::{self, render_tile, PixelResult, PixelSums};
 use super::{
     Context, Control, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings,
 };
 use crate::accel::Ray;
-use crate::genetic::plan::Plan;
+use crate::genetic::plan::{LearnStore, Plan};
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
@@ -281,34 +281,7 @@ pub fn train_spatial(
     let open_plan = plan.filter(|p| !p.is_closed());
     let store = settings.control.learning.as_deref();
     let kept = |e: String| PrepareError::Kept(e);
-    let mut at = match store.map(|s| s.load_training()).transpose().map_err(kept)? {
-        Some(Some(bytes)) => {
-            let (at, seconds, dark): (Between, f64, Vec<bool>) = bincode::deserialize(&bytes)
-                .map_err(|e| kept(format!("the spatial guide's training: {e}")))?;
-            records.set_dark(dark).map_err(kept)?;
-            Between { seconds, ..at }
-        }
-        // Before the first pass: no samples, and a guide that has learned nothing.
-        _ => Between {
-            passes: 0,
-            training: SpatialTraining {
-                guide: Arc::new(records.field()),
-                samples: PixelSums::zero(pixels),
-                plan_guides: PlanGuides::Everywhere,
-            },
-            guides_trial: None,
-            trialling: open_plan.is_some(),
-            recorded_in_all: 0,
-            seconds: 0.0,
-            last: 0.0,
-        },
-    };
-    if at.training.samples.sum.len() != pixels {
-        return Err(kept(format!(
-            "the spatial guide's kept training is of {} pixels, not {pixels}",
-            at.training.samples.sum.len()
-        )));
-    }
+    let mut at = Between::start(store, &mut records, pixels, open_plan.is_some())?;
     let bar = progress_bar(0, "guide", settings.progress);
     let stop = &settings.control.stop;
     let elapsed = |at: &Between| at.seconds + start.elapsed().as_secs_f64();
@@ -352,28 +325,16 @@ pub fn train_spatial(
         }
         records.clear();
         let mut arms = TrialArms::new();
-        for (recorder, sums) in per_tile {
-            records.add_recorded(recorder);
-            for pixel in sums {
-                let (i, sum, sum_sq) = (pixel.index, pixel.sum, pixel.sum_sq);
-                if let (true, Some(plan)) = (trial, open_plan) {
-                    let before = training.samples.at(i);
-                    let n = pass_settings.spp;
-                    // The mean of the passes before, independent of this pass's samples: a
-                    // rare large sample must not lower its own pixel's relative variance.
-                    let mean = before.0 / f64::from(training.samples.spp);
-                    arms.add(
-                        plan,
-                        i,
-                        camera.width,
-                        (sum - before.0, sum_sq - before.1, n),
-                        mean,
-                    );
-                }
-                training.samples.sum[i] = sum;
-                training.samples.sum_sq[i] = sum_sq;
-            }
-        }
+        let trial_plan = open_plan.filter(|_| trial);
+        merge_pass(
+            per_tile,
+            &mut records,
+            training,
+            &mut arms,
+            trial_plan,
+            camera.width,
+            pass_settings.spp,
+        );
         if trial {
             let outcome;
             (outcome, at.trialling) = arms.decide(pass);
@@ -439,6 +400,84 @@ struct Between {
     #[serde(skip)]
     seconds: f64,
     last: f64,
+}
+
+impl Between {
+    /// The training kept by an earlier process in `store` (and its records' dark cells,
+    /// set in `records`), or, before the first pass, no samples and a guide that has learned
+    /// nothing; `trialling` whether a plan's guides are to be tried.
+    fn start(
+        store: Option<&dyn LearnStore>,
+        records: &mut SampleStorage,
+        pixels: usize,
+        trialling: bool,
+    ) -> Result<Self, PrepareError> {
+        let kept = |e: String| PrepareError::Kept(e);
+        let at = match store.map(|s| s.load_training()).transpose().map_err(kept)? {
+            Some(Some(bytes)) => {
+                let (at, seconds, dark): (Between, f64, Vec<bool>) =
+                    bincode::deserialize(&bytes)
+                        .map_err(|e| kept(format!("the spatial guide's training: {e}")))?;
+                records.set_dark(dark).map_err(kept)?;
+                Between { seconds, ..at }
+            }
+            _ => Between {
+                passes: 0,
+                training: SpatialTraining {
+                    guide: Arc::new(records.field()),
+                    samples: PixelSums::zero(pixels),
+                    plan_guides: PlanGuides::Everywhere,
+                },
+                guides_trial: None,
+                trialling,
+                recorded_in_all: 0,
+                seconds: 0.0,
+                last: 0.0,
+            },
+        };
+        if at.training.samples.sum.len() != pixels {
+            return Err(kept(format!(
+                "the spatial guide's kept training is of {} pixels, not {pixels}",
+                at.training.samples.sum.len()
+            )));
+        }
+        Ok(at)
+    }
+}
+
+/// Merges a training pass of `spp` samples per pixel, tile by tile in tile order: its
+/// records into `records`, its pixel sums into `training`'s, and, with a `trial` plan, each
+/// pixel's new samples into the trial's `arms` (an image `width` pixels wide).
+fn merge_pass<'a>(
+    per_tile: Vec<(PathSegmentStorage, Vec<PixelResult>)>,
+    records: &mut SampleStorage,
+    training: &mut SpatialTraining,
+    arms: &mut TrialArms<'a>,
+    trial: Option<&'a Plan>,
+    width: u32,
+    spp: u32,
+) {
+    for (recorder, sums) in per_tile {
+        records.add_recorded(recorder);
+        for pixel in sums {
+            let (i, sum, sum_sq) = (pixel.index, pixel.sum, pixel.sum_sq);
+            if let Some(plan) = trial {
+                let before = training.samples.at(i);
+                // The mean of the passes before, independent of this pass's samples: a
+                // rare large sample must not lower its own pixel's relative variance.
+                let mean = before.0 / f64::from(training.samples.spp);
+                arms.add(
+                    plan,
+                    i,
+                    width,
+                    (sum - before.0, sum_sq - before.1, spp),
+                    mean,
+                );
+            }
+            training.samples.sum[i] = sum;
+            training.samples.sum_sq[i] = sum_sq;
+        }
+    }
 }
 
 /// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
