@@ -52,9 +52,10 @@ pub struct SceneArgs {
 /// The method and its own settings.
 #[derive(Args)]
 pub struct MethodArgs {
-    /// Rendering method.
-    #[arg(long, value_enum, default_value_t = Method::Pt)]
-    pub method: Method,
+    /// Rendering method [default: ga-pt, the GA's best method, for `render` and `learn`;
+    /// pt for `reference` and `bench`].
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }
@@ -362,15 +363,20 @@ impl SettingsArgs {
 }
 
 impl MethodArgs {
+    /// The method asked for, else the command's `default`.
+    pub fn method_or(&self, default: Method) -> Method {
+        self.method.unwrap_or(default)
+    }
+
     /// The settings of the method ([`SettingsArgs::settings`]), checked before anything
     /// loads; `generators` goes with `--method mixture` only ([`load_mixture`] loads it).
     pub fn settings(&self, matches: &ArgMatches) -> Result<Settings> {
         let settings = self.settings.settings(matches)?;
         match (&settings.mixture.generators, self.method) {
-            (Some(_), m) if m != Method::Mixture => {
+            (Some(_), m) if m != Some(Method::Mixture) => {
                 bail!("--generators is only used with --method mixture")
             }
-            (None, Method::Mixture) => bail!("--method mixture needs --generators FILE"),
+            (None, Some(Method::Mixture)) => bail!("--method mixture needs --generators FILE"),
             _ => {}
         }
         Ok(settings)

@@ -210,7 +210,7 @@ fn thread_scaling(
         args.threads.clone()
     };
     let settings = RenderSettings {
-        method: args.method.method,
+        method: args.method.method_or(genpath::integrators::Method::Pt),
         spp: args.spp,
         max_bounces: scene.render.max_bounces,
         seed: 1,

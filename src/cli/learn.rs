@@ -58,7 +58,7 @@ pub struct LearnArgs {
 
 pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     check_dir(&args.output)?;
-    let method = args.method.method;
+    let method = args.method.method_or(Method::GaPt);
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     check_learns(method, shard)?;
     let config = args.method.settings(matches)?;

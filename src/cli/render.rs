@@ -44,31 +44,31 @@ pub struct RenderArgs {
 }
 
 pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
+    let method = args.method.method_or(Method::GaPt);
     for output in &args.outputs {
         check_output(output)?;
     }
     if let Some(explain) = &args.explain {
-        if !matches!(args.method.method, Method::Ga | Method::GaPt) {
+        if !matches!(method, Method::Ga | Method::GaPt) {
             bail!("--explain is only used with --method ga or ga-pt");
         }
         check_output(explain)?;
     }
-    if let (Some(plan), false) = (&args.plan, args.method.method.learns()) {
+    if let (Some(plan), false) = (&args.plan, method.learns()) {
         bail!(
             "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
             plan.display(),
-            args.method.method.name()
+            method.name()
         );
     }
-    args.shard
-        .check_method(args.method.method, args.plan.is_some())?;
+    args.shard.check_method(method, args.plan.is_some())?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
     let settings = RenderSettings {
         shard: args.shard.shard(spp, "--spp")?,
-        ..session.settings(&args.scene, args.method.method, spp)
+        ..session.settings(&args.scene, method, spp)
     };
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
     let plain = settings.clone();

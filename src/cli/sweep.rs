@@ -40,6 +40,12 @@ pub struct SweepArgs {
     /// `genpath merge PARTS.csv -o PREFIX` (docs/shards.md).
     #[arg(long, value_name = "K/N")]
     pub shard: Option<Shard>,
+    /// Also writes a comparison picture (SVG) of the last budget's renders of the first
+    /// repetition: each method's render and its per-pixel error against the reference, with
+    /// its seconds, samples and relMSE and its ratio to the first method's, and the
+    /// reference; and prints each method's relMSE over the first's at that budget.
+    #[arg(long, value_name = "FILE.svg")]
+    pub picture: Option<PathBuf>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }
@@ -52,8 +58,22 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
         PathBuf::from(p)
     };
     let (csv_path, svg_path) = (with_ext(".csv"), with_ext(".svg"));
-    for p in [&csv_path, &svg_path] {
+    for p in [&csv_path, &svg_path].into_iter().chain(&args.picture) {
         check_dir(p)?;
+    }
+    if args
+        .picture
+        .as_ref()
+        .is_some_and(|p| *p == svg_path || *p == csv_path)
+    {
+        bail!(
+            "--picture {}: that is where the sweep writes its plot or table (-o {})",
+            svg_path.display(),
+            args.output.display()
+        );
+    }
+    if let (Some(_), Some(part)) = (&args.picture, args.shard) {
+        bail!("--picture with --shard {part}: a part of a sweep may not hold the renders it shows");
     }
     let budgets = if args.time {
         if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0)) {
@@ -125,17 +145,71 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
     }
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let quiet = args.scene.quiet;
+    // The renders the picture shows: the last budget's, of the first repetition.
+    let shown = |r: &genpath::report::Row| {
+        r.seed == sweep.settings.seed && Some(&r.budget) == args.budgets.last()
+    };
+    let mut pictured = Vec::new();
     let rows = session.pool.install(|| {
-        sweep.run(&view, |r| {
+        sweep.run(&view, |r, image| {
             if !quiet {
                 eprintln!(
                     "genpath: {:<24} {:>6} spp {:>8.2} s (GA {:>6.2} s)  relMSE {:.4e}",
                     r.method, r.spp, r.seconds, r.ga_seconds, r.relmse
                 );
             }
+            if args.picture.is_some() && shown(r) {
+                pictured.push((r.clone(), image.clone()));
+            }
         })
     })?;
+    if let (Some(path), Some(budget)) = (&args.picture, args.budgets.last()) {
+        let at = if args.time {
+            format!("equal time, {budget} s each, every phase counted")
+        } else {
+            format!("{budget} samples per pixel")
+        };
+        let camera = &session.scene.camera;
+        let title = format!(
+            "{scene_name} at {at} ({}×{}, max bounces {})",
+            camera.width, camera.height, sweep.settings.max_bounces
+        );
+        write_picture(path, &title, &pictured, &reference)?;
+    }
     write_sweep(&args.output, &title, &rows)
+}
+
+/// Writes the comparison picture of `pictured` (rows and their images) against
+/// `reference`, and prints each method's relMSE over the first's at equal time.
+fn write_picture(
+    path: &Path,
+    title: &str,
+    pictured: &[(genpath::report::Row, genpath::image::Image)],
+    reference: &genpath::image::Image,
+) -> Result<()> {
+    use genpath::report::picture::{svg, Panel};
+    let panels: Vec<Panel> = pictured
+        .iter()
+        .map(|(row, image)| Panel { row, image })
+        .collect();
+    let svg = svg(title, &panels, reference).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    genpath::image::write_bytes_atomic(path, svg.as_bytes())?;
+    if let Some(((first, _), rest)) = pictured.split_first() {
+        for (r, _) in rest {
+            println!(
+                "{}: relMSE {:.3e} in {:.2} s against {}'s {:.3e} in {:.2} s: {:.2} × {}'s at equal time",
+                r.method,
+                r.relmse,
+                r.seconds,
+                first.method,
+                first.relmse,
+                first.seconds,
+                (r.relmse * r.seconds) / (first.relmse * first.seconds),
+                first.method
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Writes PREFIX.csv and PREFIX.svg of `rows`, and prints their summary.

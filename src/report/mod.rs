@@ -6,6 +6,7 @@
 //! time is added to every budget's render (the plan depends on the seed, not on the budget).
 
 pub mod bench;
+pub mod picture;
 pub mod plot;
 
 use crate::image::{metrics, Image};
@@ -252,11 +253,12 @@ fn calibrated_spp(
 }
 
 impl Sweep<'_> {
-    /// Runs every method × repetition × budget; `on_row` sees each row as it is done.
+    /// Runs every method × repetition × budget; `on_row` sees each row, with its image, as
+    /// it is done.
     pub fn run(
         &self,
         view: &SceneView,
-        mut on_row: impl FnMut(&Row),
+        mut on_row: impl FnMut(&Row, &Image),
     ) -> Result<Vec<Row>, SweepError> {
         let camera = &view.scene.camera;
         if (self.reference.width, self.reference.height) != (camera.width, camera.height) {
@@ -324,7 +326,7 @@ impl Sweep<'_> {
                         mse: m.mse,
                         seed: settings.seed,
                     };
-                    on_row(&row);
+                    on_row(&row, &film.image);
                     rows.push(row);
                     bar.inc(1);
                 }

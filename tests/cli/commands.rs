@@ -131,6 +131,49 @@ fn sweep_writes_csv_and_plot() {
         "{svg:.200}"
     );
 
+    // The comparison picture: the last budget's renders of the first repetition.
+    let picture = dir.path().join("pic.svg");
+    let out = sweep(&[
+        "--methods",
+        "pt,srt",
+        "--budgets",
+        "1,4",
+        "--reps",
+        "2",
+        "--picture",
+        picture.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(&picture).unwrap();
+    // Per method its render and its error map, and the reference.
+    assert_eq!(svg.matches("<image ").count(), 2 * 2 + 1, "{svg:.300}");
+    assert!(
+        svg.contains(", 4 spp, relMSE") && !svg.contains(", 1 spp,"),
+        "{svg:.600}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("srt: relMSE") && stdout.contains("× pt's at equal time"),
+        "{stdout}"
+    );
+    let plot = dir.path().join("sweep.svg");
+    let plot = plot.to_str().unwrap();
+    let shard = ["--picture", picture.to_str().unwrap(), "--shard", "0/2"];
+    for (extra, needle) in [
+        (
+            vec!["--picture", plot],
+            "that is where the sweep writes its plot",
+        ),
+        (shard.to_vec(), "a part of a sweep may not hold"),
+    ] {
+        let out = sweep(&extra);
+        assert!(
+            !out.status.success() && stderr(&out).contains(needle),
+            "{extra:?}: {}",
+            stderr(&out)
+        );
+    }
+
     for (extra, needle) in [
         (vec!["--methods", "pt,bdpt"], "unknown method `bdpt`"),
         (vec!["--methods", "ga:q=3"], "unknown setting `q`"),

@@ -37,6 +37,11 @@ const SMALL_GA: [&str; 8] = [
 
 /// Runs genpath in the repository's root, where relative paths such as
 /// `scenes/fig5/scene.toml` resolve.
+/// A command's standard error, as text.
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
 fn genpath(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_genpath"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))

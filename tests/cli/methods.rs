@@ -228,7 +228,7 @@ fn impossible_ga_flags() {
     let explain = explain.to_str().unwrap();
     assert_fails(
         &scene,
-        &["--explain", explain],
+        &["--explain", explain, "--method", "pt"],
         &out,
         &["--explain is only used with --method ga or ga-pt"],
     );

@@ -74,10 +74,6 @@ fn fails_in(command: &str, dir: &Path, extra: &[&str], needles: &[&str]) {
     assert!(!out.exists(), "{extra:?}: output written despite the error");
 }
 
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
 /// `<path>.<suffix>`.
 fn beside(path: &Path, suffix: &str) -> PathBuf {
     let mut p = path.as_os_str().to_owned();
