@@ -176,7 +176,7 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
         );
         write_picture(path, &title, &pictured, &reference)?;
     }
-    write_sweep(&args.output, &title, &rows)
+    write_sweep(&args.output, &title, &rows, args.time)
 }
 
 /// Writes the comparison picture of `pictured` (rows and their images) against
@@ -212,8 +212,14 @@ fn write_picture(
     Ok(())
 }
 
-/// Writes PREFIX.csv and PREFIX.svg of `rows`, and prints their summary.
-fn write_sweep(prefix: &Path, title: &str, rows: &[genpath::report::Row]) -> Result<()> {
+/// Writes PREFIX.csv and PREFIX.svg of `rows` (and PREFIX-ablations.svg where some are
+/// ablations), and prints their summary.
+fn write_sweep(
+    prefix: &Path,
+    title: &str,
+    rows: &[genpath::report::Row],
+    time: bool,
+) -> Result<()> {
     use genpath::report;
     let with_ext = |ext: &str| {
         let mut p = prefix.as_os_str().to_owned();
@@ -221,8 +227,13 @@ fn write_sweep(prefix: &Path, title: &str, rows: &[genpath::report::Row]) -> Res
         PathBuf::from(p)
     };
     genpath::image::write_bytes_atomic(&with_ext(".csv"), report::csv(rows).as_bytes())?;
-    let svg = report::plot::svg(title, rows).map_err(|e| anyhow::anyhow!(e))?;
+    let svg = report::plot::svg(title, rows, false, time).map_err(|e| anyhow::anyhow!(e))?;
     genpath::image::write_bytes_atomic(&with_ext(".svg"), svg.as_bytes())?;
+    if rows.iter().any(|r| report::plot::is_ablation(&r.method)) {
+        let title = format!("{title}: ablations");
+        let svg = report::plot::svg(&title, rows, true, time).map_err(|e| anyhow::anyhow!(e))?;
+        genpath::image::write_bytes_atomic(&with_ext("-ablations.svg"), svg.as_bytes())?;
+    }
     println!("{}", report::summary(rows));
     Ok(())
 }
@@ -363,5 +374,6 @@ pub fn merge_parts(parts: &[PathBuf], prefix: &Path, complete: bool, quiet: bool
         (r.seed.wrapping_sub(seed0), b, m)
     };
     rows.sort_by_key(key);
-    write_sweep(prefix, &first.title, &rows)
+    let time = first.sweep["time"].as_bool().unwrap_or(false);
+    write_sweep(prefix, &first.title, &rows, time)
 }
