@@ -45,14 +45,11 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
         );
     }
     check_output(&args.output)?;
-    args.shard.check_method(
-        args.method.method_or(genpath::integrators::Method::Pt),
-        false,
-    )?;
+    let method = args.method.method_or(genpath::integrators::Method::Pt);
+    args.shard.check_method(method, false)?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
-    let method = args.method.method_or(genpath::integrators::Method::Pt);
     let max_bounces = session.settings(&args.scene, method, 1).max_bounces;
     load_mixture(&mut config, &session.scene, max_bounces)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());

@@ -51,7 +51,7 @@ pub struct SweepArgs {
 }
 
 pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
-    use genpath::report::{Budgets, MethodSpec, Sweep};
+    use genpath::report::{MethodSpec, Sweep};
     let with_ext = |ext: &str| {
         let mut p = args.output.clone().into_os_string();
         p.push(ext);
@@ -61,41 +61,8 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
     for p in [&csv_path, &svg_path].into_iter().chain(&args.picture) {
         check_dir(p)?;
     }
-    if args
-        .picture
-        .as_ref()
-        .is_some_and(|p| *p == svg_path || *p == csv_path)
-    {
-        bail!(
-            "--picture {}: that is where the sweep writes its plot or table (-o {})",
-            svg_path.display(),
-            args.output.display()
-        );
-    }
-    if let (Some(_), Some(part)) = (&args.picture, args.shard) {
-        bail!("--picture with --shard {part}: a part of a sweep may not hold the renders it shows");
-    }
-    let budgets = if args.time {
-        if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0)) {
-            bail!("--budgets: {b} is not a positive number of seconds");
-        }
-        Budgets::Seconds(args.budgets.clone())
-    } else {
-        let spp = args
-            .budgets
-            .iter()
-            .map(|&b| {
-                if b.fract() == 0.0 && (1.0..=f64::from(1u32 << 24)).contains(&b) {
-                    Ok(b as u32)
-                } else {
-                    Err(anyhow::anyhow!(
-                        "--budgets: {b} is not a whole number of samples per pixel in [1, 2^24] (use --time for seconds)"
-                    ))
-                }
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Budgets::Spp(spp)
-    };
+    check_picture(&args, &csv_path, &svg_path)?;
+    let budgets = parse_budgets(&args)?;
     let mut base = args.settings.settings(matches)?;
     let reference = genpath::image::read_exr(&args.reference)?;
     let session = Session::open(&args.scene)?;
@@ -177,6 +144,51 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
         write_picture(path, &title, &pictured, &reference)?;
     }
     write_sweep(&args.output, &title, &rows, args.time)
+}
+
+/// Refuses a `--picture` where the sweep writes its table or plot, or with `--shard`.
+fn check_picture(args: &SweepArgs, csv_path: &Path, svg_path: &Path) -> Result<()> {
+    if args
+        .picture
+        .as_ref()
+        .is_some_and(|p| p == svg_path || p == csv_path)
+    {
+        bail!(
+            "--picture {}: that is where the sweep writes its plot or table (-o {})",
+            svg_path.display(),
+            args.output.display()
+        );
+    }
+    if let (Some(_), Some(part)) = (&args.picture, args.shard) {
+        bail!("--picture with --shard {part}: a part of a sweep may not hold the renders it shows");
+    }
+    Ok(())
+}
+
+/// The sweep's budgets: seconds with --time, else samples per pixel.
+fn parse_budgets(args: &SweepArgs) -> Result<genpath::report::Budgets> {
+    use genpath::report::Budgets;
+    Ok(if args.time {
+        if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0)) {
+            bail!("--budgets: {b} is not a positive number of seconds");
+        }
+        Budgets::Seconds(args.budgets.clone())
+    } else {
+        let spp = args
+            .budgets
+            .iter()
+            .map(|&b| {
+                if b.fract() == 0.0 && (1.0..=f64::from(1u32 << 24)).contains(&b) {
+                    Ok(b as u32)
+                } else {
+                    Err(anyhow::anyhow!(
+                        "--budgets: {b} is not a whole number of samples per pixel in [1, 2^24] (use --time for seconds)"
+                    ))
+                }
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Budgets::Spp(spp)
+    })
 }
 
 /// Writes the comparison picture of `pictured` (rows and their images) against

@@ -123,6 +123,37 @@ fn text(out: &mut String, x: u32, y: u32, size: u32, weight: &str, content: &str
     );
 }
 
+/// The error scale at `(x, y)`, `w` wide: a ramp with its decades.
+fn error_scale(out: &mut String, x: u32, bottom: u32, w: u32) {
+    let (lo, hi) = ERROR_RANGE;
+    text(
+        out,
+        x,
+        bottom - 8,
+        11,
+        "normal",
+        "(x − ref)² / (ref² + 0.01)",
+    );
+    let steps = 64;
+    for k in 0..steps {
+        let c = ramp(f64::from(k) / f64::from(steps - 1));
+        let _ = writeln!(
+            out,
+            r##"<rect x="{}" y="{bottom}" width="{}" height="24" fill="#{:02x}{:02x}{:02x}"/>"##,
+            x + k * w / steps,
+            w / steps + 1,
+            c[0],
+            c[1],
+            c[2]
+        );
+    }
+    for decade in (lo as i32)..=(hi as i32) {
+        let f = (f64::from(decade) - lo) / (hi - lo);
+        let tx = x + (f * f64::from(w - 24)) as u32;
+        text(out, tx, bottom + 40, 11, "normal", &format!("1e{decade}"));
+    }
+}
+
 /// The picture of `panels` (every image of `reference`'s size) against `reference`, titled
 /// `title`: an SVG document.
 pub fn svg(title: &str, panels: &[Panel], reference: &Image) -> Result<String, String> {
@@ -194,41 +225,7 @@ pub fn svg(title: &str, panels: &[Panel], reference: &Image) -> Result<String, S
         h,
         &png_bytes(w, h, &srgb::encode_image_u8(reference))?,
     );
-    // The error scale, beside the maps: a ramp with its decades.
-    let (lo, hi) = ERROR_RANGE;
-    text(
-        &mut out,
-        x,
-        bottom - 8,
-        11,
-        "normal",
-        "(x − ref)² / (ref² + 0.01)",
-    );
-    let steps = 64;
-    for k in 0..steps {
-        let c = ramp(f64::from(k) / f64::from(steps - 1));
-        let _ = writeln!(
-            out,
-            r##"<rect x="{}" y="{bottom}" width="{}" height="24" fill="#{:02x}{:02x}{:02x}"/>"##,
-            x + k * w / steps,
-            w / steps + 1,
-            c[0],
-            c[1],
-            c[2]
-        );
-    }
-    for decade in (lo as i32)..=(hi as i32) {
-        let f = (f64::from(decade) - lo) / (hi - lo);
-        let tx = x + (f * f64::from(w - 24)) as u32;
-        text(
-            &mut out,
-            tx,
-            bottom + 40,
-            11,
-            "normal",
-            &format!("1e{decade}"),
-        );
-    }
+    error_scale(&mut out, x, bottom, w);
     out.push_str("</svg>\n");
     Ok(out)
 }
