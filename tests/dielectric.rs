@@ -23,7 +23,7 @@ fn glass(eta: f32, thin: bool, reflectance: f32, transmittance: f32) -> Material
         name: "glass".into(),
         kd: Vec3::ZERO,
         ks: Vec3::splat(reflectance),
-        ns: 1.0,
+        glossy: genpath::scene::Glossy::None,
         mirror: true,
         ke: Vec3::ZERO,
         two_sided: true,

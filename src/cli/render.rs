@@ -256,7 +256,7 @@ fn left_out(
 ) -> Vec<String> {
     let mut out = Vec::new();
     if analysis.glossy_triangles == 0 {
-        out.push("Phong-lobe evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
+        out.push("glossy-lobe (Phong, microfacet) evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
     }
     if analysis.mirror_triangles == 0 {
         out.push("delta vertices: no mirror, conductor or dielectric material".to_string());

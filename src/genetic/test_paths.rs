@@ -401,7 +401,7 @@ impl TestPaths {
                 0.0
             } else {
                 let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, brdf::facing_normal(v.point.ns, v.wo), v.wo, wi)
+                brdf::pdf(m, brdf::Frame::facing(&v.point, v.wo), v.wo, wi)
             };
             self.point.push(v.point.p.as_dvec3());
             self.prim.push(v.point.prim);

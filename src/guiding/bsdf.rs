@@ -96,7 +96,8 @@ impl PathGuide for Guide {
         bsdf: Bsdf<'a>,
         last: bool,
     ) -> GuidedVertex<GuidedBsdf<'a>> {
-        let vertex = (!bsdf.material.mirror && self.guides(k)).then(|| self.at(k, x, bsdf.n, last));
+        let vertex =
+            (!bsdf.material.mirror && self.guides(k)).then(|| self.at(k, x, bsdf.frame, last));
         GuidedVertex {
             light_share: vertex.map_or(1.0, |v| v.light_share()),
             bsdf: GuidedBsdf::new(bsdf, vertex),
@@ -119,8 +120,14 @@ mod tests {
         Material {
             name: "test".into(),
             kd: Vec3::new(0.5, 0.4, 0.3),
-            ks: Vec3::splat(ks),
-            ns: 20.0,
+            ks: if mirror { Vec3::splat(ks) } else { Vec3::ZERO },
+            glossy: match mirror {
+                true => crate::scene::Glossy::None,
+                false => crate::scene::Glossy::Phong {
+                    ks: Vec3::splat(ks),
+                    ns: 20.0,
+                },
+            },
             mirror,
             ke: Vec3::ZERO,
             two_sided: true,
@@ -145,6 +152,10 @@ mod tests {
 
     const N: Vec3 = Vec3::Y;
 
+    fn frame() -> brdf::Frame {
+        brdf::Frame::new(N, Vec3::ZERO)
+    }
+
     fn wo() -> Vec3 {
         Vec3::new(0.3, 1.0, 0.1).normalize()
     }
@@ -165,7 +176,7 @@ mod tests {
             assert_eq!(uniform(&mut a).to_bits(), uniform(&mut b).to_bits());
             if let Some(s) = s {
                 assert_eq!(guided.pdf(s.wi).to_bits(), expected_pdf(s.wi).to_bits());
-                let f = brdf::eval(guided.bsdf.material, N, wo(), s.wi);
+                let f = brdf::eval(guided.bsdf.material, frame(), wo(), s.wi);
                 assert_eq!(guided.eval(s.wi), f);
                 sampled += 1;
             }
@@ -187,7 +198,7 @@ mod tests {
         ] {
             let bsdf = Bsdf {
                 material: &m,
-                n: N,
+                frame: frame(),
                 wo: wo(),
                 ns: N,
             };
@@ -217,9 +228,9 @@ mod tests {
                         uniform(rng) as f64,
                         uniform(rng) as f64,
                     ];
-                    brdf::sample(&m, N, wo(), u)
+                    brdf::sample(&m, frame(), wo(), u)
                 };
-                assert_draws_as(&guided, bsdf_sampled, |wi| brdf::pdf(&m, N, wo(), wi));
+                assert_draws_as(&guided, bsdf_sampled, |wi| brdf::pdf(&m, frame(), wo(), wi));
             }
         }
     }
@@ -233,13 +244,13 @@ mod tests {
         for m in [material(0.0, false), material(0.3, false)] {
             let bsdf = Bsdf {
                 material: &m,
-                n: N,
+                frame: frame(),
                 wo: wo(),
                 ns: N,
             };
             for k in 0..3 {
                 let v = guide.vertex(k, Vec3::ZERO, bsdf, false);
-                let vertex = guide.at(k, Vec3::ZERO, N, false);
+                let vertex = guide.at(k, Vec3::ZERO, frame(), false);
                 assert!(v.bsdf.guided() && v.bsdf.samplers() == vertex.samplers());
                 assert_eq!(v.light_share, 1.0);
                 let mixture_sampled = |rng: &mut Rng| {

@@ -27,6 +27,7 @@ use super::vertex::{GuideSample, Vertex, VertexSampler};
 use crate::path::generator::DirectionSampler;
 use crate::path::mixture::Mixture;
 use crate::sampling::anchor::{AnchorSampler, ConeTest};
+use crate::sampling::brdf::Frame;
 use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
@@ -258,10 +259,10 @@ impl Guide {
     /// it, relMSE was 5× `pg`'s). At the path's `last` vertex it does not guide the
     /// direction: that direction can only find emission, which next-event estimation finds
     /// better, and the quadtree's descents would cost for nothing.
-    pub fn at(&self, k: usize, x: Vec3, n: Vec3, last: bool) -> Vertex<'_> {
+    pub fn at(&self, k: usize, x: Vec3, frame: Frame, last: bool) -> Vertex<'_> {
         let (spatial, light_share) = match self.spatial.as_deref() {
             Some(s) => {
-                let (cell, light_share) = s.at(x, n);
+                let (cell, light_share) = s.at(x, frame.n);
                 (cell.filter(|_| !last).map(|cell| (s, cell)), light_share)
             }
             None => (None, 1.0),
@@ -276,13 +277,21 @@ impl Guide {
             light_share,
             scale: self.pdf_error.unwrap_or(1.0),
             x: x.as_dvec3(),
-            n,
+            frame,
         }
     }
 
-    /// `p_k(wi)` at the surface point `x` of `material` (normal `n` facing `wo`).
-    pub fn pdf(&self, k: usize, material: &Material, x: Vec3, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
-        self.at(k, x, n, false).pdf(material, wo, wi)
+    /// `p_k(wi)` at the surface point `x` of `material` (shading frame facing `wo`).
+    pub fn pdf(
+        &self,
+        k: usize,
+        material: &Material,
+        x: Vec3,
+        frame: Frame,
+        wo: Vec3,
+        wi: Vec3,
+    ) -> f64 {
+        self.at(k, x, frame, false).pdf(material, wo, wi)
     }
 
     /// A direction out of the `k`-th non-delta vertex `x`, from four uniform numbers (see
@@ -292,11 +301,11 @@ impl Guide {
         k: usize,
         material: &Material,
         x: Vec3,
-        n: Vec3,
+        frame: Frame,
         wo: Vec3,
         u: [f64; 4],
     ) -> Option<GuideSample> {
-        self.at(k, x, n, false).sample(material, wo, u)
+        self.at(k, x, frame, false).sample(material, wo, u)
     }
 }
 
@@ -383,8 +392,10 @@ pub(super) mod tests {
             let r = (1.0 - z * z).max(0.0).sqrt();
             let wi = DVec3::new(r * phi.cos(), z, r * phi.sin());
             let (pa, pb) = (
-                a.at(0, x.as_vec3(), Vec3::Y, false).pdf_with(wi, 0.3),
-                b.at(0, x.as_vec3(), Vec3::Y, false).pdf_with(wi, 0.3),
+                a.at(0, x.as_vec3(), Frame::new(Vec3::Y, Vec3::ZERO), false)
+                    .pdf_with(wi, 0.3),
+                b.at(0, x.as_vec3(), Frame::new(Vec3::Y, Vec3::ZERO), false)
+                    .pdf_with(wi, 0.3),
             );
             worst = worst.max((pa - pb).abs() / pa.max(pb));
         }
@@ -399,7 +410,10 @@ pub(super) mod tests {
         let mut rebuilt = Guide::new(&mixture());
         rebuilt.rebuild(&[(0.25, &m1), (0.75, &m2)]);
         let fresh = Guide::new(&Mixture::union(&[(0.25, &m1), (0.75, &m2)]));
-        let samplers = |g: &Guide| g.at(0, Vec3::ZERO, Vec3::Y, false).samplers();
+        let samplers = |g: &Guide| {
+            g.at(0, Vec3::ZERO, Frame::new(Vec3::Y, Vec3::ZERO), false)
+                .samplers()
+        };
         assert!(!rebuilt.guides(1) && samplers(&rebuilt) == samplers(&fresh));
         let same = max_difference(&rebuilt, &fresh);
         assert!(same < 1e-12, "rebuilt guide differs by {same}");

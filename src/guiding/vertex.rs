@@ -7,7 +7,7 @@ use super::field::{SpatialField, GUIDE_SHARE};
 use super::guide::Level;
 #[cfg(doc)]
 use super::Guide;
-use crate::sampling::brdf;
+use crate::sampling::brdf::{self, Frame};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
@@ -43,7 +43,7 @@ pub struct Vertex<'a> {
     /// The guide's fault injection (1 without).
     pub(super) scale: f64,
     pub(super) x: DVec3,
-    pub(super) n: Vec3,
+    pub(super) frame: Frame,
 }
 
 impl Vertex<'_> {
@@ -92,7 +92,7 @@ impl Vertex<'_> {
 
     /// `p(wi)` for `material` seen from `wo`.
     pub fn pdf(&self, material: &Material, wo: Vec3, wi: Vec3) -> f64 {
-        let brdf_pdf = brdf::pdf(material, self.n, wo, wi);
+        let brdf_pdf = brdf::pdf(material, self.frame, wo, wi);
         self.pdf_with(wi.as_dvec3(), brdf_pdf)
     }
 
@@ -101,7 +101,7 @@ impl Vertex<'_> {
     /// carries nothing.
     pub fn sample(&self, material: &Material, wo: Vec3, u: [f64; 4]) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
-        let n = self.n;
+        let n = self.frame;
         let wi = match self.sampler {
             VertexSampler::Brdf => {
                 let s = brdf::sample(material, n, wo, rest)?;
@@ -147,8 +147,8 @@ impl Vertex<'_> {
         wi: Vec3,
         pdf: impl FnOnce(f64) -> f64,
     ) -> Option<GuideSample> {
-        let n = self.n;
-        let cos = n.dot(wi);
+        let n = self.frame;
+        let cos = n.n.dot(wi);
         let f = brdf::eval(material, n, wo, wi);
         if cos <= 0.0 || f.max_element() <= 0.0 {
             return None;
@@ -195,7 +195,7 @@ mod tests {
             let phi = std::f32::consts::TAU * uniform(&mut rng);
             let r = (1.0 - z * z).max(0.0).sqrt();
             let wi = Vec3::new(r * phi.cos(), z, r * phi.sin());
-            sum += guide.pdf(k, material, Vec3::ZERO, n, wo, wi);
+            sum += guide.pdf(k, material, Vec3::ZERO, Frame::new(n, Vec3::ZERO), wo, wi);
         }
         sum / count as f64 * 4.0 * std::f64::consts::PI
     }
@@ -205,7 +205,7 @@ mod tests {
             name: "white".into(),
             kd: Vec3::splat(0.5),
             ks: Vec3::ZERO,
-            ns: 0.0,
+            glossy: crate::scene::Glossy::None,
             mirror: false,
             ke: Vec3::ZERO,
             two_sided: true,
@@ -232,7 +232,13 @@ mod tests {
             around.contains(&(u - tu)) && around.contains(&(v - tv))
         };
         let guide = Guide::new(&mixture()).with_spatial(Some(spatial));
-        assert!(guide.guides(2) && guide.at(2, Vec3::ZERO, Vec3::Y, false).samplers() == 1);
+        assert!(
+            guide.guides(2)
+                && guide
+                    .at(2, Vec3::ZERO, Frame::new(Vec3::Y, Vec3::ZERO), false)
+                    .samplers()
+                    == 1
+        );
         let total = integral_at(&guide, &material, 2);
         assert!((total - 1.0).abs() < 0.01, "∫ p = {total}");
         // Half the density is the spatial guide's: ×1.1 there makes ∫ p ≈ 1.05.
@@ -249,8 +255,17 @@ mod tests {
             let mut count = 0;
             for _ in 0..10_000 {
                 let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
-                if let Some(s) = guide.sample(k, &material, Vec3::ZERO, n, wo, u) {
-                    let p = guide.pdf(k, &material, Vec3::ZERO, n, wo, s.wi);
+                if let Some(s) =
+                    guide.sample(k, &material, Vec3::ZERO, Frame::new(n, Vec3::ZERO), wo, u)
+                {
+                    let p = guide.pdf(
+                        k,
+                        &material,
+                        Vec3::ZERO,
+                        Frame::new(n, Vec3::ZERO),
+                        wo,
+                        s.wi,
+                    );
                     assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
                     count += usize::from(near(s.wi));
                 }
@@ -269,7 +284,12 @@ mod tests {
             "{by_spatial} samples near the records at level 0"
         );
         for k in 0..2 {
-            assert_eq!(guide.at(k, Vec3::ZERO, Vec3::Y, false).samplers(), 3 - k);
+            assert_eq!(
+                guide
+                    .at(k, Vec3::ZERO, Frame::new(Vec3::Y, Vec3::ZERO), false)
+                    .samplers(),
+                3 - k
+            );
             let total = integral_at(&guide, &material, k);
             assert!((total - 1.0).abs() < 0.01, "level {k}: ∫ p = {total}");
         }
@@ -281,8 +301,11 @@ mod tests {
         // On a surface facing another way, where nothing was recorded: BRDF sampling alone.
         let (n, wo) = (Vec3::X, Vec3::new(1.0, 0.3, 0.1).normalize());
         let wi = Vec3::new(0.5, 0.5, 0.0).normalize();
-        let brdf_pdf = brdf::pdf(&material, n, wo, wi);
-        assert_eq!(guide.pdf(2, &material, Vec3::ZERO, n, wo, wi), brdf_pdf);
+        let brdf_pdf = brdf::pdf(&material, Frame::new(n, Vec3::ZERO), wo, wi);
+        assert_eq!(
+            guide.pdf(2, &material, Vec3::ZERO, Frame::new(n, Vec3::ZERO), wo, wi),
+            brdf_pdf
+        );
     }
 
     #[test]
@@ -306,10 +329,20 @@ mod tests {
         let shape = PatchShape::new(&PATCH);
         for _ in 0..10_000 {
             let u = std::array::from_fn(|_| uniform(&mut rng) as f64);
-            if let Some(s) = guide.sample(0, &material, Vec3::ZERO, n, wo, u) {
-                let p = guide.pdf(0, &material, Vec3::ZERO, n, wo, s.wi);
+            if let Some(s) =
+                guide.sample(0, &material, Vec3::ZERO, Frame::new(n, Vec3::ZERO), wo, u)
+            {
+                let p = guide.pdf(
+                    0,
+                    &material,
+                    Vec3::ZERO,
+                    Frame::new(n, Vec3::ZERO),
+                    wo,
+                    s.wi,
+                );
                 assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
-                let expected = brdf::eval(&material, n, wo, s.wi) * (n.dot(s.wi) / p as f32);
+                let expected = brdf::eval(&material, Frame::new(n, Vec3::ZERO), wo, s.wi)
+                    * (n.dot(s.wi) / p as f32);
                 assert!((s.weight - expected).length() <= 1e-5 * expected.length());
                 anchored += usize::from(s.wi.dot(Vec3::new(1.0, 2.0, 0.0).normalize()) > 0.98);
                 patched += usize::from(shape.patch_density(DVec3::ZERO, s.wi.as_dvec3()) > 0.0);

@@ -10,7 +10,8 @@ use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::path::pt::LightPoint;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
-use crate::sampling::{brdf, specular, uniform, Rng};
+use crate::sampling::brdf::{self, Frame};
+use crate::sampling::{specular, uniform, Rng};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
 
@@ -34,21 +35,21 @@ impl PixelIntegrator for NeeOnly {
 }
 
 /// The light a point sampled on the emitters (or, with the scene's environment share, a
-/// direction uniform over the sphere towards its environment) sends to `x` (normal `n`) and
+/// direction uniform over the sphere towards its environment) sends to `x` (shading frame `frame`) and
 /// on towards `wo`, over its density in solid angle.
 fn light_sample(
     view: &SceneView,
-    (x, n, wo): (&SurfacePoint, Vec3, Vec3),
+    (x, frame, wo): (&SurfacePoint, Frame, Vec3),
     material: &Material,
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
     let env_share = view.scene.environment_share();
     if env_share <= 0.0 {
-        return match LightPoint::sample(view, (x, n), rng) {
+        return match LightPoint::sample(view, (x, frame.n), rng) {
             Some(l) if view.unoccluded(x, &l.y, counts) => {
                 let le = view.material(l.y.prim).ke;
-                brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
+                brdf::eval(material, frame, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
             }
             _ => Vec3::ZERO,
         };
@@ -60,19 +61,19 @@ fn light_sample(
         .filter(|_| f64::from(u[0]) < env_share)
     {
         let wi = env.sample(u[1], u[2]);
-        let cos = n.dot(wi);
+        let cos = frame.n.dot(wi);
         if cos <= 0.0 || !view.escapes(x, wi, counts) {
             return Vec3::ZERO;
         }
         let pdf = (env_share * env.pdf()) as f32;
-        return brdf::eval(material, n, wo, wi) * env.radiance * (cos / pdf);
+        return brdf::eval(material, frame, wo, wi) * env.radiance * (cos / pdf);
     }
     u[0] = ((f64::from(u[0]) - env_share) / (1.0 - env_share)) as f32;
-    match LightPoint::from_uniforms(view, (x, n), u) {
+    match LightPoint::from_uniforms(view, (x, frame.n), u) {
         Some(l) if view.unoccluded(x, &l.y, counts) => {
             let le = view.material(l.y.prim).ke;
             let pdf = (1.0 - env_share) as f32 * l.pdf_solid_angle();
-            brdf::eval(material, n, wo, l.wi) * le * (l.cos_x / pdf)
+            brdf::eval(material, frame, wo, l.wi) * le * (l.cos_x / pdf)
         }
         _ => Vec3::ZERO,
     }
@@ -105,19 +106,19 @@ impl PixelEstimator for NeeOnly {
                 break;
             };
             let wo = -ray.dir;
-            let n = brdf::facing_normal(x.ns, wo);
+            let frame = Frame::facing(&x, wo);
             let material = view.scattering_material(&x, wo);
             if !material.scatters() {
                 break;
             }
             if !material.mirror {
-                radiance += beta * light_sample(view, (&x, n, wo), material, rng, counts);
+                radiance += beta * light_sample(view, (&x, frame, wo), material, rng, counts);
             }
             let u = [0; 3].map(|_| f64::from(uniform(rng)));
             let s = if material.mirror {
                 specular::sample(material, x.ns, wo, u[0])
             } else {
-                brdf::sample(material, n, wo, u)
+                brdf::sample(material, frame, wo, u)
             };
             let Some(s) = s else {
                 break;

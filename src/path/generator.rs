@@ -256,7 +256,7 @@ impl PathGenerator {
         match &self.steps[k].sampler {
             DirectionSampler::Brdf => {
                 let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, brdf::facing_normal(v.point.ns, v.wo), v.wo, v.wi)
+                brdf::pdf(m, brdf::Frame::facing(&v.point, v.wo), v.wo, v.wi)
             }
             DirectionSampler::Anchor(a) => a.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
             DirectionSampler::Patch(s) => s.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),

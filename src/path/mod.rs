@@ -25,6 +25,9 @@ pub struct SurfacePoint {
     /// Unit shading normal (Mitsuba's `sh_frame.n`): the interpolated vertex normals, or
     /// `ng`. BSDFs scatter in its frame, and one-sided ones on its side.
     pub ns: Vec3,
+    /// Unit shading tangent (Mitsuba's `sh_frame.s`, orthogonal to `ns`) where the material
+    /// has an anisotropic lobe, which alone reads it; zero elsewhere.
+    pub ts: Vec3,
     pub prim: u32,
 }
 
@@ -35,6 +38,7 @@ impl SurfacePoint {
             p,
             ng,
             ns: ng,
+            ts: Vec3::ZERO,
             prim,
         }
     }
@@ -105,10 +109,16 @@ impl<'a> SceneView<'a> {
     }
 
     fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
+        let ns = self.scene.shading_normal(hit.prim, (hit.u, hit.v), hit.ng);
+        let ts = match self.material(hit.prim).glossy.is_anisotropic() {
+            true => self.scene.shading_tangent(hit.prim, hit.ng, ns),
+            false => Vec3::ZERO,
+        };
         SurfacePoint {
             p: ray.origin + ray.dir * hit.t,
             ng: hit.ng,
-            ns: self.scene.shading_normal(hit.prim, (hit.u, hit.v), hit.ng),
+            ns,
+            ts,
             prim: hit.prim,
         }
     }

@@ -26,7 +26,7 @@
 
 use super::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
-use crate::sampling::brdf::{self, BrdfSample};
+use crate::sampling::brdf::{self, BrdfSample, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
 use crate::scene::Material;
@@ -53,13 +53,12 @@ pub trait VertexBsdf {
     }
 }
 
-/// The BSDF of `material` at a vertex whose shading normal `n` faces `wo`
-/// ([`brdf::facing_normal`]): [`brdf`]'s evaluation, density and sampling, and
-/// [`specular`]'s sampling of a delta BSDF.
+/// The BSDF of `material` at a vertex whose shading frame faces `wo` ([`Frame::facing`]):
+/// [`brdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
 #[derive(Clone, Copy)]
 pub struct Bsdf<'a> {
     pub material: &'a Material,
-    pub n: Vec3,
+    pub frame: Frame,
     pub wo: Vec3,
     /// The shading normal as stored (`n` or `−n`): a dielectric tells its sides apart by
     /// it.
@@ -68,11 +67,11 @@ pub struct Bsdf<'a> {
 
 impl VertexBsdf for Bsdf<'_> {
     fn eval(&self, wi: Vec3) -> Vec3 {
-        brdf::eval(self.material, self.n, self.wo, wi)
+        brdf::eval(self.material, self.frame, self.wo, wi)
     }
 
     fn pdf(&self, wi: Vec3) -> f64 {
-        brdf::pdf(self.material, self.n, self.wo, wi)
+        brdf::pdf(self.material, self.frame, self.wo, wi)
     }
 
     /// [`brdf::sample`] from three uniform numbers ([`specular::sample`] from the first of
@@ -86,7 +85,7 @@ impl VertexBsdf for Bsdf<'_> {
         if self.material.mirror {
             specular::sample(self.material, self.ns, self.wo, u[0])
         } else {
-            brdf::sample(self.material, self.n, self.wo, u)
+            brdf::sample(self.material, self.frame, self.wo, u)
         }
     }
 }
@@ -410,17 +409,19 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         if !material.scatters() {
             break;
         }
-        let n = brdf::facing_normal(x.ns, wo);
+        let frame = Frame::facing(&x, wo);
+        let n = frame.n;
         let last = bounce == max_bounces;
-        // At a diffuse vertex the spatial guide's records leave out the direct light, which
-        // next-event estimation samples well there (see `guiding::field`).
-        let diffuse = !material.mirror && material.ks.max_element() <= 0.0;
+        // At a diffuse vertex (no glossy lobe: Phong, rough conductor or rough plastic) the
+        // spatial guide's records leave out the direct light, which next-event estimation
+        // samples well there (see `guiding::field`).
+        let diffuse = !material.mirror && !material.is_glossy();
         let GuidedVertex { light_share, bsdf } = guide.vertex(
             k,
             x.p,
             Bsdf {
                 material,
-                n,
+                frame,
                 wo,
                 ns: x.ns,
             },

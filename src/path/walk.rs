@@ -7,7 +7,8 @@ use super::generator::{
 };
 use super::{emitted, SceneView, SurfacePoint};
 use crate::accel::Ray;
-use crate::sampling::{brdf, specular};
+use crate::sampling::brdf::{self, Frame};
+use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
 use crate::scene::Material;
 use glam::{DVec3, Vec3};
@@ -226,7 +227,7 @@ impl Walk {
     ) -> Option<Query> {
         let scene = view.scene;
         let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
-        let n = brdf::facing_normal(x.ns, wo);
+        let frame = Frame::facing(&x, wo);
         let mut vertex = PathVertex {
             point: x,
             wo,
@@ -263,10 +264,10 @@ impl Walk {
             let d = y_point.p - x.p;
             let dist2 = d.length_squared();
             let wi = d / dist2.sqrt();
-            let (cos_x, cos_y) = (n.dot(wi), -y_point.ng.dot(wi));
+            let (cos_x, cos_y) = (frame.n.dot(wi), -y_point.ng.dot(wi));
             if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
-                let f =
-                    brdf::eval(material, n, wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
+                let f = brdf::eval(material, frame, wo, wi).as_dvec3()
+                    * view.material(prim).ke.as_dvec3();
                 if f.max_element() > 0.0 {
                     let geometry = cos_x as f64 * cos_y as f64 / dist2 as f64;
                     self.nee = self.throughput * f * geometry;
@@ -275,7 +276,7 @@ impl Walk {
             }
             return None;
         }
-        let (wi, pdf) = self.direction(g, rng, (material, n), absorption)?;
+        let (wi, pdf) = self.direction(g, rng, (material, frame), absorption)?;
         vertex.wi = wi;
         vertex.pdf_sampled = pdf;
         path.vertices.push(vertex);
@@ -297,7 +298,7 @@ impl Walk {
         material: &Material,
     ) -> Option<Query> {
         let (x, wo) = (self.x, self.wo);
-        let n = brdf::facing_normal(x.ns, wo);
+        let frame = Frame::facing(&x, wo);
         // Pushed first: the light point's contribution ends here whatever follows.
         path.vertices.push(PathVertex {
             point: x,
@@ -310,12 +311,12 @@ impl Walk {
         let (shadow, absorption) = if material.mirror {
             (None, 0.0)
         } else {
-            let shadow = self.light_point(g, view, rng, (material, n));
+            let shadow = self.light_point(g, view, rng, (material, frame));
             let a = g.absorption_after_light(self.k, self.bounce, self.max_bounces);
             (shadow, a)
         };
         if (uniform(rng) as f64) >= absorption {
-            if let Some((wi, pdf)) = self.direction(g, rng, (material, n), absorption) {
+            if let Some((wi, pdf)) = self.direction(g, rng, (material, frame), absorption) {
                 if let Some(v) = path.vertices.last_mut() {
                     v.wi = wi;
                     v.pdf_sampled = pdf;
@@ -332,7 +333,7 @@ impl Walk {
         }
     }
 
-    /// [`Nee::Every`]'s light point at the current (non-delta) vertex, normal `n`: its
+    /// [`Nee::Every`]'s light point at the current (non-delta) vertex, shading frame `frame`: its
     /// contribution (solid angle at the vertex) becomes pending and its shadow ray is
     /// returned; `None` where it can carry nothing.
     fn light_point(
@@ -340,7 +341,7 @@ impl Walk {
         g: &PathGenerator,
         view: &SceneView,
         rng: &mut Rng,
-        (material, n): (&Material, Vec3),
+        (material, frame): (&Material, Frame),
     ) -> Option<Ray> {
         self.pending = None;
         let scene = view.scene;
@@ -359,11 +360,12 @@ impl Walk {
         let d = y_point.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
-        let (cos_x, cos_y) = (n.dot(wi), -y_point.ng.dot(wi));
+        let (cos_x, cos_y) = (frame.n.dot(wi), -y_point.ng.dot(wi));
         if !(cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0) {
             return None;
         }
-        let f = brdf::eval(material, n, self.wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
+        let f =
+            brdf::eval(material, frame, self.wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
         // Also false for a NaN.
         let carries = f.max_element() > 0.0;
         if !carries {
@@ -385,7 +387,7 @@ impl Walk {
         Some(view.shadow_ray(&x, &y_point))
     }
 
-    /// A direction out of the current vertex (normal `n`), where the path goes on with
+    /// A direction out of the current vertex (shading frame `frame`), where the path goes on with
     /// probability `1 − absorption`: the delta BSDF's (a mirror's, or a dielectric's
     /// reflection or transmission, chosen by one more uniform number), or one from the
     /// generator's step; the throughput takes the BRDF × cos (a delta's weight). Returns it
@@ -395,7 +397,7 @@ impl Walk {
         &mut self,
         g: &PathGenerator,
         rng: &mut Rng,
-        (material, n): (&Material, Vec3),
+        (material, frame): (&Material, Frame),
         absorption: f64,
     ) -> Option<(Vec3, f64)> {
         let (x, wo) = (self.x, self.wo);
@@ -416,7 +418,7 @@ impl Walk {
         ];
         let (wi, pdf) = match &g.steps[self.k].sampler {
             DirectionSampler::Brdf => {
-                let s = brdf::sample(material, n, wo, u)?;
+                let s = brdf::sample(material, frame, wo, u)?;
                 (s.wi, s.pdf)
             }
             DirectionSampler::Anchor(a) => {
@@ -428,8 +430,8 @@ impl Walk {
                 (wi, s.pdf(x.p.as_dvec3(), wi.as_dvec3()))
             }
         };
-        let cos = n.dot(wi);
-        let f = brdf::eval(material, n, wo, wi);
+        let cos = frame.n.dot(wi);
+        let f = brdf::eval(material, frame, wo, wi);
         if cos <= 0.0 || f.max_element() <= 0.0 {
             return None;
         }

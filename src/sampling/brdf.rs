@@ -1,14 +1,20 @@
 //! The BRDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
-//! normalised modified-Phong lobe (chosen by albedo), or a delta BSDF (an ideal mirror or
-//! conductor here; dielectrics, which tell their sides apart, in [`super::specular`]).
+//! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor or rough
+//! plastic, [`super::microfacet`]), the Lambertian one chosen by albedo; or a delta BSDF (an
+//! ideal mirror or conductor here; dielectrics, which tell their sides apart, in
+//! [`super::specular`]). This is the one BSDF interface of every method: `pt`, `pg`, `srt`,
+//! `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta lobe through it
+//! (the GA's BRDF sampler is [`sample`]).
 //!
-//! Directions are unit vectors pointing away from the surface; `n` is the shading normal (the
-//! geometric one where a mesh has no vertex normals) turned to the side of `wo`
-//! ([`facing_normal`]). Densities are solid-angle densities over
-//! the full sphere (zero below the surface for the Lambertian lobe), in `f64`.
+//! Directions are unit vectors pointing away from the surface; the [`Frame`]'s `n` is the
+//! shading normal (the geometric one where a mesh has no vertex normals) turned to the side
+//! of `wo` ([`facing_normal`]), its `s` Mitsuba's shading tangent, which only anisotropic
+//! lobes read. Densities are solid-angle densities over the full sphere (zero below the
+//! surface for the Lambertian lobe), in `f64`.
 
 use super::specular;
-use crate::scene::Material;
+use crate::path::SurfacePoint;
+use crate::scene::{Glossy, Material};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 
@@ -26,13 +32,70 @@ pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
     2.0 * n.dot(wo) * n - wo
 }
 
+/// The shading frame a BSDF scatters in at one vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// The unit shading normal, turned towards `wo`.
+    pub n: Vec3,
+    /// Mitsuba's unit shading tangent (`sh_frame.s`), orthogonal to `n`; read only by
+    /// anisotropic lobes (zero, any tangent, for the others).
+    pub s: Vec3,
+}
+
+impl Frame {
+    /// The frame of normal `n` (facing `wo`) and tangent `s`.
+    pub fn new(n: Vec3, s: Vec3) -> Self {
+        Self { n, s }
+    }
+
+    /// The frame at `x` seen from `wo`.
+    pub fn facing(x: &SurfacePoint, wo: Vec3) -> Self {
+        Self {
+            n: facing_normal(x.ns, wo),
+            s: x.ts,
+        }
+    }
+
+    /// The orthonormal basis (s, t, n) in `f64`: `s` made orthogonal to `n`, or any tangent
+    /// where it is zero.
+    fn basis(&self) -> [DVec3; 3] {
+        let n = self.n.as_dvec3().normalize();
+        let s = self.s.as_dvec3();
+        let s = (s - n * n.dot(s)).normalize_or_zero();
+        let s = if s == DVec3::ZERO {
+            crate::sampling::basis(n).0
+        } else {
+            s
+        };
+        [s, n.cross(s), n]
+    }
+
+    fn to_local(basis: &[DVec3; 3], w: Vec3) -> DVec3 {
+        let w = w.as_dvec3().normalize();
+        DVec3::new(basis[0].dot(w), basis[1].dot(w), basis[2].dot(w))
+    }
+
+    fn to_world(basis: &[DVec3; 3], l: DVec3) -> Vec3 {
+        (basis[0] * l.x + basis[1] * l.y + basis[2] * l.z)
+            .normalize()
+            .as_vec3()
+    }
+}
+
 fn channel_sum(c: Vec3) -> f64 {
     (c.x + c.y + c.z) as f64
 }
 
-/// Probability of sampling the Lambertian lobe rather than the Phong lobe.
+/// Probability of sampling the Lambertian lobe rather than the glossy lobe: by albedo
+/// (Phong's `ks`, a microfacet lobe's reflectance).
 fn diffuse_probability(m: &Material) -> f64 {
-    let (d, s) = (channel_sum(m.kd), channel_sum(m.ks));
+    let s = match &m.glossy {
+        Glossy::None => 0.0,
+        Glossy::Phong { ks, .. } => channel_sum(*ks),
+        Glossy::RoughConductor(c) => channel_sum(c.specular_reflectance),
+        Glossy::RoughPlastic(p) => channel_sum(p.specular_reflectance + p.diffuse_reflectance),
+    };
+    let d = channel_sum(m.kd);
     if d + s > 0.0 {
         d / (d + s)
     } else {
@@ -51,41 +114,71 @@ fn cos_lobe(n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
 }
 
 /// BRDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta) and below the surface.
-pub fn eval(m: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+pub fn eval(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    let n = frame.n;
     if m.mirror || n.dot(wi) <= 0.0 || n.dot(wo) <= 0.0 {
         return Vec3::ZERO;
     }
-    let mut f = m.kd * std::f32::consts::FRAC_1_PI;
-    if m.is_glossy() {
-        let c = cos_lobe(n, wo, wi);
-        if c > 0.0 {
-            let ns = m.ns as f64;
-            f += m.ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32;
+    let f = m.kd * std::f32::consts::FRAC_1_PI;
+    match &m.glossy {
+        Glossy::None => f,
+        Glossy::Phong { ks, ns } => {
+            let c = cos_lobe(n, wo, wi);
+            if c > 0.0 && ks.max_element() > 0.0 {
+                let ns = *ns as f64;
+                f + *ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32
+            } else {
+                f
+            }
+        }
+        Glossy::RoughConductor(c) => {
+            let b = frame.basis();
+            f + c.eval(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+        }
+        Glossy::RoughPlastic(p) => {
+            let b = frame.basis();
+            f + p.eval(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
         }
     }
-    f
 }
 
 /// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
-pub fn pdf(m: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
+pub fn pdf(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
     if m.mirror {
         return 0.0;
     }
+    let n = frame.n;
     let p_diffuse = diffuse_probability(m);
     let cos = n.as_dvec3().normalize().dot(wi.as_dvec3().normalize());
-    let mut pdf = if cos > 0.0 {
+    let diffuse = if cos > 0.0 {
         p_diffuse * cos * FRAC_1_PI
     } else {
         0.0
     };
-    if m.is_glossy() {
-        let c = cos_lobe(n, wo, wi);
-        if c > 0.0 {
-            let ns = m.ns as f64;
-            pdf += (1.0 - p_diffuse) * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns);
+    let p_glossy = 1.0 - p_diffuse;
+    let glossy = match &m.glossy {
+        Glossy::None => return diffuse,
+        Glossy::Phong { ks, ns } => {
+            let c = cos_lobe(n, wo, wi);
+            if c > 0.0 && ks.max_element() > 0.0 {
+                let ns = *ns as f64;
+                p_glossy * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns)
+            } else {
+                0.0
+            }
         }
-    }
-    pdf
+        // Microfacet lobes reflect only: nothing below the surface, nor seen from below.
+        _ if n.dot(wo) <= 0.0 || n.dot(wi) <= 0.0 => 0.0,
+        Glossy::RoughConductor(c) => {
+            let b = frame.basis();
+            p_glossy * c.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+        }
+        Glossy::RoughPlastic(p) => {
+            let b = frame.basis();
+            p_glossy * p.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+        }
+    };
+    diffuse + glossy
 }
 
 /// A sampled direction.
@@ -108,38 +201,55 @@ fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
 
 /// The direction [`sample`] draws from `u` for a non-mirror material (`None` for one that
 /// does not scatter), without its density and weight: for callers that evaluate both for a
-/// mixture anyway.
-pub fn sample_direction(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<Vec3> {
+/// mixture anyway. `u[0]` picks the lobe (rescaled, it picks a rough plastic's lobe too),
+/// `u[1]` and `u[2]` drive it.
+pub fn sample_direction(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<Vec3> {
     if !m.scatters() {
         return None;
     }
+    let n = frame.n;
     let phi = 2.0 * PI * u[2];
-    let wi = if u[0] < diffuse_probability(m) {
-        around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi)
-    } else {
-        let c = u[1].powf(1.0 / (m.ns as f64 + 1.0));
-        around(reflect(wo, n).as_dvec3().normalize(), c, phi)
+    let p_diffuse = diffuse_probability(m);
+    if u[0] < p_diffuse {
+        return Some(around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi).as_vec3());
+    }
+    let wi = match &m.glossy {
+        Glossy::None => return None,
+        Glossy::Phong { ns, .. } => {
+            let c = u[1].powf(1.0 / (*ns as f64 + 1.0));
+            around(reflect(wo, n).as_dvec3().normalize(), c, phi).as_vec3()
+        }
+        _ if n.dot(wo) <= 0.0 => return None,
+        Glossy::RoughConductor(c) => {
+            let b = frame.basis();
+            Frame::to_world(&b, c.sample(Frame::to_local(&b, wo), [u[1], u[2]]))
+        }
+        Glossy::RoughPlastic(p) => {
+            let b = frame.basis();
+            let pick = ((u[0] - p_diffuse) / (1.0 - p_diffuse)).clamp(0.0, 1.0);
+            Frame::to_world(&b, p.sample(Frame::to_local(&b, wo), [pick, u[1], u[2]]))
+        }
     };
-    Some(wi.as_vec3())
+    Some(wi)
 }
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
 /// (below the surface, or a black material), and for a dielectric, whose sampling needs the
 /// stored (not facing) normal's side: [`specular::sample`] samples every delta BSDF.
-pub fn sample(m: &Material, n: Vec3, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
+pub fn sample(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
     if m.mirror {
         return match m.dielectric {
             Some(_) => None,
-            None => specular::sample(m, n, wo, u[0]),
+            None => specular::sample(m, frame.n, wo, u[0]),
         };
     }
-    let wi = sample_direction(m, n, wo, u)?;
-    let pdf = pdf(m, n, wo, wi);
-    let cos = n.dot(wi);
+    let wi = sample_direction(m, frame, wo, u)?;
+    let pdf = pdf(m, frame, wo, wi);
+    let cos = frame.n.dot(wi);
     if cos <= 0.0 || pdf <= 0.0 {
         return None;
     }
-    let weight = eval(m, n, wo, wi) * (cos as f64 / pdf) as f32;
+    let weight = eval(m, frame, wo, wi) * (cos as f64 / pdf) as f32;
     Some(BrdfSample {
         wi,
         pdf,

@@ -7,6 +7,7 @@
 pub mod anchor;
 pub mod brdf;
 pub mod light_point;
+pub mod microfacet;
 pub mod patch;
 pub mod specular;
 

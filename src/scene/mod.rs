@@ -12,6 +12,7 @@ pub use file::{CameraFile, RenderDefaults, SceneFile};
 pub use shading::Shading;
 
 use crate::accel::TriangleMesh;
+use crate::sampling::microfacet::{RoughConductor, RoughPlastic};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -43,18 +44,19 @@ pub enum SceneError {
     NoEmitter { path: PathBuf },
 }
 
-/// A surface material (design §3): a two-sided Lambertian lobe plus a normalised
-/// modified-Phong lobe, or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or
-/// thin dielectric); and a one-sided emission.
+/// A surface material (design §3): a two-sided Lambertian lobe plus a glossy lobe
+/// ([`Glossy`]: a normalised modified-Phong lobe, or Mitsuba's rough conductor or rough
+/// plastic), or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or thin
+/// dielectric); and a one-sided emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
     /// Two-sided Lambertian albedo (`Kd`).
     pub kd: Vec3,
-    /// Phong lobe albedo at normal incidence (`Ks`), or the mirror's reflectance.
+    /// The delta BSDF's reflectance (a mirror's `Ks`, Mitsuba's `specular_reflectance`).
     pub ks: Vec3,
-    /// Phong exponent (`Ns`).
-    pub ns: f32,
+    /// The non-delta lobe beside the Lambertian one.
+    pub glossy: Glossy,
     /// A delta BSDF: an ideal mirror (`illum 3`) of reflectance `ks`, or, with
     /// [`Self::dielectric`], a dielectric interface. Transport treats every such vertex
     /// alike: no next-event estimation there, no sampler of a generator or guide, and the
@@ -72,6 +74,43 @@ pub struct Material {
     /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
     /// [`crate::sampling::specular`]).
     pub dielectric: Option<Dielectric>,
+}
+
+/// The glossy (non-delta, non-Lambertian) lobe of a [`Material`], evaluated, weighed and
+/// sampled by [`crate::sampling::brdf`] in the shading frame.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Glossy {
+    None,
+    /// MTL's normalised modified-Phong lobe `ks (ns + 2)/(2π) cos^ns α` about the mirror
+    /// direction (`Ks`, `Ns`).
+    Phong {
+        ks: Vec3,
+        ns: f32,
+    },
+    /// Mitsuba's `roughconductor` (the material's `kd` is zero).
+    RoughConductor(RoughConductor),
+    /// Mitsuba's `roughplastic`, its diffuse base included (the material's `kd` is zero).
+    RoughPlastic(Box<RoughPlastic>),
+}
+
+impl Glossy {
+    /// Whether the lobe is present and can reflect anything.
+    pub fn reflects(&self) -> bool {
+        match self {
+            Glossy::None => false,
+            Glossy::Phong { ks, .. } => ks.max_element() > 0.0,
+            Glossy::RoughConductor(c) => c.specular_reflectance.max_element() > 0.0,
+            Glossy::RoughPlastic(p) => {
+                p.specular_reflectance.max_element() > 0.0
+                    || p.diffuse_reflectance.max_element() > 0.0
+            }
+        }
+    }
+
+    /// Whether the lobe reads the shading frame's tangent (Mitsuba's `sh_frame.s`).
+    pub fn is_anisotropic(&self) -> bool {
+        matches!(self, Glossy::RoughConductor(c) if !c.microfacet.is_isotropic())
+    }
 }
 
 /// A dielectric interface: its relative index of refraction and what it transmits.
@@ -92,7 +131,7 @@ pub static BLACK: Material = Material {
     name: String::new(),
     kd: Vec3::ZERO,
     ks: Vec3::ZERO,
-    ns: 1.0,
+    glossy: Glossy::None,
     mirror: false,
     ke: Vec3::ZERO,
     two_sided: true,
@@ -105,9 +144,9 @@ impl Material {
         self.ke.max_element() > 0.0
     }
 
-    /// Whether the Phong lobe is present (and the surface is not a mirror).
+    /// Whether a glossy lobe is present (and the surface is not a mirror).
     pub fn is_glossy(&self) -> bool {
-        !self.mirror && self.ks.max_element() > 0.0
+        !self.mirror && self.glossy.reflects()
     }
 
     /// The mirror's reflectance for an incident direction at `cos_theta` to the normal:
@@ -127,7 +166,7 @@ impl Material {
                     .dielectric
                     .is_some_and(|d| d.transmittance.max_element() > 0.0)
         } else {
-            self.kd.max_element() > 0.0 || self.ks.max_element() > 0.0
+            self.kd.max_element() > 0.0 || self.glossy.reflects()
         }
     }
 }
@@ -346,8 +385,8 @@ pub struct Scene {
 pub struct SceneAnalysis {
     /// Primitives: triangles and analytic shapes (the counts below too).
     pub triangles: usize,
-    /// Triangles by material kind: Lambertian only, with a Phong lobe, delta BSDFs (mirrors,
-    /// conductors, dielectrics), emitters.
+    /// Triangles by material kind: Lambertian only, with a glossy lobe (Phong, microfacet),
+    /// delta BSDFs (mirrors, conductors, dielectrics), emitters.
     pub diffuse_triangles: usize,
     pub glossy_triangles: usize,
     pub mirror_triangles: usize,
@@ -376,6 +415,18 @@ impl Scene {
             Some(&t) => self.shading.normal(t, u, v).unwrap_or(ng),
             None => ng,
         }
+    }
+
+    /// Mitsuba's shading tangent (`sh_frame.s`) of primitive `prim`, whose unit geometric
+    /// normal is `ng` and whose shading normal is `ns` there: for a triangle its `dp/du`
+    /// ([`shading::dp_du`]) made orthogonal to `ns`. Analytic shapes (which the loader keeps
+    /// from anisotropic lobes) get `coordinate_system(ns)`'s.
+    pub fn shading_tangent(&self, prim: u32, ng: Vec3, ns: Vec3) -> Vec3 {
+        let dp_du = match self.mesh.triangles.get(prim as usize) {
+            Some(&t) => shading::dp_du(self.mesh.vertices(prim), self.shading.corner_uvs(t), ng),
+            None => glam::DVec3::ZERO,
+        };
+        shading::tangent(dp_du, ns)
     }
 
     /// The probability with which light sampling (`pt`'s next-event estimation) picks the
@@ -592,8 +643,14 @@ fn material(
     Ok(Material {
         name: m.name.clone(),
         kd: if mirror { Vec3::ZERO } else { kd },
-        ks,
-        ns: m.shininess.unwrap_or(1.0),
+        ks: if mirror { ks } else { Vec3::ZERO },
+        glossy: match mirror {
+            true => Glossy::None,
+            false => Glossy::Phong {
+                ks,
+                ns: m.shininess.unwrap_or(1.0),
+            },
+        },
         mirror,
         ke: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
         two_sided: true,

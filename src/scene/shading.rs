@@ -1,7 +1,7 @@
 //! What shading reads at a surface point beyond its triangle: Mitsuba's per-vertex shading
 //! normals and texture coordinates, interpolated with a hit's barycentrics.
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 /// Per-vertex shading attributes, indexed like [`crate::accel::TriangleMesh::positions`].
 /// Empty for a scene without any (every TOML scene): its triangles shade with their
@@ -58,17 +58,54 @@ impl Shading {
     /// The texture coordinates of triangle `t` at barycentrics `(u, v)`: its vertices'
     /// interpolated, or Mitsuba's default for a mesh without any, `(u, v)` itself.
     pub fn uv(&self, t: [u32; 3], u: f32, v: f32) -> Vec2 {
-        let corners = match self.uvs.is_empty() {
-            true => None,
-            false => t
-                .map(|i| self.uvs[i as usize])
-                .into_iter()
-                .collect::<Option<Vec<_>>>(),
-        };
-        match corners.as_deref() {
-            Some(&[a, b, c]) => a + (b - a) * u + (c - a) * v,
-            _ => Vec2::new(u, v),
+        match self.corner_uvs(t) {
+            Some([a, b, c]) => a + (b - a) * u + (c - a) * v,
+            None => Vec2::new(u, v),
         }
+    }
+}
+
+/// Mitsuba's `dp_du` of a triangle with corners `p` (world space) and texture coordinates
+/// `uvs` (`None` for a mesh without): from the texture coordinates, or, where they are
+/// degenerate, the first axis of `coordinate_system(ng)`; `p1 − p0` without texture
+/// coordinates (the barycentric parameterisation).
+pub fn dp_du(p: [Vec3; 3], uvs: Option<[Vec2; 3]>, ng: Vec3) -> DVec3 {
+    let [p0, p1, p2] = p.map(|x| x.as_dvec3());
+    let (dp0, dp1) = (p1 - p0, p2 - p0);
+    let Some([uv0, uv1, uv2]) = uvs.map(|u| u.map(|x| x.as_dvec2())) else {
+        return dp0;
+    };
+    let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
+    let det = duv0.x * duv1.y - duv0.y * duv1.x;
+    if det == 0.0 {
+        crate::sampling::basis(ng.as_dvec3()).0
+    } else {
+        (duv1.y * dp0 - duv0.y * dp1) / det
+    }
+}
+
+/// Mitsuba's shading tangent `sh_frame.s`: `dp_du` made orthogonal to the unit shading
+/// normal `ns` (Gram–Schmidt), or the first axis of `coordinate_system(ns)` where that
+/// leaves nothing.
+pub fn tangent(dp_du: DVec3, ns: Vec3) -> Vec3 {
+    let n = ns.as_dvec3();
+    let s = dp_du - n * n.dot(dp_du);
+    let s = s.normalize_or_zero();
+    if s == DVec3::ZERO {
+        crate::sampling::basis(n).0.as_vec3()
+    } else {
+        s.as_vec3()
+    }
+}
+
+impl Shading {
+    /// The texture coordinates of triangle `t`'s corners, where its mesh has them.
+    pub fn corner_uvs(&self, t: [u32; 3]) -> Option<[Vec2; 3]> {
+        if self.uvs.is_empty() {
+            return None;
+        }
+        let [a, b, c] = t.map(|i| self.uvs[i as usize]);
+        Some([a?, b?, c?])
     }
 }
 
@@ -122,5 +159,27 @@ mod tests {
         let uv = s.uv([4, 5, 3], 0.25, 0.5);
         assert!((uv - Vec2::new(0.25, 0.25)).length() < 1e-7, "{uv}");
         assert_eq!(s.uv([0, 1, 2], 0.25, 0.5), Vec2::new(0.25, 0.5));
+    }
+
+    #[test]
+    fn the_tangent_follows_u_and_is_orthogonal_to_the_normal() {
+        // A triangle in the x–y plane whose u runs along y: dp/du = +y whatever the order.
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let uvs = [Vec2::ZERO, Vec2::Y, Vec2::X];
+        let rotated = [1, 2, 0];
+        for order in [[0, 1, 2], [0, 2, 1], rotated] {
+            let d = dp_du(order.map(|i| p[i]), Some(order.map(|i| uvs[i])), Vec3::Z);
+            assert!((d - DVec3::Y).length() < 1e-12, "{d}");
+        }
+        // Without texture coordinates: p1 − p0.
+        assert_eq!(dp_du(p, None, Vec3::Z), DVec3::X);
+        // A tilted shading normal: s is orthogonal to it, in the plane of n and dp/du.
+        let ns = Vec3::new(0.0, 0.6, 0.8);
+        let s = tangent(DVec3::Y, ns);
+        assert!(s.dot(ns).abs() < 1e-6 && (s - Vec3::new(0.0, 0.8, -0.6)).length() < 1e-6);
+        // Degenerate texture coordinates: Mitsuba's coordinate_system(ng).
+        let flat = [Vec2::ZERO; 3];
+        let d = dp_du(p, Some(flat), Vec3::Z);
+        assert_eq!(d, crate::sampling::basis(DVec3::Z).0);
     }
 }

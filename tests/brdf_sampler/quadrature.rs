@@ -203,7 +203,7 @@ pub(crate) fn mixture_pdf_integrates_to_one() {
             half_angle: mix.anchors[1].theta_c,
         },
     ];
-    let splits = lobe_splits(mix.v.m.ns as f64);
+    let splits = lobe_splits(phong(&mix.v.m).1 as f64);
     let integral =
         |w: [f64; 3]| sphere_integral(|d| mix.pdf_with(w, d), mix.v.lobe_axis(), &splits, &caps);
     let total = integral(mix.w);

@@ -29,8 +29,8 @@ pub(crate) fn material(kd: Vec3, ks: Vec3, ns: f32) -> Material {
     Material {
         name: "test".into(),
         kd,
-        ks,
-        ns,
+        ks: Vec3::ZERO,
+        glossy: Glossy::Phong { ks, ns },
         mirror: false,
         ke: Vec3::ZERO,
         two_sided: true,
@@ -51,13 +51,24 @@ pub(crate) struct Vertex {
     pub(crate) m: Material,
     pub(crate) n: Vec3,
     pub(crate) wo: Vec3,
+    /// The shading tangent, orthogonal to `n` (anisotropic lobes follow it).
+    pub(crate) s: Vec3,
+}
+
+/// Phong's albedo and exponent of `m`.
+pub(crate) fn phong(m: &Material) -> (Vec3, f32) {
+    match m.glossy {
+        Glossy::Phong { ks, ns } => (ks, ns),
+        _ => (Vec3::ZERO, 1.0),
+    }
 }
 
 impl Vertex {
     pub(crate) fn new(m: Material, theta_o: f64) -> Self {
         let n = normal();
         let wo = about(n.as_dvec3(), theta_o, 0.3).as_vec3().normalize();
-        Self { m, n, wo }
+        let s = frame(n.as_dvec3()).0.as_vec3();
+        Self { m, n, wo, s }
     }
 
     pub(crate) fn nd(&self) -> DVec3 {
@@ -69,15 +80,30 @@ impl Vertex {
         brdf::reflect(self.wo, self.n).as_dvec3().normalize()
     }
 
+    /// The shading frame.
+    pub(crate) fn frame(&self) -> Frame {
+        Frame::new(self.n, self.s)
+    }
+
+    /// `d` in the shading frame: (tangent, bitangent `n × s`, normal) components.
+    pub(crate) fn local(&self, d: DVec3) -> DVec3 {
+        let (n, s) = (self.nd(), self.s.as_dvec3().normalize());
+        DVec3::new(s.dot(d), n.cross(s).dot(d), n.dot(d))
+    }
+
     pub(crate) fn pdf(&self, d: DVec3) -> f64 {
-        brdf::pdf(&self.m, self.n, self.wo, d.as_vec3())
+        brdf::pdf(&self.m, self.frame(), self.wo, d.as_vec3())
     }
 
     /// One draw: the direction above the surface, or `None` for a rejected one. A sample
     /// whose own `pdf` differs from `brdf::pdf` (what `pdf_path` re-evaluates) is a bug.
     pub(crate) fn sample(&self, u: [f64; 3]) -> Option<DVec3> {
-        let s = brdf::sample(&self.m, self.n, self.wo, u)?;
-        assert_eq!(s.pdf, brdf::pdf(&self.m, self.n, self.wo, s.wi), "{s:?}");
+        let s = brdf::sample(&self.m, self.frame(), self.wo, u)?;
+        assert_eq!(
+            s.pdf,
+            brdf::pdf(&self.m, self.frame(), self.wo, s.wi),
+            "{s:?}"
+        );
         assert!(!s.delta);
         Some(s.wi.as_dvec3().normalize())
     }
@@ -97,9 +123,10 @@ impl Model {
     /// The right model: lobe chosen by the albedos' channel sums, `(n+1)/(2π)`.
     pub(crate) fn of(m: &Material) -> Self {
         let sum = |c: Vec3| c.as_dvec3().element_sum();
-        let ns = m.ns as f64;
+        let (ks, ns) = phong(m);
+        let ns = ns as f64;
         Self {
-            p_diffuse: sum(m.kd) / (sum(m.kd) + sum(m.ks)),
+            p_diffuse: sum(m.kd) / (sum(m.kd) + sum(ks)),
             exponent: ns,
             norm: ns + 1.0,
         }
@@ -271,7 +298,7 @@ pub(crate) fn assert_model_is_the_pdf(v: &Vertex) {
             ((i * 37) % 101) as f64 / 101.0,
             0.37,
         ];
-        if let Some(s) = brdf::sample(&v.m, v.n, v.wo, u) {
+        if let Some(s) = brdf::sample(&v.m, v.frame(), v.wo, u) {
             let (want, got) = (s.pdf, model.pdf(v, s.wi.as_dvec3().normalize()));
             assert!((got - want).abs() <= 1e-6 * want, "{got} {want}");
             checked += 1;

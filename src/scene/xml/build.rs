@@ -10,8 +10,8 @@ use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
 use crate::accel::{Analytic, TriangleMesh};
 use crate::scene::{
-    triangle_area, Camera, Dielectric, Emitters, Environment, Material, RenderDefaults, Scene,
-    SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    triangle_area, Camera, Dielectric, Emitters, Environment, Glossy, Material, RenderDefaults,
+    Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -148,6 +148,9 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     if let Some(shape) = shapes::analytic(p, warnings)? {
         let material = shape_material(p, g, warnings)?;
         p.finish()?;
+        if g.materials[material as usize].glossy.is_anisotropic() {
+            return Err(p.error("an anisotropic BSDF on an analytic shape: genpath reads the tangent of anisotropic roughness from triangles only"));
+        }
         g.shapes.push(shape);
         g.shape_material.push(material);
         return Ok(());
@@ -162,6 +165,9 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     let material = shape_material(p, g, warnings)?;
     p.finish()?;
     let placed = shapes::place(raw, &how, p.loc(), p)?;
+    if g.materials[material as usize].glossy.is_anisotropic() {
+        anisotropic_tangents(p, &how, placed.uvs.is_some())?;
+    }
     if placed.normals.is_some() && g.materials[material as usize].is_emitter() {
         // Mitsuba's area emitter then emits, and converts its light samples' densities, by
         // the shading normal, while a ray that finds it converts by the geometric one.
@@ -192,6 +198,20 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
         } else {
             g.degenerate += 1;
         }
+    }
+    Ok(())
+}
+
+/// Refuses the triangle shapes whose tangent (Mitsuba's `dp/du`, which anisotropic roughness
+/// follows) genpath cannot reproduce: a `cube` (Mitsuba's has texture coordinates, genpath's
+/// not yet), and a mesh without texture coordinates under `flip_normals` (whose `p1 − p0`
+/// genpath's reversed winding changes).
+fn anisotropic_tangents(p: &Props, how: &Placement, has_uvs: bool) -> Result<(), SceneError> {
+    if p.object().plugin == "cube" {
+        return Err(p.error("an anisotropic BSDF on a `cube`: genpath's cube has no texture coordinates, whose dp/du Mitsuba's tangent follows (use a mesh with UVs)"));
+    }
+    if !has_uvs && how.flip_normals {
+        return Err(p.error("an anisotropic BSDF on a mesh without texture coordinates and with `flip_normals`: Mitsuba's tangent p1 − p0 follows a vertex order genpath's flipped winding does not keep"));
     }
     Ok(())
 }
@@ -233,7 +253,7 @@ fn diffuse(kd: DVec3, name: String) -> Material {
         name,
         kd: kd.as_vec3(),
         ks: Vec3::ZERO,
-        ns: 1.0,
+        glossy: Glossy::None,
         mirror: false,
         ke: Vec3::ZERO,
         two_sided: false,
@@ -275,9 +295,14 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
             m
         }
         "conductor" => conductor(p, name, warnings)?,
+        "roughconductor" => super::rough::rough_conductor(p, name, warnings)?,
+        "roughplastic" => super::rough::rough_plastic(p, name, warnings)?,
+        // A delta lobe beside a diffuse one, where genpath's vertices are either delta or
+        // not (see docs/scenes.md).
+        "plastic" => return Err(p.error("genpath does not implement the smooth `plastic` BSDF (a delta reflection beside a diffuse lobe at one vertex; use `roughplastic` with a small `alpha`)")),
         "dielectric" => dielectric(p, name, false, warnings)?,
         "thindielectric" => dielectric(p, name, true, warnings)?,
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, dielectric, thindielectric)"))),
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, thindielectric)"))),
     };
     p.finish()?;
     Ok(m)
@@ -286,47 +311,64 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
 /// Mitsuba's smooth `conductor`: a mirror with the Fresnel reflectance of (η, k), from a
 /// named preset or given; η = 0, k = 1 (a perfect mirror) for `material="none"`, the default.
 fn conductor(p: &Props, name: String, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
-    let ks = p
-        .color("specular_reflectance", ColorUse::Reflectance, warnings)?
-        .unwrap_or(DVec3::ONE);
-    let preset = p.string("material")?.unwrap_or("none");
-    let given_eta = p.color("eta", ColorUse::Unbounded, warnings)?;
-    let given_k = p.color("k", ColorUse::Unbounded, warnings)?;
-    let (eta, k) = if given_eta.is_some() || preset == "none" {
-        if preset != "none" {
-            return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
-        }
-        (
-            given_eta.unwrap_or(DVec3::ZERO),
-            given_k.unwrap_or(DVec3::ONE),
-        )
-    } else {
-        if given_k.is_some() {
-            return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
-        }
-        let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, _, _)| *n == preset) else {
-            let names: Vec<&str> = CONDUCTORS.iter().map(|c| c.0).collect();
-            return Err(p.error(format!(
-                "unknown conductor `material` \"{preset}\" (known: none, {})",
-                names.join(", ")
-            )));
-        };
-        (DVec3::from(*eta), DVec3::from(*k))
-    };
-    if ks.max_element() > 1.0 || ks.min_element() < 0.0 {
-        return Err(p.error(format!("`specular_reflectance` {ks} is outside [0, 1]")));
-    }
+    let ks = specular_reflectance(p, warnings)?;
+    let (eta, k) = complex_ior(p, warnings)?;
     Ok(Material {
         name,
         kd: Vec3::ZERO,
         ks: ks.as_vec3(),
-        ns: 1.0,
+        glossy: Glossy::None,
         mirror: true,
         ke: Vec3::ZERO,
         two_sided: false,
         conductor: Some([eta.as_vec3(), k.as_vec3()]),
         dielectric: None,
     })
+}
+
+/// A conductor's `specular_reflectance` (1 by default), within [0, 1].
+pub(super) fn specular_reflectance(
+    p: &Props,
+    warnings: &mut Vec<String>,
+) -> Result<DVec3, SceneError> {
+    let ks = p
+        .color("specular_reflectance", ColorUse::Reflectance, warnings)?
+        .unwrap_or(DVec3::ONE);
+    if ks.max_element() > 1.0 || ks.min_element() < 0.0 {
+        return Err(p.error(format!("`specular_reflectance` {ks} is outside [0, 1]")));
+    }
+    Ok(ks)
+}
+
+/// A conductor's complex index of refraction (η, k) as Mitsuba's conductors read it: given
+/// (`eta` 0 and `k` 1 by default) or a `material` preset.
+pub(super) fn complex_ior(
+    p: &Props,
+    warnings: &mut Vec<String>,
+) -> Result<(DVec3, DVec3), SceneError> {
+    let preset = p.string("material")?.unwrap_or("none");
+    let given_eta = p.color("eta", ColorUse::Unbounded, warnings)?;
+    let given_k = p.color("k", ColorUse::Unbounded, warnings)?;
+    if given_eta.is_some() || preset == "none" {
+        if preset != "none" {
+            return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
+        }
+        return Ok((
+            given_eta.unwrap_or(DVec3::ZERO),
+            given_k.unwrap_or(DVec3::ONE),
+        ));
+    }
+    if given_k.is_some() {
+        return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
+    }
+    let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, _, _)| *n == preset) else {
+        let names: Vec<&str> = CONDUCTORS.iter().map(|c| c.0).collect();
+        return Err(p.error(format!(
+            "unknown conductor `material` \"{preset}\" (known: none, {})",
+            names.join(", ")
+        )));
+    };
+    Ok((DVec3::from(*eta), DVec3::from(*k)))
 }
 
 /// Mitsuba's smooth `dielectric` (or, `thin`, its `thindielectric`): a two-sided delta BSDF
@@ -358,7 +400,7 @@ fn dielectric(
         name,
         kd: Vec3::ZERO,
         ks: reflectance.as_vec3(),
-        ns: 1.0,
+        glossy: Glossy::None,
         mirror: true,
         ke: Vec3::ZERO,
         two_sided: true,

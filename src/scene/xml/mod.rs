@@ -8,6 +8,7 @@ mod ior;
 mod parse;
 mod ply;
 mod props;
+mod rough;
 mod serialized;
 mod shapes;
 mod spectrum;

@@ -1,0 +1,544 @@
+//! Microfacet reflection as Mitsuba 3 models it: the Beckmann and GGX distributions
+//! (`include/mitsuba/render/microfacet.h`), isotropic or anisotropic, with Smith's
+//! masking-shadowing, sampled from the distribution of visible normals or from the full
+//! distribution; and the two BSDFs built on them, `roughconductor` ([`RoughConductor`]) and
+//! `roughplastic` ([`RoughPlastic`]).
+//!
+//! Everything here works in the local shading frame (`z` the normal facing `wo`, `x`
+//! Mitsuba's `sh_frame.s`), in `f64`. `wo` is the direction towards the viewer (Mitsuba's
+//! `si.wi`) and `wi` towards the light (Mitsuba's `wo`); values are BSDF values without the
+//! cosine (Mitsuba's `eval` divided by `cos θ_i`).
+
+use super::specular::fresnel_dielectric;
+use crate::scene::fresnel_conductor;
+use glam::{DVec2, DVec3, Vec3};
+use statrs::function::erf::{erf, erf_inv};
+use std::f64::consts::{FRAC_1_PI, PI};
+
+/// The microfacet normal distribution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Distribution {
+    Beckmann,
+    /// GGX (Trowbridge–Reitz).
+    Ggx,
+}
+
+impl Distribution {
+    /// Mitsuba's name for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Distribution::Beckmann => "beckmann",
+            Distribution::Ggx => "ggx",
+        }
+    }
+}
+
+/// The smallest roughness, as Mitsuba clamps it.
+pub const MIN_ALPHA: f64 = 1e-4;
+
+/// A microfacet distribution: its kind, its roughness along the tangent (`alpha_u`) and the
+/// bitangent (`alpha_v`), and how its normals are sampled.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Microfacet {
+    pub distribution: Distribution,
+    pub alpha_u: f64,
+    pub alpha_v: f64,
+    /// Sample the normals visible from `wo` (Heitz and d'Eon 2014), else the whole
+    /// distribution `D(m) cos θ_m`.
+    pub sample_visible: bool,
+}
+
+impl Microfacet {
+    /// The distribution with its roughness clamped to [`MIN_ALPHA`], as Mitsuba's.
+    pub fn new(
+        distribution: Distribution,
+        alpha_u: f64,
+        alpha_v: f64,
+        sample_visible: bool,
+    ) -> Self {
+        Self {
+            distribution,
+            alpha_u: alpha_u.max(MIN_ALPHA),
+            alpha_v: alpha_v.max(MIN_ALPHA),
+            sample_visible,
+        }
+    }
+
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha_u == self.alpha_v
+    }
+
+    /// `D(m)`, the density of microfacet normals per projected area.
+    pub fn d(&self, m: DVec3) -> f64 {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let cos2 = m.z * m.z;
+        let (x, y) = (m.x / au, m.y / av);
+        let d = match self.distribution {
+            Distribution::Beckmann => {
+                (-(x * x + y * y) / cos2).exp() / (PI * au * av * cos2 * cos2)
+            }
+            Distribution::Ggx => {
+                let q = x * x + y * y + cos2;
+                1.0 / (PI * au * av * q * q)
+            }
+        };
+        // Mitsuba's cut of a vanishing density (and of m below the surface).
+        if d * m.z > 1e-20 {
+            d
+        } else {
+            0.0
+        }
+    }
+
+    /// Smith's masking function `G1(v, m)` (Beckmann through Mitsuba's rational fit, < 0.35 %
+    /// from the exact one), 0 where `m` faces away from `v` or `v` from the surface.
+    pub fn smith_g1(&self, v: DVec3, m: DVec3) -> f64 {
+        if v.dot(m) * v.z <= 0.0 {
+            return 0.0;
+        }
+        let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
+        if xy == 0.0 {
+            return 1.0;
+        }
+        let tan2 = xy / (v.z * v.z);
+        match self.distribution {
+            Distribution::Beckmann => {
+                let a = 1.0 / tan2.sqrt();
+                if a >= 1.6 {
+                    1.0
+                } else {
+                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+                }
+            }
+            Distribution::Ggx => 2.0 / (1.0 + (1.0 + tan2).sqrt()),
+        }
+    }
+
+    /// `G(wo, wi, m)`, the separable masking-shadowing.
+    pub fn g(&self, wo: DVec3, wi: DVec3, m: DVec3) -> f64 {
+        self.smith_g1(wo, m) * self.smith_g1(wi, m)
+    }
+
+    /// The density of [`Self::sample`]'s normal `m` seen from `wo`, per solid angle of `m`.
+    pub fn pdf(&self, wo: DVec3, m: DVec3) -> f64 {
+        if self.sample_visible {
+            self.d(m) * self.smith_g1(wo, m) * wo.dot(m).abs() / wo.z
+        } else {
+            self.d(m) * m.z
+        }
+    }
+
+    /// A microfacet normal from two uniform numbers, seen from `wo` (above the surface).
+    pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> DVec3 {
+        if self.sample_visible {
+            self.sample_visible_normal(wo, u)
+        } else {
+            self.sample_all(u)
+        }
+    }
+
+    /// A normal of density `D(m) cos θ_m`.
+    fn sample_all(&self, u: [f64; 2]) -> DVec3 {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (sin_phi, cos_phi, alpha2) = if self.is_isotropic() {
+            let (s, c) = (2.0 * PI * u[1]).sin_cos();
+            (s, c, au * au)
+        } else {
+            let tmp = av / au * (2.0 * PI * u[1]).tan();
+            let cos_phi = (1.0 / (tmp * tmp + 1.0).sqrt()).copysign((u[1] - 0.5).abs() - 0.25);
+            let sin_phi = cos_phi * tmp;
+            let alpha2 = 1.0 / ((cos_phi / au).powi(2) + (sin_phi / av).powi(2));
+            (sin_phi, cos_phi, alpha2)
+        };
+        let cos_theta = match self.distribution {
+            Distribution::Beckmann => 1.0 / (1.0 - alpha2 * (1.0 - u[0]).ln()).sqrt(),
+            Distribution::Ggx => 1.0 / (1.0 + alpha2 * u[0] / (1.0 - u[0])).sqrt(),
+        };
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        DVec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta)
+    }
+
+    /// A normal visible from `wo`: the slopes of the unit-roughness distribution seen at
+    /// `wo` stretched back (Heitz and d'Eon 2014).
+    fn sample_visible_normal(&self, wo: DVec3, u: [f64; 2]) -> DVec3 {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let stretched = DVec3::new(au * wo.x, av * wo.y, wo.z).normalize();
+        let sin2 = stretched.x * stretched.x + stretched.y * stretched.y;
+        let (sin_phi, cos_phi) = if sin2 <= 4.0 * f64::from(f32::EPSILON) {
+            (0.0, 1.0)
+        } else {
+            let inv = 1.0 / sin2.sqrt();
+            (
+                (stretched.y * inv).clamp(-1.0, 1.0),
+                (stretched.x * inv).clamp(-1.0, 1.0),
+            )
+        };
+        let slope = self.visible_slope(stretched.z, u);
+        let slope = DVec2::new(
+            (cos_phi * slope.x - sin_phi * slope.y) * au,
+            (sin_phi * slope.x + cos_phi * slope.y) * av,
+        );
+        DVec3::new(-slope.x, -slope.y, 1.0).normalize()
+    }
+
+    /// The slopes of a visible normal of the unit-roughness distribution seen at
+    /// `cos_theta` in the x–z plane.
+    fn visible_slope(&self, cos_theta: f64, u: [f64; 2]) -> DVec2 {
+        match self.distribution {
+            Distribution::Beckmann => beckmann_visible_slope(cos_theta, u),
+            Distribution::Ggx => {
+                let p = concentric_disk(u);
+                let s = 0.5 * (1.0 + cos_theta);
+                let y = (1.0 - p.x * p.x).max(0.0).sqrt() * (1.0 - s) + p.y * s;
+                let x = p.x;
+                let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+                let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                let norm = 1.0 / (sin_theta * y + cos_theta * z);
+                DVec2::new((cos_theta * y - sin_theta * z) * norm, x * norm)
+            }
+        }
+    }
+}
+
+/// Beckmann's visible slopes by Jakob's numerical inversion (Mitsuba's, three Newton steps
+/// in the erf domain).
+fn beckmann_visible_slope(cos_theta: f64, u: [f64; 2]) -> DVec2 {
+    let tan_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt() / cos_theta;
+    let cot_theta = 1.0 / tan_theta;
+    let max_value = erf(cot_theta);
+    let inv_sqrt_pi = 1.0 / PI.sqrt();
+    let u = u.map(|x| x.clamp(1e-6, 1.0 - 1e-6));
+    let mut x = max_value - (max_value + 1.0) * erf((-u[0].ln()).sqrt());
+    let target =
+        u[0] * (1.0 + max_value + inv_sqrt_pi * tan_theta * (-cot_theta * cot_theta).exp());
+    for _ in 0..3 {
+        let slope = erf_inv(x);
+        let value = 1.0 + x + inv_sqrt_pi * tan_theta * (-slope * slope).exp() - target;
+        let derivative = 1.0 - slope * tan_theta;
+        x -= value / derivative;
+    }
+    DVec2::new(erf_inv(x), erf_inv(2.0 * u[1] - 1.0))
+}
+
+/// Shirley and Chiu's concentric map of the unit square onto the unit disk.
+fn concentric_disk(u: [f64; 2]) -> DVec2 {
+    let (x, y) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if x == 0.0 && y == 0.0 {
+        return DVec2::ZERO;
+    }
+    let (r, phi) = if x.abs() > y.abs() {
+        (x, std::f64::consts::FRAC_PI_4 * (y / x))
+    } else {
+        (
+            y,
+            std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (x / y),
+        )
+    };
+    DVec2::new(r * phi.cos(), r * phi.sin())
+}
+
+/// `wo` mirrored about `m`.
+fn reflect(wo: DVec3, m: DVec3) -> DVec3 {
+    2.0 * wo.dot(m) * m - wo
+}
+
+/// The unit half vector of `wo` and `wi`, and whether both lie above the surface and on
+/// its front side (Mitsuba's conditions for a reflection's density).
+fn half_vector(wo: DVec3, wi: DVec3) -> Option<DVec3> {
+    let h = (wo + wi).normalize();
+    (wo.z > 0.0 && wi.z > 0.0 && wo.dot(h) > 0.0 && wi.dot(h) > 0.0).then_some(h)
+}
+
+/// The density in `wi` of reflecting `wo` about a normal drawn by `distr`.
+fn reflection_pdf(distr: &Microfacet, wo: DVec3, wi: DVec3) -> f64 {
+    let Some(h) = half_vector(wo, wi) else {
+        return 0.0;
+    };
+    if distr.sample_visible {
+        distr.d(h) * distr.smith_g1(wo, h) / (4.0 * wo.z)
+    } else {
+        distr.pdf(wo, h) / (4.0 * wi.dot(h))
+    }
+}
+
+/// `D G / (4 cos θ_o cos θ_i)` and the half vector: the microfacet reflection without its
+/// Fresnel factor.
+fn reflection(distr: &Microfacet, wo: DVec3, wi: DVec3) -> Option<(f64, DVec3)> {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return None;
+    }
+    let h = (wo + wi).normalize();
+    let d = distr.d(h);
+    (d != 0.0).then(|| (d * distr.g(wo, wi, h) / (4.0 * wo.z * wi.z), h))
+}
+
+/// Mitsuba's `roughconductor`: microfacet reflection off a conductor of complex index of
+/// refraction `eta + i k` per channel, times `specular_reflectance`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughConductor {
+    pub microfacet: Microfacet,
+    pub eta: Vec3,
+    pub k: Vec3,
+    pub specular_reflectance: Vec3,
+}
+
+impl RoughConductor {
+    /// `f(wo, wi)`, without the cosine.
+    pub fn eval(&self, wo: DVec3, wi: DVec3) -> Vec3 {
+        let Some((value, h)) = reflection(&self.microfacet, wo, wi) else {
+            return Vec3::ZERO;
+        };
+        let fresnel = fresnel_conductor(wo.dot(h) as f32, self.eta, self.k);
+        fresnel * self.specular_reflectance * value as f32
+    }
+
+    pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
+        reflection_pdf(&self.microfacet, wo, wi)
+    }
+
+    /// A direction from two uniform numbers; it may lie below the surface (no energy).
+    pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> DVec3 {
+        reflect(wo, self.microfacet.sample(wo, u))
+    }
+}
+
+/// Entries of the table of the coating's transmittance against `cos θ` (Mitsuba's
+/// `MI_ROUGH_TRANSMITTANCE_RES`).
+pub const TRANSMITTANCE_RES: usize = 64;
+
+/// Mitsuba's `roughplastic`: a rough dielectric interface of relative index `eta` over a
+/// Lambertian base. Reflection off the interface is a microfacet lobe; light that enters
+/// reaches the base, and what leaves again is the base's albedo corrected for the
+/// interface's internal reflections (`diffuse / (1 − F_dr)`, or `diffuse / (1 − diffuse
+/// F_dr)` when `nonlinear`), times the interface's transmittance both ways over `eta²`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughPlastic {
+    /// Isotropic.
+    pub microfacet: Microfacet,
+    /// `int_ior / ext_ior`.
+    pub eta: f32,
+    pub diffuse_reflectance: Vec3,
+    pub specular_reflectance: Vec3,
+    pub nonlinear: bool,
+    /// The share of the specular lobe in sampling before the transmittance's: the
+    /// specular reflectance's mean over both means.
+    specular_sampling_weight: f64,
+    /// The interface's hemispherical reflectance from inside, cosine-weighted (Mitsuba's
+    /// `m_internal_reflectance`, the diffuse Fresnel reflectance of a rough interface).
+    internal_reflectance: f64,
+    /// The interface's transmittance into the coating at `cos θ = i / (RES − 1)`.
+    external_transmittance: [f64; TRANSMITTANCE_RES],
+}
+
+impl RoughPlastic {
+    /// The BSDF with Mitsuba's precomputed tables: the transmittance by Gauss–Legendre
+    /// quadrature over visible normals (32² nodes for `eta > 1`, else 128²), and the
+    /// internal reflectance from the reflectance seen from inside (relative index `1/eta`)
+    /// at the same `cos θ`.
+    pub fn new(
+        microfacet: Microfacet,
+        eta: f32,
+        diffuse_reflectance: Vec3,
+        specular_reflectance: Vec3,
+        nonlinear: bool,
+    ) -> Self {
+        let mean = |c: Vec3| c.as_dvec3().element_sum() / 3.0;
+        let s_mean = mean(specular_reflectance);
+        let visible = Microfacet {
+            sample_visible: true,
+            ..microfacet
+        };
+        let eta64 = f64::from(eta);
+        let mut external_transmittance = [0.0; TRANSMITTANCE_RES];
+        let mut internal = 0.0;
+        for (i, t) in external_transmittance.iter_mut().enumerate() {
+            let mu = (i as f64 / (TRANSMITTANCE_RES - 1) as f64).max(1e-6);
+            let wo = DVec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            *t = coating_integral(&visible, wo, eta64, Coating::Transmittance);
+            internal += coating_integral(&visible, wo, 1.0 / eta64, Coating::Reflectance) * mu;
+        }
+        Self {
+            microfacet,
+            eta,
+            diffuse_reflectance,
+            specular_reflectance,
+            nonlinear,
+            specular_sampling_weight: s_mean / (mean(diffuse_reflectance) + s_mean),
+            internal_reflectance: 2.0 * internal / TRANSMITTANCE_RES as f64,
+            external_transmittance,
+        }
+    }
+
+    /// The interface's transmittance at `cos θ` (linear in the table, as Mitsuba's).
+    pub fn transmittance(&self, cos_theta: f64) -> f64 {
+        let x = cos_theta * (TRANSMITTANCE_RES - 1) as f64;
+        let i = (x as usize).min(TRANSMITTANCE_RES - 2);
+        let (a, b) = (
+            self.external_transmittance[i],
+            self.external_transmittance[i + 1],
+        );
+        a + (b - a) * (x - i as f64)
+    }
+
+    /// The probability of sampling the specular lobe, seen from `wo` (above the surface).
+    pub fn specular_probability(&self, wo: DVec3) -> f64 {
+        let t = self.transmittance(wo.z);
+        let w = self.specular_sampling_weight;
+        let (s, d) = ((1.0 - t) * w, t * (1.0 - w));
+        s / (s + d)
+    }
+
+    /// `f(wo, wi)`, without the cosine: the interface's reflection and the base's light.
+    pub fn eval(&self, wo: DVec3, wi: DVec3) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let mut f = Vec3::ZERO;
+        if let Some((value, h)) = reflection(&self.microfacet, wo, wi) {
+            let fresnel = fresnel_dielectric(wo.dot(h), f64::from(self.eta)).0;
+            f += self.specular_reflectance * (fresnel * value) as f32;
+        }
+        let kd = self.diffuse_reflectance;
+        let fdr = self.internal_reflectance as f32;
+        let base = if self.nonlinear {
+            kd / (Vec3::ONE - kd * fdr)
+        } else {
+            kd / (1.0 - fdr)
+        };
+        let through = self.transmittance(wo.z) * self.transmittance(wi.z);
+        let inv_eta2 = 1.0 / (f64::from(self.eta) * f64::from(self.eta));
+        f + base * (FRAC_1_PI * inv_eta2 * through) as f32
+    }
+
+    pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let p = self.specular_probability(wo);
+        p * reflection_pdf(&self.microfacet, wo, wi) + (1.0 - p) * wi.z * FRAC_1_PI
+    }
+
+    /// A direction from three uniform numbers: `u[0]` picks the lobe.
+    pub fn sample(&self, wo: DVec3, u: [f64; 3]) -> DVec3 {
+        if u[0] < self.specular_probability(wo) {
+            reflect(wo, self.microfacet.sample(wo, [u[1], u[2]]))
+        } else {
+            let (r, phi) = (u[1].sqrt(), 2.0 * PI * u[2]);
+            DVec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u[1]).max(0.0).sqrt())
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Coating {
+    Transmittance,
+    Reflectance,
+}
+
+/// Mitsuba's `eval_transmittance` or `eval_reflectance` of a rough dielectric interface of
+/// relative index `eta` at `wo`: the Fresnel transmittance (reflectance) of visible normals
+/// times the masking of the refracted (reflected) direction, by Gauss–Legendre quadrature.
+fn coating_integral(distr: &Microfacet, wo: DVec3, eta: f64, what: Coating) -> f64 {
+    let nodes = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+    let mut sum = 0.0;
+    for &(x, wx) in &nodes {
+        for &(y, wy) in &nodes {
+            let m = distr.sample(wo, [0.5 * x + 0.5, 0.5 * y + 0.5]);
+            let cos_i = wo.dot(m);
+            let (r, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
+            let value = match what {
+                Coating::Transmittance => {
+                    let wi = m * (cos_i * eta_ti + cos_t) - wo * eta_ti;
+                    if wi.z * wo.z >= 0.0 {
+                        0.0
+                    } else {
+                        distr.smith_g1(wi, m) * (1.0 - r)
+                    }
+                }
+                Coating::Reflectance => {
+                    let wi = reflect(wo, m);
+                    if wi.z <= 0.0 || wo.z <= 0.0 {
+                        0.0
+                    } else {
+                        distr.smith_g1(wi, m) * r
+                    }
+                }
+            };
+            sum += value * wx * wy * 0.25;
+        }
+    }
+    sum
+}
+
+/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
+fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    (0..n)
+        .map(|i| {
+            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 0.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let k = k as f64;
+                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            (x, 2.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `∫ D(m) cos θ_m dm = 1` over the hemisphere, by a midpoint rule in (cos θ, φ).
+    #[test]
+    fn distributions_are_normalised() {
+        for distribution in [Distribution::Beckmann, Distribution::Ggx] {
+            for (au, av) in [(0.3, 0.3), (0.5, 0.1), (0.05, 0.2)] {
+                let d = Microfacet::new(distribution, au, av, true);
+                let (nt, np) = (4000, 400);
+                let mut sum = 0.0;
+                for i in 0..nt {
+                    let c = (i as f64 + 0.5) / nt as f64;
+                    let s = (1.0 - c * c).sqrt();
+                    for j in 0..np {
+                        let phi = 2.0 * PI * (j as f64 + 0.5) / np as f64;
+                        sum += d.d(DVec3::new(s * phi.cos(), s * phi.sin(), c)) * c;
+                    }
+                }
+                let integral = sum * 2.0 * PI / (nt * np) as f64;
+                assert!(
+                    (integral - 1.0).abs() < 2e-3,
+                    "{distribution:?} {au} {av}: {integral}"
+                );
+            }
+        }
+    }
+
+    /// The roughplastic tables are plausible: below the smooth interface's transmittance at
+    /// normal incidence, falling towards grazing angles (their values against Mitsuba's are
+    /// checked through `eval` in `tests/brdf_sampler`).
+    #[test]
+    fn transmittance_is_below_one_and_falls_at_grazing_angles() {
+        let p = RoughPlastic::new(
+            Microfacet::new(Distribution::Ggx, 0.2, 0.2, true),
+            1.49,
+            Vec3::splat(0.5),
+            Vec3::ONE,
+            false,
+        );
+        let normal = p.transmittance(1.0);
+        // 1 − ((1.49 − 1)/(1.49 + 1))² at normal incidence, a little less for roughness.
+        assert!(normal < 1.0 - 0.0387 && normal > 0.94, "{normal}");
+        assert!(p.transmittance(0.05) < normal);
+        assert!(p.internal_reflectance > 0.4 && p.internal_reflectance < 0.8);
+    }
+}

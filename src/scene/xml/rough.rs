@@ -1,0 +1,129 @@
+//! Mitsuba's microfacet BSDFs (`roughconductor`, `roughplastic`) as genpath materials: the
+//! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
+//! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
+
+use super::build::{complex_ior, specular_reflectance};
+use super::props::Props;
+use super::spectrum::ColorUse;
+use crate::sampling::microfacet::{Distribution, Microfacet, RoughConductor, RoughPlastic};
+use crate::scene::{Glossy, Material, SceneError};
+use glam::{DVec3, Vec3};
+
+/// The microfacet distribution of `p`: `distribution` (`beckmann`, Mitsuba's default, or
+/// `ggx`, in any case), `alpha` or both `alpha_u` and `alpha_v` (0.1 by default), and
+/// `sample_visible` (true by default).
+fn microfacet(p: &Props) -> Result<Microfacet, SceneError> {
+    let distribution = match p.string("distribution")?.map(str::to_lowercase).as_deref() {
+        None | Some("beckmann") => Distribution::Beckmann,
+        Some("ggx") => Distribution::Ggx,
+        Some(other) => {
+            return Err(p.error(format!(
+                "unknown microfacet `distribution` \"{other}\" (known: beckmann, ggx)"
+            )))
+        }
+    };
+    let has = |name: &str| p.object().props.iter().any(|q| q.name == name);
+    let (alpha_u, alpha_v) = match (has("alpha"), has("alpha_u"), has("alpha_v")) {
+        (true, false, false) | (false, false, false) => {
+            let a = roughness(p, "alpha")?;
+            (a, a)
+        }
+        (false, true, true) => (roughness(p, "alpha_u")?, roughness(p, "alpha_v")?),
+        (true, _, _) => return Err(p.error("give either `alpha` or `alpha_u` and `alpha_v`")),
+        _ => return Err(p.error("give both `alpha_u` and `alpha_v`")),
+    };
+    let sample_visible = p.bool("sample_visible", true)?;
+    Ok(Microfacet::new(
+        distribution,
+        alpha_u,
+        alpha_v,
+        sample_visible,
+    ))
+}
+
+/// A roughness: a positive, finite `<float>` (0.1 by default).
+fn roughness(p: &Props, name: &str) -> Result<f64, SceneError> {
+    let a = p.float(name, 0.1)?;
+    match p.get(name) {
+        Some(prop) if !(a.is_finite() && a > 0.0) => Err(p.prop_error(
+            prop,
+            format!("{a} is not a positive, finite roughness (for a smooth surface use the smooth BSDF)"),
+        )),
+        _ => Ok(a),
+    }
+}
+
+/// A material with `glossy` as its only lobe (one-sided, as Mitsuba's BSDFs).
+fn glossy(name: String, glossy: Glossy) -> Material {
+    Material {
+        name,
+        kd: Vec3::ZERO,
+        ks: Vec3::ZERO,
+        glossy,
+        mirror: false,
+        ke: Vec3::ZERO,
+        two_sided: false,
+        conductor: None,
+        dielectric: None,
+    }
+}
+
+/// Mitsuba's `roughconductor`: the distribution, the complex index of refraction and
+/// `specular_reflectance` as the smooth `conductor` reads them.
+pub(super) fn rough_conductor(
+    p: &Props,
+    name: String,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let microfacet = microfacet(p)?;
+    let ks = specular_reflectance(p, warnings)?;
+    let (eta, k) = complex_ior(p, warnings)?;
+    let lobe = RoughConductor {
+        microfacet,
+        eta: eta.as_vec3(),
+        k: k.as_vec3(),
+        specular_reflectance: ks.as_vec3(),
+    };
+    Ok(glossy(name, Glossy::RoughConductor(lobe)))
+}
+
+/// Mitsuba's `roughplastic`: an isotropic distribution, `int_ior` (polypropylene) over
+/// `ext_ior` (air), `diffuse_reflectance` (0.5), `specular_reflectance` (1), `nonlinear`.
+pub(super) fn rough_plastic(
+    p: &Props,
+    name: String,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let microfacet = microfacet(p)?;
+    if !microfacet.is_isotropic() {
+        return Err(p.error("roughplastic does not support anisotropic roughness (as Mitsuba's)"));
+    }
+    let int_ior = super::ior::read(p, "int_ior", "polypropylene")?;
+    let ext_ior = super::ior::read(p, "ext_ior", "air")?;
+    if int_ior == ext_ior {
+        return Err(p.error("the interior and exterior indices of refraction must differ"));
+    }
+    let mut reflectance = |what: &str, default: f64| -> Result<DVec3, SceneError> {
+        let c = p
+            .color(what, ColorUse::Reflectance, warnings)?
+            .unwrap_or(DVec3::splat(default));
+        if c.max_element() > 1.0 || c.min_element() < 0.0 {
+            return Err(p.error(format!(
+                "`{what}` {c} is outside [0, 1] (it would create energy)"
+            )));
+        }
+        Ok(c)
+    };
+    let diffuse = reflectance("diffuse_reflectance", 0.5)?;
+    let specular = reflectance("specular_reflectance", 1.0)?;
+    let nonlinear = p.bool("nonlinear", false)?;
+    let lobe = RoughPlastic::new(
+        microfacet,
+        // In single precision, as Mitsuba computes it.
+        int_ior / ext_ior,
+        diffuse.as_vec3(),
+        specular.as_vec3(),
+        nonlinear,
+    );
+    Ok(glossy(name, Glossy::RoughPlastic(Box::new(lobe))))
+}
