@@ -23,7 +23,7 @@ use genpath::scene::Scene;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-const SCENES: [&str; 9] = [
+const SCENES: [&str; 11] = [
     "tiny_light",
     "grazing_light",
     "phong_1e4",
@@ -33,13 +33,20 @@ const SCENES: [&str; 9] = [
     "coincident",
     "long_room",
     "mirror",
+    "rough_1e-4",
+    "rough_1",
 ];
 
+/// The scene file of stiff scene `name`: its `scene.xml` (the microfacet cases, which MTL
+/// cannot describe), else its `scene.toml`.
 fn stiff(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenes/stiff")
-        .join(name)
-        .join("scene.toml")
+        .join(name);
+    match dir.join("scene.xml") {
+        xml if xml.exists() => xml,
+        _ => dir.join("scene.toml"),
+    }
 }
 
 fn load(name: &str, size: u32) -> (Scene, Box<dyn Accel>) {
