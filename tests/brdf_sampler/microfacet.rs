@@ -463,7 +463,7 @@ fn eval_is_reciprocal() {
 /// `bsdf.eval(ctx, si, wo) / cos θ` and `bsdf.pdf`.
 #[test]
 fn eval_and_pdf_are_mitsubas() {
-    type Case = ((f64, f64), (f64, f64), [f32; 3], f64);
+    type Case = ((f64, f64), (f64, f64), [f64; 3], f64);
     let au = (
         Vec3::new(0.143_037_47, 0.375_306_28, 1.442_043_7),
         Vec3::new(3.982_986_5, 2.385_559, 1.603_36),
@@ -666,7 +666,7 @@ fn eval_and_pdf_are_mitsubas() {
             let (wo, wi) = (dir(a), dir(b));
             let got = brdf::eval(&m, frame, wo, wi);
             let got_pdf = brdf::pdf(&m, frame, wo, wi);
-            let want = Vec3::from(f);
+            let want = DVec3::from(f).as_vec3();
             let rel = ((got - want).abs() / want).max_element();
             println!("{name} {a:?} {b:?}: eval {got} against {want} ({rel:.1e}), pdf {got_pdf:.6} against {pdf:.6}");
             assert!(rel < 2e-5, "{name}: eval {got} against Mitsuba's {want}");
