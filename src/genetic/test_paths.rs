@@ -26,7 +26,8 @@
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
-    Contribution, DirectionSampler, Nee, PathGenerator, PathVertices, Query, Walk,
+    fixed_light_pdf, Contribution, DirectionSampler, LightEnd, Nee, PathGenerator, PathVertices,
+    Query, Walk,
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
@@ -58,6 +59,14 @@ pub struct TestPaths {
     /// `u32::MAX` after a delta one).
     light_point: Vec<DVec3>,
     light_prim: Vec<u32>,
+    /// Per stored path: whether it ends with a light sample or a connection (with
+    /// [`Nee::Every`] after a non-delta last vertex); where it ends at a delta light or the
+    /// environment, the light technique's density, the same for every generator
+    /// ([`crate::path::generator::fixed_light_pdf`]; NaN for an emitter point), and whether
+    /// it is a delta light's (whose direction technique has density 0).
+    connected: Vec<bool>,
+    light_fixed: Vec<f64>,
+    light_delta: Vec<bool>,
     /// Per stored path with [`Nee::Every`]: `d²/cos` at the emitter point, which turns its
     /// area density into solid angle at the last vertex.
     area_to_solid_angle: Vec<f64>,
@@ -256,6 +265,9 @@ impl TestPaths {
             nee: Vec::new(),
             light_point: Vec::new(),
             light_prim: Vec::new(),
+            connected: Vec::new(),
+            light_fixed: Vec::new(),
+            light_delta: Vec::new(),
             area_to_solid_angle: Vec::new(),
             end_point: Vec::new(),
             end_prim: Vec::new(),
@@ -412,13 +424,24 @@ impl TestPaths {
         self.offsets.push(self.point.len() as u32);
         self.len.push(c.len as u32);
         self.nee.push(c.nee);
-        let (point, prim) = match (c.light, c.nee, path.light) {
-            (Some(l), _, _) => (l.point, l.prim),
-            (None, true, Some(l)) if !every => (l.point, l.prim),
+        let end = match (c.light, c.nee, path.light) {
+            (Some(l), _, _) => Some((l.end, l.wi)),
+            (None, true, Some(l)) if !every => Some((l.end, l.wi)),
+            _ => None,
+        };
+        let (point, prim) = match end {
+            Some((LightEnd::Area { point, prim }, _)) => (point, prim),
             _ => (DVec3::ZERO, u32::MAX),
         };
         self.light_point.push(point);
         self.light_prim.push(prim);
+        self.connected.push(end.is_some());
+        self.light_fixed.push(
+            end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi))
+                .unwrap_or(f64::NAN),
+        );
+        self.light_delta
+            .push(matches!(end, Some((LightEnd::Delta, _))));
         self.area_to_solid_angle
             .push(c.light.map_or(0.0, |l| l.area_to_solid_angle));
         let end = match path.vertices.get(scattering) {
@@ -542,7 +565,7 @@ impl TestPaths {
             let (start, mut end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
             let len = self.len[i] as usize;
             // With an emitter point, the last vertex has two techniques (below).
-            let connected = every && self.light_prim[i] != u32::MAX;
+            let connected = every && self.connected[i];
             if connected {
                 end -= 1;
             }
@@ -568,14 +591,18 @@ impl TestPaths {
                 pdf *= (1.0 - a) * direction(j, k);
                 k += 1;
             }
-            let light_pdf = |g: &PathGenerator| {
-                let (point, prim) = (self.light_point[i], self.light_prim[i]);
-                g.light.pdf_area(&scene.mesh, &scene.emitters, point, prim)
+            let light_pdf = |g: &PathGenerator| match self.light_fixed[i] {
+                fixed if !fixed.is_nan() => fixed,
+                _ => {
+                    let (point, prim) = (self.light_point[i], self.light_prim[i]);
+                    scene.area_light_pmf()
+                        * g.light.pdf_area(&scene.mesh, &scene.emitters, point, prim)
+                }
             };
             if connected && pdf > 0.0 {
                 // As `PathGenerator::pdf_techniques`: `p_dir + p_light`.
                 let a = g.absorption_after_light(k, len, self.max_bounces);
-                let dir = if a >= 1.0 {
+                let dir = if a >= 1.0 || self.light_delta[i] {
                     0.0
                 } else {
                     (1.0 - a) * direction(end, k)

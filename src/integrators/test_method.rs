@@ -8,7 +8,7 @@
 
 use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
-use crate::path::pt::LightPoint;
+use crate::path::pt::LightCandidate;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::{specular, uniform, Rng};
@@ -34,9 +34,9 @@ impl PixelIntegrator for NeeOnly {
     }
 }
 
-/// The light a point sampled on the emitters (or, with the scene's environment share, a
-/// direction uniform over the sphere towards its environment) sends to `x` (shading frame `frame`) and
-/// on towards `wo`, over its density in solid angle.
+/// The light a light sample (`pt`'s: a point on the area emitters, a direction towards the
+/// environment, or a delta light) sends to `x` (shading frame `frame`) and on towards `wo`, over its
+/// density.
 fn light_sample(
     view: &SceneView,
     (x, frame, wo): (&SurfacePoint, Frame, Vec3),
@@ -44,36 +44,10 @@ fn light_sample(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
-    let env_share = view.scene.environment_share();
-    if env_share <= 0.0 {
-        return match LightPoint::sample(view, (x, frame.n), rng) {
-            Some(l) if view.unoccluded(x, &l.y, counts) => {
-                let le = view.material(l.y.prim).ke;
-                brdf::eval(material, frame, wo, l.wi) * le * (l.cos_x / l.pdf_solid_angle())
-            }
-            _ => Vec3::ZERO,
-        };
-    }
-    let mut u = [uniform(rng), uniform(rng), uniform(rng)];
-    if let Some(env) = view
-        .scene
-        .environment
-        .filter(|_| f64::from(u[0]) < env_share)
-    {
-        let wi = env.sample(u[1], u[2]);
-        let cos = frame.n.dot(wi);
-        if cos <= 0.0 || !view.escapes(x, wi, counts) {
-            return Vec3::ZERO;
-        }
-        let pdf = (env_share * env.pdf()) as f32;
-        return brdf::eval(material, frame, wo, wi) * env.radiance * (cos / pdf);
-    }
-    u[0] = ((f64::from(u[0]) - env_share) / (1.0 - env_share)) as f32;
-    match LightPoint::from_uniforms(view, (x, frame.n), u) {
-        Some(l) if view.unoccluded(x, &l.y, counts) => {
-            let le = view.material(l.y.prim).ke;
-            let pdf = (1.0 - env_share) as f32 * l.pdf_solid_angle();
-            brdf::eval(material, frame, wo, l.wi) * le * (l.cos_x / pdf)
+    let u = [uniform(rng), uniform(rng), uniform(rng)];
+    match LightCandidate::sample(view, (x, frame.n), u) {
+        Some(l) if l.visible(view, x, counts) => {
+            brdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
         }
         _ => Vec3::ZERO,
     }
@@ -99,7 +73,7 @@ impl PixelEstimator for NeeOnly {
                     * match &hit {
                         _ if bounce == 0 => view.seen_directly(hit.as_ref(), ray.dir),
                         Some(x) => emitted(view.material(x.prim), x, -ray.dir),
-                        None => view.escaped(),
+                        None => view.escaped(ray.dir),
                     };
             }
             let Some(x) = hit else {

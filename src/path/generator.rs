@@ -163,12 +163,28 @@ pub struct PathVertex {
     pub pdf_sampled: f64,
 }
 
-/// The light point drawn at the absorbing vertex.
+/// What a light technique's sample, or a sampled direction, ends on after the last
+/// scattering vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightEnd {
+    /// A point on the area emitters, on primitive `prim`.
+    Area { point: DVec3, prim: u32 },
+    /// A delta light (`point`, `directional`), which only the light technique reaches: its
+    /// density is the probability of its pick.
+    Delta,
+    /// The environment, along the direction that reached it.
+    Environment,
+}
+
+/// The light sample drawn at the absorbing vertex (with [`Nee::End`]).
 #[derive(Clone, Copy, Debug)]
 pub struct LightVertex {
-    pub point: DVec3,
-    pub prim: u32,
-    /// Density with which the sampling generator ended here: `a · p_area(y)`.
+    pub end: LightEnd,
+    /// Unit direction from the absorbing vertex towards it.
+    pub wi: Vec3,
+    /// Density with which the sampling generator ended here: `a · p_light`, `p_light`
+    /// ([`PathGenerator::light_pdf`]) by area for a point on an area emitter, in solid angle
+    /// for the environment, the pick's probability for a delta light.
     pub pdf_sampled: f64,
 }
 
@@ -179,18 +195,20 @@ pub struct PathVertices {
     pub light: Option<LightVertex>,
 }
 
-/// With [`Nee::Every`], the emitter point `y` that ends a contribution after its last
-/// scattering vertex `x_len` (non-delta), with what the other technique's density needs.
+/// With [`Nee::Every`], what ends a contribution after its last scattering vertex `x_len`
+/// (non-delta): an emitter point, a delta light or the environment, with what the other
+/// technique's density needs.
 #[derive(Clone, Copy, Debug)]
 pub struct Connection {
-    pub point: DVec3,
-    pub prim: u32,
-    /// Unit direction from `x_len` to `y`.
+    pub end: LightEnd,
+    /// Unit direction from `x_len` towards it.
     pub wi: Vec3,
-    /// `d² / cos_y`: turns an area density at `y` into a solid-angle density at `x_len`.
+    /// `d² / cos_y` for an emitter point (it turns an area density at `y` into a
+    /// solid-angle density at `x_len`); 1 otherwise.
     pub area_to_solid_angle: f64,
-    /// Density with which the sampling generator drew `y`: the light point's in area
-    /// measure, or the direction's `(1 − a)·p(wi)`.
+    /// Density with which the sampling generator drew it: the light technique's
+    /// ([`PathGenerator::light_pdf`], by area for an emitter point), or the direction's
+    /// `(1 − a)·p(wi)`.
     pub pdf_sampled: f64,
 }
 
@@ -207,13 +225,41 @@ pub struct Contribution {
     pub len: usize,
     /// Ends with a light point (`true`) or on an emitter a sampled direction hit.
     pub nee: bool,
-    /// With [`Nee::Every`], the emitter point after a non-delta `x_len` (none after a delta
-    /// one, which admits direction sampling alone, and none for the environment).
+    /// With [`Nee::Every`], what ends the contribution after a non-delta `x_len` (none after
+    /// a delta one, which admits direction sampling alone).
     pub light: Option<Connection>,
-    /// Ends with a direction out of `x_len` that escaped the scene to the environment
-    /// (Mitsuba's `constant` emitter), which only direction sampling reaches: its density is
-    /// the directions' at all `len` vertices.
+    /// Ends at the environment: by a direction that escaped the scene, or by a light
+    /// sample towards it.
     pub escaped: bool,
+}
+
+/// [`PathGenerator::light_pdf`] where it is the same for every generator: for a delta light
+/// and the environment (`None` for a point on the area emitters).
+pub fn fixed_light_pdf(view: &SceneView, end: &LightEnd, wi: Vec3) -> Option<f64> {
+    let scene = view.scene;
+    match end {
+        LightEnd::Area { .. } => None,
+        LightEnd::Delta => Some(scene.light_pmf()),
+        LightEnd::Environment => Some(
+            scene
+                .environment
+                .as_ref()
+                .map_or(0.0, |env| scene.light_pmf() * env.pdf_solid_angle(wi)),
+        ),
+    }
+}
+
+impl Contribution {
+    /// What the contribution ends on after its last scattering vertex, where a light
+    /// technique could have drawn it: its connection, or with [`Nee::End`] the light sample
+    /// of `path` (its absorbing vertex's).
+    pub fn end(&self, path: &PathVertices) -> Option<LightEnd> {
+        match (self.light, self.nee, path.light) {
+            (Some(l), _, _) => Some(l.end),
+            (None, true, Some(l)) => Some(l.end),
+            _ => None,
+        }
+    }
 }
 
 impl PathGenerator {
@@ -263,6 +309,24 @@ impl PathGenerator {
         }
     }
 
+    /// The density with which this generator's light technique draws `end` (along unit
+    /// `wi`): the probability of the emitter's pick ([`crate::scene::Scene::pick_light`])
+    /// times its light-point sampler's density by area for a point on the area emitters, the
+    /// environment's in solid angle, or 1 for a delta light.
+    pub fn light_pdf(&self, view: &SceneView, end: &LightEnd, wi: Vec3) -> f64 {
+        let scene = view.scene;
+        match (*end, fixed_light_pdf(view, end, wi)) {
+            (_, Some(pdf)) => pdf,
+            (LightEnd::Area { point, prim }, None) => {
+                scene.area_light_pmf()
+                    * self
+                        .light
+                        .pdf_area(&scene.mesh, &scene.emitters, point, prim)
+            }
+            (_, None) => 0.0,
+        }
+    }
+
     /// Density with which this generator produces the first `len` vertices of `path`
     /// followed by its light point (`nee`), or by an emitter hit through a delta vertex, or
     /// by the environment (the direction out of `x_len` escaped).
@@ -296,21 +360,18 @@ impl PathGenerator {
             if last.delta {
                 return 0.0;
             }
-            let scene = view.scene;
-            pdf *= self.absorption(k, len, max_bounces)
-                * self
-                    .light
-                    .pdf_area(&scene.mesh, &scene.emitters, light.point, light.prim);
+            pdf *=
+                self.absorption(k, len, max_bounces) * self.light_pdf(view, &light.end, light.wi);
         }
         pdf
     }
 
     /// With [`Nee::Every`], the densities `(p_dir, p_light)` with which this generator
     /// produces contribution `c` of `path` by its two techniques (design §13): directions at
-    /// all `c.len` vertices, or at the first `c.len − 1` and then a light point from
+    /// all `c.len` vertices, or at the first `c.len − 1` and then a light sample from
     /// `x_len`, whose absorption does not enter. Directions in solid angle, the last segment
-    /// too (the light point's density converted there). After a delta `x_len`, and for the
-    /// environment, `p_light` is 0.
+    /// too (a light point's density converted there). After a delta `x_len` `p_light` is 0,
+    /// and for a delta light `p_dir` is.
     pub fn pdf_techniques(
         &self,
         view: &SceneView,
@@ -345,19 +406,17 @@ impl PathGenerator {
             if last.delta {
                 return (prefix, 0.0);
             }
-            // The environment, which only directions reach, after a non-delta `x_len`.
             return (prefix * direction(last), 0.0);
         };
         let last = PathVertex {
             wi: end.wi,
             ..path.vertices[c.len - 1]
         };
-        let dir = direction(&last);
-        let scene = view.scene;
-        let light = self
-            .light
-            .pdf_area(&scene.mesh, &scene.emitters, end.point, end.prim)
-            * end.area_to_solid_angle;
+        let dir = match end.end {
+            LightEnd::Delta => 0.0,
+            _ => direction(&last),
+        };
+        let light = self.light_pdf(view, &end.end, end.wi) * end.area_to_solid_angle;
         (prefix * dir, prefix * light)
     }
 

@@ -1,7 +1,7 @@
 //! Weighted sets of path generators (paper eq. 7) and the balance-heuristic estimator
 //! (paper eq. 8), with next-event estimation at the path's end or at every vertex ([`Nee`]).
 
-use super::generator::{Contribution, Nee, PathGenerator, PathVertices};
+use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices};
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{uniform, Rng};
 use glam::{DVec3, Vec3};
@@ -29,6 +29,10 @@ pub struct Mixture {
     /// geometric one), while paths are sampled in the shading frame.
     #[serde(skip)]
     geometric_frame: bool,
+    /// Fault injection for statistical tests: [`Mixture::pdf_path`] leaves the probability
+    /// of a delta light's pick out of the density of the paths that end at one.
+    #[serde(skip)]
+    delta_pick_dropped: bool,
 }
 
 /// `path` with each vertex's shading normal replaced by its geometric one (the fault of
@@ -60,6 +64,7 @@ impl Mixture {
             pdf_error: None,
             light_density_dropped: false,
             geometric_frame: false,
+            delta_pick_dropped: false,
         }
     }
 
@@ -92,6 +97,15 @@ impl Mixture {
     #[cfg(any(test, feature = "testing"))]
     pub fn with_geometric_frame_density(mut self) -> Self {
         self.geometric_frame = true;
+        self
+    }
+
+    /// This mixture with the probability of a delta light's pick left out of the density of
+    /// every path that ends at one (as if each delta light were the only emitter): a wrong
+    /// input that unbiasedness tests on scenes with several emitters must reject.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn with_delta_pick_dropped(mut self) -> Self {
+        self.delta_pick_dropped = true;
         self
     }
 
@@ -128,6 +142,7 @@ impl Mixture {
             pdf_error: None,
             light_density_dropped: parts.iter().any(|(_, m)| m.light_density_dropped),
             geometric_frame: parts.iter().any(|(_, m)| m.geometric_frame),
+            delta_pick_dropped: parts.iter().any(|(_, m)| m.delta_pick_dropped),
         }
     }
 
@@ -162,7 +177,10 @@ impl Mixture {
                 pdf += w * scale * p;
             }
         }
-        match view.scene.environment {
+        if self.delta_pick_dropped && c.end(path) == Some(LightEnd::Delta) {
+            pdf /= view.scene.light_pmf();
+        }
+        match &view.scene.environment {
             Some(env) if c.escaped => pdf * env.escape_pdf_scale(),
             _ => pdf,
         }

@@ -167,13 +167,17 @@ impl<'a> SceneView<'a> {
         }
         match x1 {
             Some(x1) => emitted(self.material(x1.prim), x1, -dir),
-            None => self.escaped(),
+            None => self.escaped(dir),
         }
     }
 
-    /// The radiance a ray that escapes the scene gathers: the environment's, or none.
-    pub fn escaped(&self) -> Vec3 {
-        self.scene.environment.map_or(Vec3::ZERO, |e| e.radiance)
+    /// The radiance a ray that escapes the scene along unit `dir` gathers: the
+    /// environment's, or none.
+    pub fn escaped(&self, dir: Vec3) -> Vec3 {
+        self.scene
+            .environment
+            .as_ref()
+            .map_or(Vec3::ZERO, |e| e.eval(dir))
     }
 
     /// Whether nothing blocks a shadow ray (from [`SceneView::shadow_ray`]).

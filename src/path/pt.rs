@@ -29,7 +29,7 @@ use crate::accel::Ray;
 use crate::sampling::brdf::{self, BrdfSample, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::Material;
+use crate::scene::{LightPick, Material};
 use glam::Vec3;
 
 /// First bounce at which Russian roulette may end a path.
@@ -257,20 +257,129 @@ pub fn radiance(
 }
 
 /// A light sample that reached a light: the direction to it, its emission, the BSDF's value
-/// and the MIS-weighted `|cos| / pdf`.
+/// and the MIS-weighted `|cos| / pdf`; `delta` for a delta light (which no direction finds).
 struct LightHit {
     wi: Vec3,
     le: Vec3,
     f: Vec3,
     scale: f32,
+    delta: bool,
+}
+
+/// Where a light sample's shadow ray goes.
+#[derive(Clone, Copy, Debug)]
+enum Target {
+    /// To a point (on an area emitter, or a point light's position).
+    Point(SurfacePoint),
+    /// Out of the scene (the environment, a directional light).
+    Infinity,
+}
+
+/// How a [`LightCandidate`]'s density is made: kept apart so that each kind rounds as it
+/// always did.
+#[derive(Clone, Copy, Debug)]
+enum Density {
+    /// A point on the area emitters: its solid-angle density at `x`.
+    Area(f32),
+    /// A direction towards the environment: its solid-angle density.
+    Environment(f64),
+    /// A delta light: its pick's probability alone.
+    Delta,
+}
+
+/// A light sample drawn for next-event estimation at `x`, before its shadow ray: Mitsuba's
+/// uniform pick of an emitter (`Scene::pick_light`), then a point on the area emitters, a
+/// direction towards the environment, or a delta light's own point or direction.
+#[derive(Clone, Copy, Debug)]
+pub struct LightCandidate {
+    /// Unit direction from `x` towards the light, with `cos` against `x`'s facing normal
+    /// (positive).
+    pub wi: Vec3,
+    pub cos_x: f32,
+    /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
+    pub le: Vec3,
+    pub delta: bool,
+    /// The probability of the emitter's pick.
+    pick: f64,
+    density: Density,
+    target: Target,
+}
+
+impl LightCandidate {
+    /// A light sample at `x` (facing normal `n`) from three uniform numbers: `u[0]` picks
+    /// the emitter (rescaled, it then picks the area emitter), the others place the point or
+    /// direction. `None` where it cannot reach `x` (behind it, facing away, or no emitter).
+    pub fn sample(view: &SceneView, (x, n): (&SurfacePoint, Vec3), u: [f32; 3]) -> Option<Self> {
+        let scene = view.scene;
+        let (pick, u0) = scene.pick_light(f64::from(u[0]))?;
+        let pmf = scene.light_pmf();
+        let (wi, le, density, target) = match pick {
+            LightPick::Environment => {
+                let env = scene.environment.as_ref()?;
+                let wi = env.sample(u[1], u[2]);
+                (
+                    wi,
+                    env.eval(wi),
+                    Density::Environment(env.pdf(wi)),
+                    Target::Infinity,
+                )
+            }
+            LightPick::Delta(i) => {
+                let a = scene.delta_lights[i].arrival(x.p)?;
+                let target = match a.position {
+                    Some(p) => Target::Point(SurfacePoint::flat(p, Vec3::ZERO, u32::MAX)),
+                    None => Target::Infinity,
+                };
+                (a.wi, a.value, Density::Delta, target)
+            }
+            LightPick::Area => {
+                let l = LightPoint::from_uniforms(view, (x, n), [u0 as f32, u[1], u[2]])?;
+                let le = view.material(l.y.prim).ke;
+                let density = Density::Area(l.pdf_solid_angle());
+                (l.wi, le, density, Target::Point(l.y))
+            }
+        };
+        let cos_x = n.dot(wi);
+        let density_positive = match density {
+            Density::Environment(pdf) => pdf > 0.0,
+            _ => true,
+        };
+        (cos_x > 0.0 && le.max_element() > 0.0 && density_positive).then_some(Self {
+            wi,
+            cos_x,
+            le,
+            delta: matches!(density, Density::Delta),
+            pick: pmf,
+            density,
+            target,
+        })
+    }
+
+    /// The sample's density where next-event estimation runs with probability
+    /// `light_share`: in solid angle at `x`, or for a delta light the probability of its
+    /// pick.
+    pub fn pdf(&self, light_share: f64) -> f32 {
+        let share = light_share * self.pick;
+        match self.density {
+            Density::Area(pdf) => share as f32 * pdf,
+            Density::Environment(pdf) => (share * pdf) as f32,
+            Density::Delta => share as f32,
+        }
+    }
+
+    /// Whether nothing blocks the light from `x` (one shadow ray).
+    pub fn visible(&self, view: &SceneView, x: &SurfacePoint, counts: &mut RayCounts) -> bool {
+        match &self.target {
+            Target::Point(y) => view.unoccluded(x, y, counts),
+            Target::Infinity => view.escapes(x, self.wi, counts),
+        }
+    }
 }
 
 /// Next-event estimation at `x` (normal `n`), where it runs with probability `light_share`:
-/// from three uniform numbers, the environment (with probability
-/// [`Scene::environment_share`](crate::scene::Scene::environment_share), then a direction
-/// uniform over the sphere from the last two) or a point on an area emitter (the first
-/// number rescaled), and what it brings if it reaches `x`. Without an environment the
-/// numbers and the arithmetic are those of an area-only scene.
+/// a [`LightCandidate`] from three uniform numbers, and what it brings if it reaches `x`,
+/// weighed against `bsdf`'s density by the power heuristic (a delta light's weight is 1).
+/// With area emitters alone the numbers and the arithmetic are those they always were.
 fn next_event<B: VertexBsdf>(
     view: &SceneView,
     (x, n): (&SurfacePoint, Vec3),
@@ -279,60 +388,23 @@ fn next_event<B: VertexBsdf>(
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Option<LightHit> {
-    let mut u = [uniform(rng), uniform(rng), uniform(rng)];
-    let env_share = view.scene.environment_share();
-    if env_share > 0.0 {
-        if f64::from(u[0]) < env_share {
-            let share = light_share * env_share;
-            return environment_event(view, (x, n), bsdf, share, counts, [u[1], u[2]]);
-        }
-        u[0] = ((f64::from(u[0]) - env_share) / (1.0 - env_share)) as f32;
-    }
-    let light = LightPoint::from_uniforms(view, (x, n), u)?;
-    let (wi, cos_x) = (light.wi, light.cos_x);
-    let le = view.material(light.y.prim).ke;
-    let f = bsdf.eval(wi);
-    if !(le.max_element() > 0.0 && f.max_element() > 0.0 && view.unoccluded(x, &light.y, counts)) {
+    let u = [uniform(rng), uniform(rng), uniform(rng)];
+    let light = LightCandidate::sample(view, (x, n), u)?;
+    let f = bsdf.eval(light.wi);
+    if !(f.max_element() > 0.0 && light.visible(view, x, counts)) {
         return None;
     }
-    let pdf_light = (light_share * (1.0 - env_share)) as f32 * light.pdf_solid_angle();
-    let pdf_brdf = bsdf.pdf(wi) as f32;
-    let weight = power_heuristic(pdf_light, pdf_brdf);
+    let pdf_light = light.pdf(light_share);
+    let weight = match light.delta {
+        true => 1.0,
+        false => power_heuristic(pdf_light, bsdf.pdf(light.wi) as f32),
+    };
     Some(LightHit {
-        wi,
-        le,
+        wi: light.wi,
+        le: light.le,
         f,
-        scale: cos_x * weight / pdf_light,
-    })
-}
-
-/// Next-event estimation towards the environment, chosen with probability `share`: a
-/// direction uniform over the sphere from the two uniform numbers `u`.
-fn environment_event<B: VertexBsdf>(
-    view: &SceneView,
-    (x, n): (&SurfacePoint, Vec3),
-    bsdf: &B,
-    share: f64,
-    counts: &mut RayCounts,
-    u: [f32; 2],
-) -> Option<LightHit> {
-    let env = view.scene.environment?;
-    let wi = env.sample(u[0], u[1]);
-    let cos_x = n.dot(wi);
-    if cos_x <= 0.0 {
-        return None;
-    }
-    let f = bsdf.eval(wi);
-    if !(f.max_element() > 0.0 && view.escapes(x, wi, counts)) {
-        return None;
-    }
-    let pdf_light = (share * env.pdf()) as f32;
-    let weight = power_heuristic(pdf_light, bsdf.pdf(wi) as f32);
-    Some(LightHit {
-        wi,
-        le: env.radiance,
-        f,
-        scale: cos_x * weight / pdf_light,
+        scale: light.cos_x * weight / pdf_light,
+        delta: light.delta,
     })
 }
 
@@ -355,7 +427,7 @@ fn emission_weight(
             let pdf_area = scene
                 .emitters
                 .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim);
-            let share = light_share * (1.0 - scene.environment_share());
+            let share = light_share * scene.area_light_pmf();
             let pdf_light = share as f32 * light_pdf_solid_angle(pdf_area, dist2, cos_light);
             power_heuristic(bs.pdf as f32, pdf_light)
         })
@@ -367,16 +439,16 @@ fn emission_weight(
 /// The environment's radiance that the direction `bs` found by escaping the scene, MIS
 /// weighted against next-event estimation (which ran with probability `light_share`).
 fn escape_radiance(view: &SceneView, bs: &BrdfSample, light_share: f64) -> Vec3 {
-    let Some(env) = view.scene.environment else {
+    let Some(env) = &view.scene.environment else {
         return Vec3::ZERO;
     };
     let weight = if bs.delta {
         1.0
     } else {
-        let pdf_light = (light_share * view.scene.environment_share() * env.pdf()) as f32;
+        let pdf_light = (light_share * view.scene.environment_share() * env.pdf(bs.wi)) as f32;
         power_heuristic(bs.pdf as f32, pdf_light)
     };
-    env.radiance * weight
+    env.eval(bs.wi) * weight
 }
 
 /// [`radiance`], with directions drawn from `guide`'s BSDF at every vertex and next-event
@@ -436,7 +508,8 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             let hit = next_event(view, (&x, n), &bsdf, light_share, rng, counts);
             if let Some(h) = &hit {
                 radiance += beta * h.f * h.le * h.scale;
-                if let Some(r) = recorder.as_deref_mut().filter(|_| !diffuse) {
+                // A delta light, which no direction finds, is nothing for a guide to learn.
+                if let Some(r) = recorder.as_deref_mut().filter(|_| !diffuse && !h.delta) {
                     r.light(x.p, n, h.wi, h.le * h.scale);
                 }
             }

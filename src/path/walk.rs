@@ -2,15 +2,15 @@
 //! ([`Nee`]; see [`super::generator`]).
 
 use super::generator::{
-    Connection, Contribution, DirectionSampler, LightVertex, Nee, PathGenerator, PathVertex,
-    PathVertices,
+    Connection, Contribution, DirectionSampler, LightEnd, LightVertex, Nee, PathGenerator,
+    PathVertex, PathVertices,
 };
 use super::{emitted, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::Material;
+use crate::scene::{LightPick, Material};
 use glam::{DVec3, Vec3};
 
 /// The ray a [`Walk`] waits on before it can go on.
@@ -50,8 +50,10 @@ pub struct Walk {
     wi: Vec3,
     mirror: bool,
     pdf_dir: f64,
-    /// [`Nee::End`]: contribution of the pending shadow query, counted if it is unblocked.
+    /// [`Nee::End`]: contribution of the pending shadow query, counted if it is unblocked,
+    /// and whether it goes to the environment.
     nee: DVec3,
+    nee_escapes: bool,
     /// [`Nee::Every`]: the light point's contribution, counted if its shadow ray is
     /// unblocked, and the closest-hit query that follows it.
     pending: Option<Contribution>,
@@ -128,8 +130,10 @@ impl Walk {
                     return;
                 }
                 Some(Connection {
-                    point: y.p.as_dvec3(),
-                    prim: y.prim,
+                    end: LightEnd::Area {
+                        point: y.p.as_dvec3(),
+                        prim: y.prim,
+                    },
                     wi: self.wi,
                     area_to_solid_angle: dist2 / cos_y,
                     pdf_sampled: self.pdf_dir,
@@ -145,20 +149,31 @@ impl Walk {
         });
     }
 
-    /// The environment's radiance that the pending direction found by escaping the scene,
-    /// as a contribution of direction sampling alone (for either estimator: no light point
-    /// reaches the environment, whose density is left out of the light-point samplers), whose
-    /// density is that of the directions at all its `len` vertices.
+    /// The environment's radiance that the pending direction found by escaping the scene, as
+    /// a contribution where the estimator counts it: after a delta vertex (direction
+    /// sampling alone), or with [`Nee::Every`] as the direction technique's sample (the
+    /// light technique samples the environment too). With [`Nee::End`] the environment, as
+    /// an area emitter, is found by the absorbing vertex's light sample.
     fn escaped(&self, view: &SceneView, out: &mut Vec<Contribution>) {
-        let le = view.escaped();
+        let le = view.escaped(self.wi);
         if le.max_element() <= 0.0 {
             return;
         }
+        let light = match (self.mirror, self.estimator) {
+            (true, _) => None,
+            (false, Nee::End) => return,
+            (false, Nee::Every) => Some(Connection {
+                end: LightEnd::Environment,
+                wi: self.wi,
+                area_to_solid_angle: 1.0,
+                pdf_sampled: self.pdf_dir,
+            }),
+        };
         out.push(Contribution {
             f: self.throughput * le.as_dvec3(),
             len: self.bounce,
             nee: false,
-            light: None,
+            light,
             escaped: true,
         });
     }
@@ -178,7 +193,7 @@ impl Walk {
                         len: self.bounce,
                         nee: true,
                         light: None,
-                        escaped: false,
+                        escaped: self.nee_escapes,
                     });
                 }
                 None
@@ -225,7 +240,6 @@ impl Walk {
         path: &mut PathVertices,
         material: &Material,
     ) -> Option<Query> {
-        let scene = view.scene;
         let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
         let frame = Frame::facing(&x, wo);
         let mut vertex = PathVertex {
@@ -241,38 +255,25 @@ impl Walk {
             g.absorption(k, bounce, self.max_bounces)
         };
         if (uniform(rng) as f64) < absorption {
-            // Absorbed: one shadow ray to a light point (next-event estimation), where the
-            // scene has area emitters.
+            // Absorbed: one shadow ray to a light sample (next-event estimation).
             path.vertices.push(vertex);
-            if scene.emitters.prims.is_empty() {
-                return None;
-            }
             let u = [
                 uniform(rng) as f64,
                 uniform(rng) as f64,
                 uniform(rng) as f64,
             ];
-            let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
-            let pdf_area = g.light.pdf_area(&scene.mesh, &scene.emitters, y, prim);
+            let drawn = LightDraw::sample(g, view, &x, frame.n, u)?;
             path.light = Some(LightVertex {
-                point: y,
-                prim,
-                pdf_sampled: absorption * pdf_area,
+                end: drawn.end,
+                wi: drawn.wi,
+                pdf_sampled: absorption * drawn.pdf,
             });
-            let y_point =
-                SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
-            let d = y_point.p - x.p;
-            let dist2 = d.length_squared();
-            let wi = d / dist2.sqrt();
-            let (cos_x, cos_y) = (frame.n.dot(wi), -y_point.ng.dot(wi));
-            if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
-                let f = brdf::eval(material, frame, wo, wi).as_dvec3()
-                    * view.material(prim).ke.as_dvec3();
-                if f.max_element() > 0.0 {
-                    let geometry = cos_x as f64 * cos_y as f64 / dist2 as f64;
-                    self.nee = self.throughput * f * geometry;
-                    return Some(Query::Shadow(view.shadow_ray(&x, &y_point)));
-                }
+            let f = brdf::eval(material, frame, wo, drawn.wi).as_dvec3() * drawn.le;
+            if f.max_element() > 0.0 {
+                // In the light sample's own measure: area for an emitter point.
+                self.nee = self.throughput * f * drawn.geometry;
+                self.nee_escapes = drawn.end == LightEnd::Environment;
+                return Some(Query::Shadow(drawn.shadow));
             }
             return None;
         }
@@ -333,9 +334,9 @@ impl Walk {
         }
     }
 
-    /// [`Nee::Every`]'s light point at the current (non-delta) vertex, shading frame `frame`: its
-    /// contribution (solid angle at the vertex) becomes pending and its shadow ray is
-    /// returned; `None` where it can carry nothing.
+    /// [`Nee::Every`]'s light sample at the current (non-delta) vertex, shading frame `frame`: its
+    /// contribution (solid angle at the vertex, or a delta light's) becomes pending and its
+    /// shadow ray is returned; `None` where it can carry nothing.
     fn light_point(
         &mut self,
         g: &PathGenerator,
@@ -344,8 +345,7 @@ impl Walk {
         (material, frame): (&Material, Frame),
     ) -> Option<Ray> {
         self.pending = None;
-        let scene = view.scene;
-        if scene.emitters.prims.is_empty() {
+        if view.scene.light_count() == 0 {
             return None;
         }
         let u = [
@@ -353,38 +353,26 @@ impl Walk {
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
-        let (y, prim) = g.light.sample(&scene.mesh, &scene.emitters, u);
-        let y_point =
-            SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
-        let x = self.x;
-        let d = y_point.p - x.p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let (cos_x, cos_y) = (frame.n.dot(wi), -y_point.ng.dot(wi));
-        if !(cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0) {
-            return None;
-        }
-        let f =
-            brdf::eval(material, frame, self.wo, wi).as_dvec3() * view.material(prim).ke.as_dvec3();
+        let drawn = LightDraw::sample(g, view, &self.x, frame.n, u)?;
+        let f = brdf::eval(material, frame, self.wo, drawn.wi).as_dvec3() * drawn.le;
         // Also false for a NaN.
         let carries = f.max_element() > 0.0;
         if !carries {
             return None;
         }
         self.pending = Some(Contribution {
-            f: self.throughput * f * f64::from(cos_x),
+            f: self.throughput * f * f64::from(drawn.cos_x),
             len: self.bounce,
             nee: true,
             light: Some(Connection {
-                point: y,
-                prim,
-                wi,
-                area_to_solid_angle: f64::from(dist2) / f64::from(cos_y),
-                pdf_sampled: g.light.pdf_area(&scene.mesh, &scene.emitters, y, prim),
+                end: drawn.end,
+                wi: drawn.wi,
+                area_to_solid_angle: drawn.area_to_solid_angle,
+                pdf_sampled: drawn.pdf,
             }),
-            escaped: false,
+            escaped: drawn.end == LightEnd::Environment,
         });
-        Some(view.shadow_ray(&x, &y_point))
+        Some(drawn.shadow)
     }
 
     /// A direction out of the current vertex (shading frame `frame`), where the path goes on with
@@ -438,5 +426,95 @@ impl Walk {
         self.throughput *= f.as_dvec3() * cos as f64;
         self.k += 1;
         Some((wi, (1.0 - absorption) * pdf))
+    }
+}
+
+/// A generator's light sample at a vertex `x` (facing normal `n`), before its shadow ray: the
+/// emitter picked as `pt` picks it ([`crate::scene::Scene::pick_light`]), then a point from
+/// the generator's light-point sampler on the area emitters, a direction towards the
+/// environment, or a delta light.
+struct LightDraw {
+    end: LightEnd,
+    /// Unit direction from `x` towards it, and its cosine with `n` (positive).
+    wi: Vec3,
+    cos_x: f32,
+    /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
+    le: DVec3,
+    /// `d² / cos_y` for an emitter point, else 1.
+    area_to_solid_angle: f64,
+    /// `cos_x · cos_y / d²` for an emitter point, else `cos_x`: the geometry term in the
+    /// sample's own measure (with [`Nee::End`]).
+    geometry: f64,
+    /// [`PathGenerator::light_pdf`] of the sample.
+    pdf: f64,
+    shadow: Ray,
+}
+
+impl LightDraw {
+    /// From three uniform numbers: `u[0]` picks the emitter (rescaled, it then serves the
+    /// light-point sampler), the others place the point or direction. `None` where the
+    /// sample cannot reach `x` (behind it, facing away, or no emitter).
+    fn sample(
+        g: &PathGenerator,
+        view: &SceneView,
+        x: &SurfacePoint,
+        n: Vec3,
+        u: [f64; 3],
+    ) -> Option<Self> {
+        let scene = view.scene;
+        let (pick, u0) = scene.pick_light(u[0])?;
+        let (end, wi, le, area, shadow) = match pick {
+            LightPick::Environment => {
+                let env = scene.environment.as_ref()?;
+                let wi = env.sample(u[1] as f32, u[2] as f32);
+                let le = env.eval(wi);
+                (LightEnd::Environment, wi, le, (1.0, 1.0), view.spawn(x, wi))
+            }
+            LightPick::Delta(i) => {
+                let a = scene.delta_lights[i].arrival(x.p)?;
+                let shadow = match a.position {
+                    Some(p) => view.shadow_ray(x, &SurfacePoint::flat(p, Vec3::ZERO, u32::MAX)),
+                    None => view.spawn(x, a.wi),
+                };
+                (LightEnd::Delta, a.wi, a.value, (1.0, 1.0), shadow)
+            }
+            LightPick::Area => {
+                let (y, prim) = g
+                    .light
+                    .sample(&scene.mesh, &scene.emitters, [u0, u[1], u[2]]);
+                let y_point =
+                    SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
+                let d = y_point.p - x.p;
+                let dist2 = d.length_squared();
+                let wi = d / dist2.sqrt();
+                let cos_y = -y_point.ng.dot(wi);
+                if !(cos_y > 0.0 && dist2 > 0.0) {
+                    return None;
+                }
+                let end = LightEnd::Area { point: y, prim };
+                let le = view.material(prim).ke;
+                let shadow = view.shadow_ray(x, &y_point);
+                (end, wi, le, (cos_y, dist2), shadow)
+            }
+        };
+        let cos_x = n.dot(wi);
+        let (cos_y, dist2) = area;
+        let (area_to_solid_angle, geometry) = match end {
+            LightEnd::Area { .. } => (
+                f64::from(dist2) / f64::from(cos_y),
+                cos_x as f64 * cos_y as f64 / dist2 as f64,
+            ),
+            _ => (1.0, f64::from(cos_x)),
+        };
+        (cos_x > 0.0).then(|| Self {
+            end,
+            wi,
+            cos_x,
+            le: le.as_dvec3(),
+            area_to_solid_angle,
+            geometry,
+            pdf: g.light_pdf(view, &end, wi),
+            shadow,
+        })
     }
 }

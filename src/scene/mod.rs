@@ -2,13 +2,18 @@
 //! the emitters, validated strictly at load time.
 
 mod camera;
+mod environment;
+pub mod envmap;
 mod file;
+mod lights;
 mod shading;
 mod validate;
 pub mod xml;
 
 pub use camera::Camera;
+pub use environment::Environment;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
+pub use lights::{DeltaArrival, DeltaLight, LightPick};
 pub use shading::Shading;
 
 use crate::accel::TriangleMesh;
@@ -307,51 +312,6 @@ pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f64 {
     0.5 * (b - a).cross(c - a).length()
 }
 
-/// Mitsuba's `constant` emitter: radiance `radiance` arriving from every direction that
-/// escapes the scene. Light sampling draws its directions uniformly over the sphere (as
-/// Mitsuba's `constant` does), density `1 / 4π` in solid angle.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Environment {
-    pub radiance: Vec3,
-    /// Fault injection for statistical tests: multiplies the density of the environment's
-    /// directions wherever it is evaluated (not where it is sampled). 1 otherwise.
-    pdf_scale: f64,
-}
-
-impl Environment {
-    pub fn new(radiance: Vec3) -> Self {
-        Self {
-            radiance,
-            pdf_scale: 1.0,
-        }
-    }
-
-    /// A direction uniform over the unit sphere from two uniform numbers in [0, 1).
-    pub fn sample(&self, u1: f32, u2: f32) -> Vec3 {
-        crate::sampling::uniform_sphere(u1, u2)
-    }
-
-    /// The solid-angle density of [`Self::sample`] (times the fault injection's factor).
-    pub fn pdf(&self) -> f64 {
-        self.pdf_scale / (4.0 * std::f64::consts::PI)
-    }
-
-    /// The factor by which the density of a path that escaped to the environment is
-    /// evaluated: 1, but for the fault injection of [`Self::with_pdf_error`].
-    pub fn escape_pdf_scale(&self) -> f64 {
-        self.pdf_scale
-    }
-
-    /// This environment with its density deliberately scaled by `factor` where evaluated:
-    /// `pt`'s light-sampling density of its directions, and the mixtures' density of paths
-    /// that escaped to it. A wrong input that statistical tests must reject.
-    #[cfg(any(test, feature = "testing"))]
-    pub fn with_pdf_error(mut self, factor: f64) -> Self {
-        self.pdf_scale = factor;
-        self
-    }
-}
-
 /// A loaded, validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -365,8 +325,11 @@ pub struct Scene {
     /// Material index of each primitive (triangles, then analytic shapes).
     pub material_of: Vec<u32>,
     pub emitters: Emitters,
-    /// Mitsuba's `constant` emitter, if any: what rays that escape the scene gather.
+    /// Mitsuba's `constant` or `envmap` emitter, if any: what rays that escape the scene
+    /// gather.
     pub environment: Option<Environment>,
+    /// Mitsuba's `point` and `directional` emitters, which only light sampling reaches.
+    pub delta_lights: Vec<DeltaLight>,
     /// Mitsuba's `hide_emitters`: camera rays that see an emitter, or escape to the
     /// environment, gather nothing (emitters seen after a scattering event still count).
     pub hide_emitters: bool,
@@ -429,15 +392,12 @@ impl Scene {
         shading::tangent(dp_du, ns)
     }
 
-    /// The probability with which light sampling (`pt`'s next-event estimation) picks the
-    /// environment rather than a point on the area emitters: 0 without an environment, 1
-    /// without area emitters, else 1/2 (Mitsuba's uniform choice between its two emitters
-    /// where the area emitters are one shape).
+    /// The probability with which light sampling picks the environment: 0 without one, else
+    /// [`Scene::light_pmf`] (Mitsuba's uniform choice between its emitters, `lights`).
     pub fn environment_share(&self) -> f64 {
-        match (&self.environment, self.emitters.prims.is_empty()) {
-            (None, _) => 0.0,
-            (Some(_), true) => 1.0,
-            (Some(_), false) => 0.5,
+        match self.environment {
+            None => 0.0,
+            Some(_) => self.light_pmf(),
         }
     }
 
@@ -527,6 +487,7 @@ impl Scene {
             material_of,
             emitters,
             environment: None,
+            delta_lights: Vec::new(),
             hide_emitters: false,
             render: file.render,
             extent,

@@ -1,6 +1,8 @@
 //! A parsed Mitsuba document as a genpath [`Scene`]: the sensor, film, sampler and
 //! integrator as the camera and render defaults, the shapes as triangles, the BSDFs and
-//! area emitters as materials, the `constant` emitter as the environment. Every plugin and parameter genpath does not implement is
+//! area emitters as materials, the `constant` or `envmap` emitter as the environment, the
+//! `point` and `directional` emitters as delta lights. Every plugin and parameter genpath
+//! does not implement is
 //! refused with its file and line ([`Props::finish`]).
 
 use super::parse::Doc;
@@ -41,6 +43,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let mut sensor = None;
     let mut integrator = None;
     let mut environment = None;
+    let mut delta_lights = Vec::new();
     let mut geometry = Geometry::default();
     for (prop, i) in root.children() {
         let p = Props::new(doc, i);
@@ -54,11 +57,19 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
             "shape" => shape(&p, &mut geometry, &mut warnings)?,
             // Defined for reference by id: built where they are used.
             "bsdf" | "texture" => {}
-            "emitter" if p.object().plugin == "constant" => {
+            "emitter" if matches!(p.object().plugin.as_str(), "constant" | "envmap") => {
                 if environment.is_some() {
-                    return Err(p.error("a second `constant` emitter (genpath takes one)"));
+                    return Err(p.error(
+                        "a second environment (`constant` or `envmap`) emitter (genpath takes one)",
+                    ));
                 }
-                environment = Some(constant_emitter(&p, &mut warnings)?);
+                environment = Some(match p.object().plugin.as_str() {
+                    "constant" => constant_emitter(&p, &mut warnings)?,
+                    _ => super::emitters::envmap(&p, &mut geometry.files, &mut warnings)?,
+                });
+            }
+            "emitter" if matches!(p.object().plugin.as_str(), "point" | "directional") => {
+                delta_lights.push(super::emitters::delta_light(&p, &mut warnings)?);
             }
             "emitter" => return Err(emitter_refusal(&p)),
             _ => return Err(p.error("genpath does not implement this plugin")),
@@ -101,10 +112,13 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let emitters = Emitters::new(&mesh, |prim| {
         materials[material_of[prim as usize] as usize].is_emitter()
     });
-    if (emitters.prims.is_empty() || emitters.total_area <= 0.0) && environment.is_none() {
+    if (emitters.prims.is_empty() || emitters.total_area <= 0.0)
+        && environment.is_none()
+        && delta_lights.is_empty()
+    {
         return Err(doc.error(
             root.loc(),
-            "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant` one)",
+            "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant`, `envmap`, `point` or `directional` one)",
         ));
     }
     let extent = mesh.shapes.iter().fold(
@@ -125,6 +139,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         material_of,
         emitters,
         environment,
+        delta_lights,
         hide_emitters,
         render: RenderDefaults { max_bounces, spp },
         extent,
@@ -135,10 +150,11 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
 
 fn emitter_refusal(p: &Props) -> SceneError {
     match p.object().plugin.as_str() {
-        "constant" => p.error("a `constant` (environment) emitter belongs in the scene, not in a shape"),
+        "constant" | "envmap" => p.error("an environment emitter belongs in the scene, not in a shape"),
+        "point" | "directional" => p.error("a delta light belongs in the scene, not in a shape"),
         "area" => p.error("an area emitter must be nested in a shape"),
         other => p.error(format!(
-            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape; constant)"
+            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape; constant, envmap, point, directional)"
         )),
     }
 }

@@ -4,6 +4,7 @@
 //! does not implement. docs/scenes.md lists what is supported and the conventions.
 
 mod build;
+mod emitters;
 mod ior;
 mod parse;
 mod ply;

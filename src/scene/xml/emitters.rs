@@ -1,0 +1,123 @@
+//! Mitsuba's emitters beside the area emitter: the delta lights `point` and `directional`,
+//! each a [`DeltaLight`], and the environment map `envmap`.
+
+use super::props::Props;
+use super::spectrum::ColorUse;
+use crate::scene::envmap::EnvMap;
+use crate::scene::{DeltaLight, Environment, SceneError};
+use glam::{DMat3, DMat4, DVec3, Vec3};
+use std::path::PathBuf;
+
+/// Whether property `name` is given (without marking it read).
+fn given(p: &Props, name: &str) -> bool {
+    p.object().props.iter().any(|q| q.name == name)
+}
+
+/// An emitter's `what` colour (intensity, irradiance): given explicitly (genpath does not
+/// assume Mitsuba's default), finite and not negative.
+fn emission(p: &Props, what: &str, warnings: &mut Vec<String>) -> Result<DVec3, SceneError> {
+    let c = p
+        .color(what, ColorUse::Emission, warnings)?
+        .ok_or_else(|| {
+            p.error(format!(
+                "needs an `{what}` (genpath does not assume Mitsuba's default)"
+            ))
+        })?;
+    if !(c.is_finite() && c.min_element() >= 0.0 && c.max_element() <= 1e30) {
+        return Err(p.error(format!(
+            "`{what}` {c} is negative, not a number or beyond 1e30"
+        )));
+    }
+    Ok(c)
+}
+
+/// The affine `to_world`, refused where `alone` is also given (as Mitsuba refuses it).
+fn to_world(p: &Props, alone: &str) -> Result<Option<DMat4>, SceneError> {
+    match (given(p, "to_world"), given(p, alone)) {
+        (true, true) => Err(p.error(format!(
+            "give either `{alone}` or `to_world`, not both (as Mitsuba refuses them)"
+        ))),
+        (true, false) => Ok(Some(p.transform("to_world")?)),
+        (false, _) => Ok(None),
+    }
+}
+
+/// Mitsuba's `point` (`position` or the translation of `to_world`; `intensity`) or
+/// `directional` (`direction`, or `to_world` applied to +z; `irradiance`).
+pub fn delta_light(p: &Props, warnings: &mut Vec<String>) -> Result<DeltaLight, SceneError> {
+    let light = match p.object().plugin.as_str() {
+        "point" => {
+            let position = match to_world(p, "position")? {
+                Some(m) => m.w_axis.truncate(),
+                None => p.point("position", DVec3::ZERO)?,
+            };
+            if !position.is_finite() {
+                return Err(p.error(format!("`position` {position} is not finite")));
+            }
+            DeltaLight::Point {
+                position: position.as_vec3(),
+                intensity: emission(p, "intensity", warnings)?.as_vec3(),
+            }
+        }
+        _ => {
+            let direction = match to_world(p, "direction")? {
+                Some(m) => m.transform_vector3(DVec3::Z),
+                None => match given(p, "direction") {
+                    true => p.point("direction", DVec3::ZERO)?,
+                    false => return Err(p.error("needs a `direction` or a `to_world`")),
+                },
+            };
+            let length = direction.length();
+            if !(length.is_finite() && length > 1e-12) {
+                return Err(p.error(format!("the direction {direction} is zero or not finite")));
+            }
+            DeltaLight::Directional {
+                direction: (direction / length).as_vec3(),
+                irradiance: emission(p, "irradiance", warnings)?.as_vec3(),
+            }
+        }
+    };
+    p.finish()?;
+    Ok(light)
+}
+
+/// Mitsuba's `envmap`: the equirectangular image `filename` (EXR through the `exr` crate;
+/// with feature `oiio` also every format OpenImageIO reads, such as Radiance `.hdr`; PNG
+/// sRGB-decoded), `scale` and a rigid `to_world`. The file is added to `files`.
+pub fn envmap(
+    p: &Props,
+    files: &mut Vec<PathBuf>,
+    warnings: &mut Vec<String>,
+) -> Result<Environment, SceneError> {
+    let name = p
+        .string("filename")?
+        .ok_or_else(|| p.error("needs a `filename`"))?;
+    let path = p.doc.resolve(p.loc(), name);
+    if !path.is_file() {
+        return Err(p.error(format!("file `{}` not found", path.display())));
+    }
+    let scale = p.float("scale", 1.0)?;
+    if !(scale.is_finite() && scale >= 0.0 && scale <= 1e30) {
+        return Err(p.error(format!(
+            "`scale` {scale} is negative, not a number or beyond 1e30"
+        )));
+    }
+    let to_world = DMat3::from_mat4(p.transform("to_world")?);
+    p.ignore(
+        &["mis_compensation"],
+        "it changes Mitsuba's sampling, not the image",
+        warnings,
+    );
+    p.finish()?;
+    let image = crate::image::read(&path).map_err(|e| p.error(e.to_string()))?;
+    files.push(path.clone());
+    let texels = image.pixels.iter().map(|&c| Vec3::from(c)).collect();
+    let map = EnvMap::new(
+        image.width as usize,
+        image.height as usize,
+        texels,
+        to_world,
+    )
+    .map_err(|e| p.error(format!("`{}`: {e}", path.display())))?;
+    Ok(Environment::map(map, scale as f32))
+}
