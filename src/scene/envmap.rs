@@ -11,15 +11,15 @@
 //! `u = (x + ½) / W`, clamped in `v` with the rows at `v = y / (H − 1)` (the first row at the
 //! pole `θ = 0`, the last at `θ = π`), times `scale`.
 //!
-//! Sampling (Mitsuba warps a piecewise-bilinear density; genpath's is piecewise constant, which
-//! is as good for light sampling and simpler to keep exact): the sphere is cut into the
-//! `W × (H − 1)` patches between neighbouring texel centres (`u` between two centres, `θ`
-//! between two rows); a patch is picked with probability proportional to the mean of its four
-//! corners' luminance times its solid angle (`Ω = (2π / W)(cos θ₀ − cos θ₁)`: the `sin θ`
-//! weighting), and a direction uniformly in solid angle inside it (`u` uniform, `cos θ`
-//! uniform), so the density is `P(patch) / Ω` there. The bilinear radiance inside a patch
-//! is positive only where one of its corners is, so the density covers every direction the
-//! map lights.
+//! Sampling (Mitsuba warps a piecewise-bilinear density; genpath's is piecewise constant,
+//! simpler to keep exact): the `W × (H − 1)` patches between neighbouring texel centres (`u`
+//! between two centres, `θ` between two rows) are cut into `sub × sub` cells each
+//! ([`subdivision`]); a cell is picked with probability proportional to the luminance of the
+//! bilinear lookup at its centre (the mean of the bilinear radiance over the cell in `(u, v)`)
+//! times its solid angle (`Ω = (2π / (W·sub))(cos θ₀ − cos θ₁)`: the `sin θ` weighting), and a
+//! direction uniformly in solid angle inside it (`u` uniform, `cos θ` uniform), so the density
+//! is `P(cell) / Ω` there. Inside a patch the bilinear radiance is zero at a cell's centre
+//! only where all four corners are, so the density covers every direction the map lights.
 
 use glam::{DMat3, DVec3, Vec3};
 use std::f64::consts::PI;
@@ -34,11 +34,13 @@ pub struct EnvMap {
     /// `to_world`'s linear part (orthogonal) and its inverse.
     to_world: DMat3,
     from_world: DMat3,
-    /// Per patch row (`H − 1`), the running sum of its patches' weights; and the running
-    /// sum of the rows' totals.
-    patch_cdf: Vec<f64>,
+    /// Cells per texel along each axis ([`subdivision`]).
+    sub: usize,
+    /// Per row of cells (`(H − 1)·sub`), the running sum of its cells' weights; and the
+    /// running sum of the rows' totals.
+    cell_cdf: Vec<f64>,
     row_cdf: Vec<f64>,
-    /// `cos θ` at each row of texels (the patches' edges).
+    /// `cos θ` at the edges of the rows of cells.
     cos_rows: Vec<f64>,
 }
 
@@ -104,20 +106,23 @@ impl EnvMap {
         if !orthogonal {
             return Err(EnvMapError::NotRigid);
         }
-        let cos_rows: Vec<f64> = (0..height)
-            .map(|y| (PI * y as f64 / (height - 1) as f64).cos())
+        let sub = subdivision(width, height);
+        let (cols, rows) = (width * sub, (height - 1) * sub);
+        let cos_rows: Vec<f64> = (0..=rows)
+            .map(|i| (PI * i as f64 / rows as f64).cos())
             .collect();
-        let lum = |x: usize, y: usize| luminance(texels[y * width + x % width]);
-        let mut patch_cdf = Vec::with_capacity(width * (height - 1));
-        let mut row_cdf = Vec::with_capacity(height - 1);
+        let lum: Vec<f64> = texels.iter().map(|&c| luminance(c)).collect();
+        let mut cell_cdf = Vec::with_capacity(cols * rows);
+        let mut row_cdf = Vec::with_capacity(rows);
         let mut total = 0.0;
-        for r in 0..height - 1 {
-            let solid_angle = 2.0 * PI / width as f64 * (cos_rows[r] - cos_rows[r + 1]);
+        for i in 0..rows {
+            let solid_angle = 2.0 * PI / cols as f64 * (cos_rows[i] - cos_rows[i + 1]);
+            let y = (i as f64 + 0.5) / sub as f64;
             let mut row = 0.0;
-            for c in 0..width {
-                let mean = 0.25 * (lum(c, r) + lum(c + 1, r) + lum(c, r + 1) + lum(c + 1, r + 1));
-                row += mean * solid_angle;
-                patch_cdf.push(row);
+            for j in 0..cols {
+                let x = (j as f64 + 0.5) / sub as f64;
+                row += bilinear(&lum, width, (x, y)) * solid_angle;
+                cell_cdf.push(row);
             }
             total += row;
             row_cdf.push(total);
@@ -131,7 +136,8 @@ impl EnvMap {
             texels,
             to_world,
             from_world: to_world.transpose(),
-            patch_cdf,
+            sub,
+            cell_cdf,
             row_cdf,
             cos_rows,
         })
@@ -158,45 +164,42 @@ impl EnvMap {
     pub fn eval(&self, dir: DVec3) -> Vec3 {
         let (u, v) = self.uv(dir);
         let x = u * self.width as f64 - 0.5;
-        let y = (v * (self.height - 1) as f64).clamp(0.0, (self.height - 1) as f64);
-        let (x0, y0) = (x.floor(), y.floor().min((self.height - 2) as f64));
-        let (fx, fy) = ((x - x0) as f32, (y - y0) as f32);
-        let w = self.width as i64;
-        let c0 = (x0 as i64).rem_euclid(w) as usize;
-        let c1 = (c0 + 1) % self.width;
-        let r0 = y0 as usize;
-        let at = |c: usize, r: usize| self.texels[r * self.width + c];
-        let top = at(c0, r0) * (1.0 - fx) + at(c1, r0) * fx;
-        let bottom = at(c0, r0 + 1) * (1.0 - fx) + at(c1, r0 + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
+        let y = v * (self.height - 1) as f64;
+        bilinear(&self.texels, self.width, (x, y))
     }
 
-    /// The patch holding `(u, v)`: its column and row.
-    fn patch(&self, u: f64, v: f64) -> (usize, usize) {
-        let c = ((u * self.width as f64 - 0.5).floor() as i64).rem_euclid(self.width as i64);
-        let r = ((v * (self.height - 1) as f64).floor() as i64).clamp(0, self.height as i64 - 2);
-        (c as usize, r as usize)
+    /// The cell holding `(u, v)`: its column and row.
+    fn cell(&self, u: f64, v: f64) -> (usize, usize) {
+        let (cols, rows) = (self.width * self.sub, self.cos_rows.len() - 1);
+        let j = ((u * self.width as f64 - 0.5) * self.sub as f64).floor() as i64;
+        let i = (v * rows as f64).floor() as i64;
+        (
+            j.rem_euclid(cols as i64) as usize,
+            i.clamp(0, rows as i64 - 1) as usize,
+        )
     }
 
-    /// The probability of patch `(c, r)` and its solid angle.
-    fn patch_mass(&self, c: usize, r: usize) -> (f64, f64) {
-        let i = r * self.width + c;
-        let before = if c == 0 { 0.0 } else { self.patch_cdf[i - 1] };
+    /// The probability of cell `(j, i)` and its solid angle.
+    fn cell_mass(&self, j: usize, i: usize) -> (f64, f64) {
+        let cols = self.width * self.sub;
+        let k = i * cols + j;
+        let before = if j == 0 { 0.0 } else { self.cell_cdf[k - 1] };
         let total = self.row_cdf[self.row_cdf.len() - 1];
-        let solid_angle = 2.0 * PI / self.width as f64 * (self.cos_rows[r] - self.cos_rows[r + 1]);
-        ((self.patch_cdf[i] - before) / total, solid_angle)
+        let solid_angle = 2.0 * PI / cols as f64 * (self.cos_rows[i] - self.cos_rows[i + 1]);
+        ((self.cell_cdf[k] - before) / total, solid_angle)
     }
 
     /// A unit direction (world) drawn from two uniform numbers in [0, 1): `u[1]` picks the
-    /// patch row, `u[0]` the patch in it, each then rescaled to place the direction
-    /// uniformly in solid angle inside the patch.
+    /// cell row, `u[0]` the cell in it, each then rescaled to place the direction uniformly
+    /// in solid angle inside the cell.
     pub fn sample(&self, u: [f64; 2]) -> DVec3 {
+        let cols = self.width * self.sub;
         let total = self.row_cdf[self.row_cdf.len() - 1];
-        let (r, t_v) = invert(&self.row_cdf, u[1] * total);
-        let row = &self.patch_cdf[r * self.width..(r + 1) * self.width];
-        let (c, t_u) = invert(row, u[0] * row[self.width - 1]);
-        let phi = 2.0 * PI * (c as f64 + 0.5 + t_u) / self.width as f64;
-        let cos_theta = self.cos_rows[r] + t_v * (self.cos_rows[r + 1] - self.cos_rows[r]);
+        let (i, t_v) = invert(&self.row_cdf, u[1] * total);
+        let row = &self.cell_cdf[i * cols..(i + 1) * cols];
+        let (j, t_u) = invert(row, u[0] * row[cols - 1]);
+        let phi = 2.0 * PI * ((j as f64 + t_u) / self.sub as f64 + 0.5) / self.width as f64;
+        let cos_theta = self.cos_rows[i] + t_v * (self.cos_rows[i + 1] - self.cos_rows[i]);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
         let local = DVec3::new(phi.sin() * sin_theta, cos_theta, -phi.cos() * sin_theta);
         (self.to_world * local).normalize()
@@ -205,21 +208,63 @@ impl EnvMap {
     /// The solid-angle density of [`Self::sample`] at unit `dir` (world).
     pub fn pdf(&self, dir: DVec3) -> f64 {
         let (u, v) = self.uv(dir);
-        let (c, r) = self.patch(u, v);
-        let (mass, solid_angle) = self.patch_mass(c, r);
+        let (j, i) = self.cell(u, v);
+        let (mass, solid_angle) = self.cell_mass(j, i);
         mass / solid_angle
     }
+}
 
-    /// The density of [`Self::sample`] per unit of `(u, v)` without the `sin θ` Jacobian
-    /// (`du dv · 2π²` taken for the solid angle): a deliberately wrong density that the χ²
-    /// test must reject.
-    #[cfg(any(test, feature = "testing"))]
-    pub fn pdf_without_jacobian(&self, dir: DVec3) -> f64 {
-        let (u, v) = self.uv(dir);
-        let (c, r) = self.patch(u, v);
-        let (mass, _) = self.patch_mass(c, r);
-        let uv_area = 1.0 / (self.width * (self.height - 1)) as f64;
-        mass / (uv_area * 2.0 * PI * PI)
+/// Mitsuba's bilinear lookup of `grid` (rows of `width`, periodic across columns, clamped
+/// across rows) at `(x, y)` in texel units, texel centres at integers: in `f64`, rounded once.
+fn bilinear<T>(grid: &[T], width: usize, (x, y): (f64, f64)) -> T
+where
+    T: Copy + Texel,
+{
+    let height = grid.len() / width;
+    let y = y.clamp(0.0, (height - 1) as f64);
+    let (x0, y0) = (x.floor(), y.floor().min((height - 2) as f64));
+    let (fx, fy) = (x - x0, y - y0);
+    let c0 = (x0 as i64).rem_euclid(width as i64) as usize;
+    let c1 = (c0 + 1) % width;
+    let r0 = y0 as usize;
+    let at = |c: usize, r: usize| grid[r * width + c].widen();
+    let top = at(c0, r0) * (1.0 - fx) + at(c1, r0) * fx;
+    let bottom = at(c0, r0 + 1) * (1.0 - fx) + at(c1, r0 + 1) * fx;
+    T::narrow(top * (1.0 - fy) + bottom * fy)
+}
+
+/// A value [`bilinear`] interpolates: an RGB texel or a luminance, in `f64` meanwhile.
+trait Texel {
+    fn widen(self) -> DVec3;
+    fn narrow(v: DVec3) -> Self;
+}
+
+impl Texel for Vec3 {
+    fn widen(self) -> DVec3 {
+        self.as_dvec3()
+    }
+    fn narrow(v: DVec3) -> Self {
+        v.as_vec3()
+    }
+}
+
+impl Texel for f64 {
+    fn widen(self) -> DVec3 {
+        DVec3::splat(self)
+    }
+    fn narrow(v: DVec3) -> Self {
+        v.x
+    }
+}
+
+/// Cells per texel along each axis of the sampling distribution: 4 (16 cells between four
+/// texel centres, each weighted by the bilinear radiance at its centre, which follows the
+/// lookup closely) for maps of up to 2^18 pixels, 2 up to 2^20, else 1.
+fn subdivision(width: usize, height: usize) -> usize {
+    match width * height {
+        n if n <= 1 << 18 => 4,
+        n if n <= 1 << 20 => 2,
+        _ => 1,
     }
 }
 
