@@ -11,7 +11,9 @@
 //! rejected. On a smooth-shaded scene (`scenes/mitsuba/smooth.xml`), the methods agree with
 //! `pt` in the shading frame, and `srt` with the shading normals dropped (geometric normals:
 //! another image) or with its densities evaluated in the geometric frame (a biased
-//! estimator) must be rejected.
+//! estimator) must be rejected. On `lights.xml` (an environment map, a point, a directional and
+//! an area light) every method agrees with `pt`, and an `srt` that leaves a delta light's pick
+//! out of its densities is rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -59,6 +61,9 @@ enum Which {
         nee: Nee,
         light_dropped: bool,
     },
+    /// `srt` (next-event estimation at every vertex) with the probability of a delta light's
+    /// pick left out of the densities of the paths that end at one.
+    SrtDeltaPickDropped,
     Anchors {
         pdf_error: Option<f64>,
     },
@@ -223,6 +228,18 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             })
         }
         Which::SrtShadedFlat => unreachable!("replaced above"),
+        Which::SrtDeltaPickDropped => Some(
+            Mixture::new(
+                vec![PathGenerator::srt(
+                    max_bounces,
+                    SRT_ABSORPTION,
+                    mixture_file::uniform_light(&scene),
+                )],
+                vec![1.0],
+            )
+            .with_nee(Nee::Every)
+            .with_delta_pick_dropped(),
+        ),
         Which::SrtGeometricDensity => Some(
             Mixture::new(
                 vec![PathGenerator::srt(
@@ -532,4 +549,45 @@ fn smooth_shading_methods_agree_and_a_wrong_frame_does_not() {
         let wrong = render_with(name, which, bounces, SPP / 2, 23);
         assert_rejected(&format!("{name}: {label}"), &wrong, &pt);
     }
+}
+
+/// Every kind of emitter at once (`lights.xml`: an environment map with a small bright sun, a
+/// point light, a directional light and an area light, each picked by light sampling with
+/// probability 1/4): `srt` and `ga` with either estimator, `ga-pt` (with and without the
+/// spatial guide) and `pg` estimate what `pt` does, and an `srt` that leaves a delta light's
+/// pick out of its densities (as if it were the only emitter) does not.
+#[test]
+fn lights_methods_agree_and_a_dropped_delta_pick_does_not() {
+    let name = "lights.xml";
+    let (bounces, spp) = (4, SPP / 4);
+    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+    let srt = |nee| Which::Srt {
+        nee,
+        light_dropped: false,
+    };
+    let ga = |nee| Which::Ga {
+        nee,
+        unnormalised: false,
+        light_dropped: false,
+    };
+    for (label, which) in [
+        ("srt", srt(Nee::Every)),
+        ("srt, nee end", srt(Nee::End)),
+        ("ga", ga(Nee::Every)),
+        ("ga, nee end", ga(Nee::End)),
+        ("ga-pt", Which::GaPt { spatial: false }),
+        ("ga-pt, spatial", Which::GaPt { spatial: true }),
+        (
+            "pg",
+            Which::Pg {
+                every_cell_dark: false,
+            },
+        ),
+    ] {
+        let film = render_with(name, which, bounces, spp, 23);
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
+    }
+    let wrong = render_with(name, Which::SrtDeltaPickDropped, bounces, spp, 23);
+    let what = format!("{name}: srt without the delta lights' pick in its densities");
+    assert_rejected(&what, &wrong, &pt);
 }
