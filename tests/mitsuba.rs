@@ -524,7 +524,7 @@ fn constant_emitter_refusals_name_file_and_line() {
         (
             r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>
 <emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#,
-            "a second `constant`",
+            "a second environment",
         ),
         (r#"<emitter type="constant"/>"#, "needs a `radiance`"),
         (
@@ -553,6 +553,108 @@ fn constant_emitter_refusals_name_file_and_line() {
             "{emitters}: {error}"
         );
     }
+}
+
+/// The refusals of the `point`, `directional` and `envmap` emitters, each naming the file
+/// and line: a negative or NaN intensity (the parser's refusal of a non-finite number), `position` beside `to_world`, a zero or missing
+/// direction, a missing map file, a map with a NaN or an infinite pixel, a negative scale,
+/// a `to_world` that scales the map, a second environment, and a delta light or map in a
+/// shape.
+#[test]
+fn point_directional_and_envmap_refusals_name_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bad) in [("nan.exr", f32::NAN), ("inf.exr", f32::INFINITY)] {
+        let mut map = Image::new(8, 4);
+        map.pixels.iter_mut().for_each(|p| *p = [0.5; 3]);
+        map.pixels[13] = [1.0, bad, 1.0];
+        genpath::image::write(&dir.path().join(name), &map).unwrap();
+    }
+    let mut good = Image::new(8, 4);
+    good.pixels.iter_mut().for_each(|p| *p = [0.5; 3]);
+    genpath::image::write(&dir.path().join("good.exr"), &good).unwrap();
+    let envmap = |inner: &str| format!(r#"<emitter type="envmap">{inner}</emitter>"#);
+    let cases = [
+        (
+            r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#.to_string(),
+            "negative",
+        ),
+        (
+            r#"<emitter type="point"><rgb name="intensity" value="nan"/></emitter>"#.into(),
+            "finite number",
+        ),
+        (r#"<emitter type="point"/>"#.into(), "needs an `intensity`"),
+        (
+            r#"<emitter type="point"><point name="position" value="0, 1, 0"/><transform name="to_world"><translate y="1"/></transform><rgb name="intensity" value="1"/></emitter>"#.into(),
+            "not both",
+        ),
+        (
+            r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/><rgb name="irradiance" value="1"/></emitter>"#.into(),
+            "is zero",
+        ),
+        (
+            r#"<emitter type="directional"><rgb name="irradiance" value="1"/></emitter>"#.into(),
+            "needs a `direction`",
+        ),
+        (
+            envmap(r#"<string name="filename" value="missing.exr"/>"#),
+            "not found",
+        ),
+        (
+            envmap(r#"<string name="filename" value="nan.exr"/>"#),
+            "pixel (5, 1)",
+        ),
+        (
+            envmap(r#"<string name="filename" value="inf.exr"/>"#),
+            "infinite",
+        ),
+        (
+            envmap(r#"<string name="filename" value="good.exr"/><float name="scale" value="-2"/>"#),
+            "negative",
+        ),
+        (
+            envmap(r#"<string name="filename" value="good.exr"/><transform name="to_world"><scale value="2"/></transform>"#),
+            "without scaling",
+        ),
+        (
+            envmap(r#"<string name="filename" value="good.exr"/>"#)
+                + r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#,
+            "a second environment",
+        ),
+        (
+            r#"<shape type="rectangle"><emitter type="point"><rgb name="intensity" value="1"/></emitter></shape>"#.into(),
+            "belongs in the scene",
+        ),
+        (
+            format!(r#"<shape type="rectangle">{}</shape>"#, envmap(r#"<string name="filename" value="good.exr"/>"#)),
+            "belongs in the scene",
+        ),
+    ];
+    for (i, (emitters, expected)) in cases.iter().enumerate() {
+        let text = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+<shape type="cube"/>
+{emitters}
+</scene>
+"#
+        );
+        let path = dir.path().join(format!("e{i}.xml"));
+        std::fs::write(&path, text).unwrap();
+        let error = Scene::load(&path).unwrap_err().to_string();
+        assert!(
+            error.contains(expected) && error.contains(&format!("e{i}.xml:")),
+            "{emitters}: {error}"
+        );
+    }
+    // The good map loads, and its file is among those the scene was read from.
+    let path = dir.path().join("good.xml");
+    let text = format!(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor><shape type="cube"/>{}</scene>"#,
+        envmap(r#"<string name="filename" value="good.exr"/>"#)
+    );
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).unwrap();
+    assert!(scene.files.iter().any(|f| f.ends_with("good.exr")));
 }
 
 /// The samples of the smooth-shading test (its reference has 64 × as many).
