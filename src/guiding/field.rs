@@ -26,8 +26,9 @@
 //! the light instead of on the indirect light only it can find. fig1, 64 spp, seed 7: `pg`
 //! relMSE 0.0187 without direct light in the records, 0.0237 with; glossy 0.0055 against
 //! 0.0106; fig5 0.299 / 0.292 / 0.285 against 0.272 / 0.286 / 0.280 (seeds 7 / 11 / 13).
-//! An environment's light (Mitsuba's `constant`) stays in the sampled directions' records:
-//! its light samples are uniform over the sphere, and a guide that leaves it to them is
+//! An environment's light (Mitsuba's `constant`, or `envmap`) stays in the sampled
+//! directions' records: a `constant`'s light samples are uniform over the sphere, and a
+//! guide that leaves it to them is
 //! worse than none (`scenes/mitsuba/env.xml`, 256 spp: relMSE 1.5e-3 without it, 5.4e-4
 //! with it, `pt` 4.6e-4). The sum of
 //! a quadrant's records is proportional to an estimate of `∫ L_i |cos| dω` over its solid

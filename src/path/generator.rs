@@ -18,6 +18,12 @@
 //!   (`p_light`, without `x_n`'s absorption), which the mixture weighs by the balance
 //!   heuristic over every (generator, technique) pair (design §13).
 //!
+//! The light sample picks an emitter as `pt` does ([`crate::scene::Scene::pick_light`]):
+//! a point on the area emitters by the generator's light-point sampler, a direction towards
+//! the environment, or a delta light ([`LightEnd`]). A delta light is reached by the light
+//! technique alone (its density the pick's probability); the environment by both with
+//! [`Nee::Every`], by the light sample alone with [`Nee::End`], as an area emitter.
+//!
 //! Every generator evaluates the density of a path that *any* generator produced from the
 //! stored vertices alone ([`PathGenerator::pdf_contribution`]), which is what the
 //! balance-heuristic estimator of a [`Mixture`](super::mixture::Mixture) (paper eq. 7–8) and
