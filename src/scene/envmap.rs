@@ -127,7 +127,7 @@ impl EnvMap {
             total += row;
             row_cdf.push(total);
         }
-        if !(total > 0.0) {
+        if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(EnvMapError::Black);
         }
         Ok(Self {

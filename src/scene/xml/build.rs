@@ -5,6 +5,7 @@
 //! does not implement is
 //! refused with its file and line ([`Props::finish`]).
 
+use super::emitters::SceneLights;
 use super::parse::Doc;
 use super::props::Props;
 use super::shapes::{self, Placement};
@@ -42,8 +43,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let root = Props::new(doc, 0);
     let mut sensor = None;
     let mut integrator = None;
-    let mut environment = None;
-    let mut delta_lights = Vec::new();
+    let mut lights = SceneLights::default();
     let mut geometry = Geometry::default();
     for (prop, i) in root.children() {
         let p = Props::new(doc, i);
@@ -57,21 +57,11 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
             "shape" => shape(&p, &mut geometry, &mut warnings)?,
             // Defined for reference by id: built where they are used.
             "bsdf" | "texture" => {}
-            "emitter" if matches!(p.object().plugin.as_str(), "constant" | "envmap") => {
-                if environment.is_some() {
-                    return Err(p.error(
-                        "a second environment (`constant` or `envmap`) emitter (genpath takes one)",
-                    ));
+            "emitter" => {
+                if !lights.add(&p, &mut geometry.files, &mut warnings)? {
+                    return Err(emitter_refusal(&p));
                 }
-                environment = Some(match p.object().plugin.as_str() {
-                    "constant" => constant_emitter(&p, &mut warnings)?,
-                    _ => super::emitters::envmap(&p, &mut geometry.files, &mut warnings)?,
-                });
             }
-            "emitter" if matches!(p.object().plugin.as_str(), "point" | "directional") => {
-                delta_lights.push(super::emitters::delta_light(&p, &mut warnings)?);
-            }
-            "emitter" => return Err(emitter_refusal(&p)),
             _ => return Err(p.error("genpath does not implement this plugin")),
         }
         prop.used.set(true);
@@ -112,6 +102,10 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     let emitters = Emitters::new(&mesh, |prim| {
         materials[material_of[prim as usize] as usize].is_emitter()
     });
+    let SceneLights {
+        environment,
+        delta_lights,
+    } = lights;
     if (emitters.prims.is_empty() || emitters.total_area <= 0.0)
         && environment.is_none()
         && delta_lights.is_empty()
@@ -445,7 +439,10 @@ fn area_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Vec3, SceneErro
 }
 
 /// Mitsuba's `constant` emitter: its `radiance` (given explicitly).
-fn constant_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Environment, SceneError> {
+pub(super) fn constant_emitter(
+    p: &Props,
+    warnings: &mut Vec<String>,
+) -> Result<Environment, SceneError> {
     let radiance = p
         .color("radiance", ColorUse::Emission, warnings)?
         .ok_or_else(|| p.error("needs a `radiance` (genpath does not assume Mitsuba's default)"))?;

@@ -8,6 +8,45 @@ use crate::scene::{DeltaLight, Environment, SceneError};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::path::PathBuf;
 
+/// The emitters given in the scene itself (not nested in a shape).
+#[derive(Default)]
+pub struct SceneLights {
+    /// A `constant` or `envmap` emitter (at most one).
+    pub environment: Option<Environment>,
+    /// `point` and `directional` emitters.
+    pub delta_lights: Vec<DeltaLight>,
+}
+
+impl SceneLights {
+    /// Adds the emitter `p` (a map's file to `files`); `false` for a plugin that does not
+    /// belong here (the caller refuses it).
+    pub fn add(
+        &mut self,
+        p: &Props,
+        files: &mut Vec<PathBuf>,
+        warnings: &mut Vec<String>,
+    ) -> Result<bool, SceneError> {
+        match p.object().plugin.as_str() {
+            "constant" | "envmap" if self.environment.is_some() => Err(p.error(
+                "a second environment (`constant` or `envmap`) emitter (genpath takes one)",
+            )),
+            "constant" => {
+                self.environment = Some(super::build::constant_emitter(p, warnings)?);
+                Ok(true)
+            }
+            "envmap" => {
+                self.environment = Some(envmap(p, files, warnings)?);
+                Ok(true)
+            }
+            "point" | "directional" => {
+                self.delta_lights.push(delta_light(p, warnings)?);
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+}
+
 /// Whether property `name` is given (without marking it read).
 fn given(p: &Props, name: &str) -> bool {
     p.object().props.iter().any(|q| q.name == name)
@@ -97,7 +136,7 @@ pub fn envmap(
         return Err(p.error(format!("file `{}` not found", path.display())));
     }
     let scale = p.float("scale", 1.0)?;
-    if !(scale.is_finite() && scale >= 0.0 && scale <= 1e30) {
+    if !(0.0..=1e30).contains(&scale) {
         return Err(p.error(format!(
             "`scale` {scale} is negative, not a number or beyond 1e30"
         )));
