@@ -62,10 +62,10 @@ pub struct TestPaths {
     /// Per stored path: whether it ends with a light sample or a connection (with
     /// [`Nee::Every`] after a non-delta last vertex); where it ends at a delta light or the
     /// environment, the light technique's density, the same for every generator
-    /// ([`crate::path::generator::fixed_light_pdf`]; NaN for an emitter point), and whether
-    /// it is a delta light's (whose direction technique has density 0).
+    /// ([`crate::path::generator::fixed_light_pdf`]; `None` for an emitter point), and
+    /// whether it is a delta light's (whose direction technique has density 0).
     connected: Vec<bool>,
-    light_fixed: Vec<f64>,
+    light_fixed: Vec<Option<f64>>,
     light_delta: Vec<bool>,
     /// Per stored path with [`Nee::Every`]: `d²/cos` at the emitter point, which turns its
     /// area density into solid angle at the last vertex.
@@ -436,10 +436,8 @@ impl TestPaths {
         self.light_point.push(point);
         self.light_prim.push(prim);
         self.connected.push(end.is_some());
-        self.light_fixed.push(
-            end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi))
-                .unwrap_or(f64::NAN),
-        );
+        self.light_fixed
+            .push(end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi)));
         self.light_delta
             .push(matches!(end, Some((LightEnd::Delta, _))));
         self.area_to_solid_angle
@@ -592,8 +590,8 @@ impl TestPaths {
                 k += 1;
             }
             let light_pdf = |g: &PathGenerator| match self.light_fixed[i] {
-                fixed if !fixed.is_nan() => fixed,
-                _ => {
+                Some(fixed) => fixed,
+                None => {
                     let (point, prim) = (self.light_point[i], self.light_prim[i]);
                     scene.area_light_pmf()
                         * g.light.pdf_area(&scene.mesh, &scene.emitters, point, prim)
