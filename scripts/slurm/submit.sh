@@ -13,7 +13,8 @@
 # task has succeeded (--dependency=afterok) and writes OUTDIR/merged.exr from the N shard
 # files. Prints the job ids.
 #
-# Methods that learn (--method pg, ga or ga-pt among the flags) learn once: a learn job
+# Methods that learn (--method pg, ga or ga-pt among the flags, or no --method: render's
+# default is ga-pt) learn once: a learn job
 # (scripts/slurm/learn.sbatch) runs `genpath learn SCENE RENDER_FLAGS -o OUTDIR/plan.bin`
 # first, the array waits for it (--dependency=afterok) and every task renders with
 # `--plan OUTDIR/plan.bin`, and the merge adds the learn job's training shard
@@ -76,7 +77,8 @@ resubmit=${tasks:+yes}
 tasks=${tasks:-0-$((shards - 1))}
 
 # Whether the method learns: then learn once, and every task renders with the plan.
-method=pt
+# render's default --method (the GA's best method) where the flags name none.
+method=ga-pt
 for ((i = 1; i <= $#; i++)); do
     arg=${!i}
     case $arg in
