@@ -7,11 +7,10 @@
 #[path = "../src/sampling/chi2.rs"]
 mod chi2;
 
-use chi2::{
-    chi2, chi2_test, gauss_legendre, Binning, Chi2, Family, Histogram, SphereBins, TriangleBins,
-};
+use chi2::{chi2, chi2_test, Binning, Chi2, Family, Histogram, SphereBins, TriangleBins};
 use genpath::accel::TriangleMesh;
 use genpath::sampling::anchor::{cone_solid_angle, AnchorSampler};
+use genpath::sampling::gauss_legendre;
 use genpath::sampling::light_point::{solid_angle_pdf, LightPointSampler, LightRegion};
 use genpath::sampling::patch::PatchSampler;
 use genpath::scene::Emitters;

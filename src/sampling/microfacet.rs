@@ -439,7 +439,7 @@ enum Coating {
 /// relative index `eta` at `wo`: the Fresnel transmittance (reflectance) of visible normals
 /// times the masking of the refracted (reflected) direction, by Gauss–Legendre quadrature.
 fn coating_integral(distr: &Microfacet, wo: DVec3, eta: f64, what: Coating) -> f64 {
-    let nodes = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+    let nodes = super::gauss_legendre(if eta > 1.0 { 32 } else { 128 });
     let mut sum = 0.0;
     for &(x, wx) in &nodes {
         for &(y, wy) in &nodes {
@@ -468,30 +468,6 @@ fn coating_integral(distr: &Microfacet, wo: DVec3, eta: f64, what: Coating) -> f
         }
     }
     sum
-}
-
-/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence).
-fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let k = k as f64;
-                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ mod mixture;
 mod quadrature;
 mod vertex;
 
-use chi2::{chi2, chi2_test, gauss_legendre, Binning, Family, Histogram, SphereBins};
+use chi2::{chi2, chi2_test, Binning, Family, Histogram, SphereBins};
 use genpath::guiding::lattice::facing;
 use genpath::guiding::square::to_square;
 use genpath::guiding::{Guide, GuidedBsdf, Record, SpatialField};
@@ -36,6 +36,7 @@ use genpath::path::mixture::Mixture as GenMixture;
 use genpath::path::pt::{Bsdf, PathGuide, VertexBsdf};
 use genpath::sampling::anchor::AnchorSampler;
 use genpath::sampling::brdf::{self, Frame};
+use genpath::sampling::gauss_legendre;
 use genpath::sampling::light_point::LightPointSampler;
 use genpath::sampling::{sample_rng, uniform};
 use genpath::scene::{Glossy, Material};
