@@ -35,8 +35,9 @@ pub struct FieldStats {
 
 /// A training pass's trial of a GA plan's per-pixel guides against this guide alone: the
 /// mean relative variance of a sample (variance over `mean² + 0.01`, as relMSE weighs
-/// errors) over the pixels the plan guides, against that over the control arm, the one
-/// pixel in sixteen that the pass leaves to this guide alone.
+/// errors) times the mean cost of a sample in rays, over the pixels the plan guides,
+/// against that over the control arm, the one pixel in sixteen that the pass leaves to this
+/// guide alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GuidesTrial {
     /// The training pass that ran the trial.
@@ -44,7 +45,8 @@ pub struct GuidesTrial {
     /// Pixels in each arm.
     pub guided_pixels: usize,
     pub control_pixels: usize,
-    /// Mean relative variance of the guided arm over the control arm's.
+    /// Mean relative variance times mean cost per sample of the guided arm over the control
+    /// arm's.
     pub ratio: f64,
     /// Whether the plan's guides stayed (for the later passes and the render).
     pub kept: bool,

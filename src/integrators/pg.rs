@@ -184,11 +184,14 @@ impl PlanGuides {
 }
 
 /// A training pass's trial of the plan's per-pixel guides decides when the pixels they
-/// guide have more than this many times the mean relative variance of the control arm
-/// (then the guides go), or less than its inverse (then they stay and trials stop); in
-/// between, they stay for the next pass, which tries again. (2 s budgets, seeds 401–406:
-/// glossy's pilot passes on seeds 404 and 405 only, and the trial of pass 2 gives 2.11 and
-/// 1.91 there, where the guides doubled `ga-pt`'s error against `pg`; fig5 0.28–0.44.)
+/// guide have more than this many times the control arm's mean relative variance times mean
+/// cost per sample (then the guides go), or less than its inverse (then they stay and
+/// trials stop); in between, they stay for the next pass, which tries again. (2 s budgets,
+/// seeds 401–406: glossy's pilot passes on seeds 404 and 405 only, and the trial of pass 2
+/// gives 2.11 and 1.91 there by variance alone, where the guides doubled `ga-pt`'s error
+/// against `pg`; fig5 0.28–0.44. With the cost, which the guides' cones and patches raise
+/// by 1.6–1.65 × per sample on fig5 and 1.4 × on glossy, 48 spp, seeds 401, 404, 405: fig5
+/// 0.54–0.71, glossy 3.26 and 2.60, the same decisions.)
 pub const LEVELS_KEEP_RATIO: f64 = 1.15;
 
 /// The first training pass that tries the plan's guides: the guide that pass 1 samples with
@@ -261,7 +264,8 @@ fn training_pass(settings: &RenderSettings, pass: u32) -> RenderSettings {
 ///
 /// With a plan that guides, the passes from [`FIRST_TRIAL_PASS`] on also try its guides:
 /// each leaves one pixel in sixteen to the spatial guide alone ([`PlanGuides::OutsideControl`]) and
-/// compares the two arms' relative variance, until the ratio leaves
+/// compares the two arms' relative variance times cost per sample (the inverse of their
+/// efficiency, as the gate compares estimators), until the ratio leaves
 /// `[1 / LEVELS_KEEP_RATIO, LEVELS_KEEP_RATIO]`; above it, the plan's guides sample nowhere
 /// from then on ([`PlanGuides::Nowhere`]). The gate's pilot could only compare them with `pt`, since
 /// the spatial guide learns after the plan (with the plan's guides: fig5 needs that). Which
@@ -468,10 +472,10 @@ fn merge_pass<'a>(
                 let mean = before.0 / f64::from(training.samples.spp);
                 arms.add(
                     plan,
-                    i,
-                    width,
+                    (i, width),
                     (sum - before.0, sum_sq - before.1, spp),
                     mean,
+                    pixel.cost,
                 );
             }
             training.samples.sum[i] = sum;
@@ -480,36 +484,57 @@ fn merge_pass<'a>(
     }
 }
 
-/// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sum
-/// over its pixels of a sample's relative variance, and its pixels. `weights` and `parts`
-/// are [`Plan::neighbour_mixtures`]'s buffers, reused for every pixel.
+/// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sums
+/// over its pixels of a sample's relative variance and of a sample's cost in rays
+/// ([`RayCounts::cost`]: the guides' cones and patches cost densities at every vertex), and
+/// its pixels. `weights` and `parts` are [`Plan::neighbour_mixtures`]'s buffers, reused for
+/// every pixel.
 struct TrialArms<'a> {
-    guided: (f64, usize),
-    control: (f64, usize),
+    guided: Arm,
+    control: Arm,
     weights: Vec<(f64, usize)>,
     parts: Vec<(f64, &'a Mixture)>,
+}
+
+/// One arm of a trial: sums over its pixels of a sample's relative variance and cost, and
+/// its pixels.
+#[derive(Clone, Copy, Default)]
+struct Arm {
+    relative_variance: f64,
+    cost: f64,
+    pixels: usize,
+}
+
+impl Arm {
+    /// The mean relative variance of a sample times its mean cost: the inverse of the
+    /// arm's efficiency.
+    fn work_variance(&self) -> f64 {
+        let n = self.pixels.max(1) as f64;
+        (self.relative_variance / n) * (self.cost / n)
+    }
 }
 
 impl<'a> TrialArms<'a> {
     fn new() -> Self {
         Self {
-            guided: (0.0, 0),
-            control: (0.0, 0),
+            guided: Arm::default(),
+            control: Arm::default(),
             weights: Vec::new(),
             parts: Vec::new(),
         }
     }
 
     /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
-    /// sum of squares `pass`, and whose mean over the passes before is `mean`. Pixels the plan
-    /// does not guide (`pt`'s points, a closed plan) are in neither arm.
+    /// sum of squares `pass` at a cost of `cost` rays, and whose mean over the passes before
+    /// is `mean`. Pixels the plan does not guide (`pt`'s points, a closed plan) are in
+    /// neither arm.
     fn add(
         &mut self,
         plan: &'a Plan,
-        i: usize,
-        width: u32,
+        (i, width): (usize, u32),
         pass: (DVec3, DVec3, u32),
         mean: DVec3,
+        cost: f64,
     ) {
         let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
         if !plan.neighbour_mixtures(x, y, &mut self.weights, &mut self.parts) {
@@ -524,22 +549,22 @@ impl<'a> TrialArms<'a> {
         } else {
             &mut self.guided
         };
-        arm.0 += relative.max(DVec3::ZERO).element_sum() / 3.0;
-        arm.1 += 1;
+        arm.relative_variance += relative.max(DVec3::ZERO).element_sum() / 3.0;
+        arm.cost += cost / n;
+        arm.pixels += 1;
     }
 
     /// The trial's outcome in pass `pass`, and whether the next pass tries again: the
     /// guides stayed, but without a clear win (or with too few control pixels to tell).
     fn decide(&self, pass: u32) -> (GuidesTrial, bool) {
-        let mean = |arm: (f64, usize)| arm.0 / arm.1.max(1) as f64;
-        let ratio = mean(self.guided) / mean(self.control);
+        let ratio = self.guided.work_variance() / self.control.work_variance();
         // A ratio that is not a number (no variance in either arm) decides nothing.
-        let undecided = self.control.1 < MIN_TRIAL_PIXELS || ratio.is_nan();
+        let undecided = self.control.pixels < MIN_TRIAL_PIXELS || ratio.is_nan();
         let kept = undecided || ratio <= LEVELS_KEEP_RATIO;
         let trial = GuidesTrial {
             pass,
-            guided_pixels: self.guided.1,
-            control_pixels: self.control.1,
+            guided_pixels: self.guided.pixels,
+            control_pixels: self.control.pixels,
             ratio,
             kept,
         };

@@ -250,6 +250,8 @@ pub struct PixelResult {
     pub sum_sq: DVec3,
     /// Samples in the sums.
     pub count: u32,
+    /// The work of this call's samples of the pixel, in rays ([`RayCounts::cost`]).
+    pub cost: f64,
 }
 
 /// The tiles of a `width × height` image, row by row.
@@ -404,6 +406,7 @@ pub fn render_tile<E: PixelEstimator>(
                 None => (DVec3::ZERO, DVec3::ZERO),
             };
             let mut count = 0;
+            let cost_before = rays.cost();
             if let Some(r) = resume {
                 // The resumed sums hold the samples preparing took too.
                 let done = r.counts[index].saturating_sub(taken_spp);
@@ -425,6 +428,7 @@ pub fn render_tile<E: PixelEstimator>(
                 sum,
                 sum_sq,
                 count: taken_spp + count,
+                cost: rays.cost() - cost_before,
             });
         }
     }
