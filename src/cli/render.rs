@@ -5,7 +5,7 @@ use super::check_output;
 use super::learn::{read_plan, SavedPlan};
 use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::integrators::{
@@ -26,9 +26,10 @@ pub struct RenderArgs {
     /// Samples (paths) per pixel [default: a Mitsuba scene's `sample_count`, else 64].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
     pub spp: Option<u32>,
-    /// With `--method ga`: also write an image of the GA pixels with their evolved anchor
-    /// points and cones drawn over the render.
-    #[arg(long, value_name = "FILE")]
+    /// With `--method ga` or `ga-pt`: also write an SVG picture of what the GA learned over
+    /// the render: its GA pixels, a stroke from each towards where its heaviest evolved
+    /// generator sends paths, its anchor points and patches, with a legend.
+    #[arg(long, value_name = "FILE.svg")]
     pub explain: Option<PathBuf>,
     #[command(flatten)]
     pub shard: ShardArgs,
@@ -43,16 +44,28 @@ pub struct RenderArgs {
     pub method: MethodArgs,
 }
 
+/// Refuses `--explain FILE` for a method without a GA plan, or a FILE that is not an SVG
+/// in a directory that exists.
+fn check_explain(explain: &std::path::Path, method: Method) -> Result<()> {
+    if !matches!(method, Method::Ga | Method::GaPt) {
+        bail!("--explain is only used with --method ga or ga-pt");
+    }
+    if explain.extension().and_then(|e| e.to_str()) != Some("svg") {
+        bail!(
+            "--explain {}: the explanation is an SVG picture (FILE.svg)",
+            explain.display()
+        );
+    }
+    super::check_dir(explain)
+}
+
 pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     let method = args.method.method_or(Method::GaPt);
     for output in &args.outputs {
         check_output(output)?;
     }
     if let Some(explain) = &args.explain {
-        if !matches!(method, Method::Ga | Method::GaPt) {
-            bail!("--explain is only used with --method ga or ga-pt");
-        }
-        check_output(explain)?;
+        check_explain(explain, method)?;
     }
     if let (Some(plan), false) = (&args.plan, method.learns()) {
         bail!(
@@ -119,8 +132,10 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         genpath::image::write(output, &film.image)?;
     }
     if let (Some(file), Some(plan)) = (&args.explain, plan) {
-        let picture = genpath::genetic::explain::draw(&view, &film.image, plan);
-        genpath::image::write(file, &picture)?;
+        let camera = &view.scene.camera;
+        let svg = genpath::genetic::explain::svg(camera, &film.image, plan)
+            .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+        genpath::image::write_bytes_atomic(file, svg.as_bytes())?;
     }
     let resume = args.shard.resume.as_deref();
     let shard = continuation.finish(&session, layers, "samples_per_pixel", film.spp, resume)?;

@@ -1,112 +1,44 @@
-//! `--explain`: what the genetic algorithm learned, drawn over the rendered image.
+//! `--explain FILE.svg`: what the genetic algorithm learned, drawn over the rendered image.
 //!
-//! The render is tone-mapped (its 99th luminance percentile to 0.6) and enlarged to at least
-//! 768 pixels across so that the overlay stands out, then for every GA pixel:
-//! * a small cross: white where the GA improved on `srt`, grey where `srt` was kept;
-//! * for every evolved generator holding at least [`MIN_SHARE`] of the evolved weight, each
-//!   anchor sampler's anchor point as a dot, coloured by the step it belongs to (first step
-//!   yellow, then cyan, magenta, orange, …), and for the first step also a faint line from
-//!   the pixel to the anchor and the cone's footprint around the anchor as seen from the
-//!   pixel's first hit (radius `distance · tan θc`); each patch sampler's outline, in its
-//!   step's colour.
+//! One self-contained SVG: the render (tone-mapped, its 99th luminance percentile to 0.6)
+//! enlarged to at least 768 pixels across, and over it, for every GA pixel:
+//! * a cross: white where the GA improved on `srt`, grey where `srt` was kept;
+//! * a short stroke from the pixel towards where its heaviest evolved generator's first
+//!   sampler sends paths (its anchor point, or its patch's centre), as long as that
+//!   generator's share of the evolved weight allows: a field of strokes that shows at a
+//!   glance where light comes from, without lines across the image;
+//! * each anchor point of the generators holding at least [`MIN_SHARE`] of the evolved
+//!   weight, as a dot coloured by the path vertex its sampler steers (first, second, …),
+//!   its opacity the generator's weight.
 //!
-//! Opacity follows the generator's weight. The result is linear RGB like any other output.
+//! The patch samplers of the most evolved weight over all GA pixels (at most
+//! [`MAX_PATCHES`]) are outlined, each once however many pixels use it. A legend names
+//! every mark and counts the GA pixels.
 
-use super::plan::Plan;
-use crate::image::Image;
-use crate::path::generator::DirectionSampler;
-use crate::path::{RayCounts, SceneView};
+use super::plan::{GaPixel, Plan};
+use crate::image::svg::{escape, image_element, png_bytes};
+use crate::image::{srgb, Image};
+use crate::path::generator::{DirectionSampler, PathGenerator};
+use crate::sampling::patch::PatchSampler;
+use crate::scene::Camera;
+use std::fmt::Write;
 
 /// Generators lighter than this share of a pixel's evolved weight are not drawn.
 pub const MIN_SHARE: f64 = 0.2;
 /// The explanation is enlarged to at least this width.
 const MIN_WIDTH: u32 = 768;
+/// The stroke of a generator that holds all of the evolved weight, in picture pixels.
+const STROKE: f32 = 28.0;
+/// The patches outlined: those of the most evolved weight over all GA pixels.
+const MAX_PATCHES: usize = 8;
 
-/// Colours of the anchor steps, in order.
-const STEP_COLOURS: [[f32; 3]; 5] = [
-    [1.0, 0.85, 0.0],
-    [0.0, 0.9, 1.0],
-    [1.0, 0.2, 1.0],
-    [1.0, 0.5, 0.0],
-    [0.5, 1.0, 0.3],
-];
+/// Colours of the path vertices the samplers steer, in order.
+const STEP_COLOURS: [&str; 5] = ["#ffd900", "#00e5ff", "#ff33ff", "#ff8000", "#80ff4d"];
+const PATCH_COLOUR: &str = "#3dff7a";
+const ORDINALS: [&str; 5] = ["first", "second", "third", "fourth", "fifth"];
 
-struct Canvas {
-    image: Image,
-}
-
-impl Canvas {
-    fn blend(&mut self, x: i64, y: i64, colour: [f32; 3], alpha: f32) {
-        if x < 0 || y < 0 || x >= self.image.width as i64 || y >= self.image.height as i64 {
-            return;
-        }
-        let (x, y) = (x as u32, y as u32);
-        let old = self.image.get(x, y);
-        let new = std::array::from_fn(|c| old[c] * (1.0 - alpha) + colour[c] * alpha);
-        self.image.set(x, y, new);
-    }
-
-    /// A segment, clipped to the image (Liang–Barsky) so that far-away ends cost nothing.
-    fn line(&mut self, a: (f32, f32), b: (f32, f32), colour: [f32; 3], alpha: f32) {
-        let (w, h) = (self.image.width as f32, self.image.height as f32);
-        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-        let (mut t0, mut t1) = (0.0f32, 1.0f32);
-        for (p, q) in [(-dx, a.0), (dx, w - a.0), (-dy, a.1), (dy, h - a.1)] {
-            if p == 0.0 {
-                if q < 0.0 {
-                    return;
-                }
-            } else {
-                let r = q / p;
-                if p < 0.0 {
-                    t0 = t0.max(r);
-                } else {
-                    t1 = t1.min(r);
-                }
-            }
-        }
-        if t0.is_nan() || t1.is_nan() || t0 > t1 {
-            return;
-        }
-        let (x0, y0) = (a.0 + t0 * dx, a.1 + t0 * dy);
-        let steps = ((t1 - t0) * dx.abs().max(dy.abs())).ceil().max(1.0) as usize;
-        for i in 0..=steps {
-            let t = i as f32 / steps as f32 * (t1 - t0);
-            self.blend(
-                (x0 + t * dx).floor() as i64,
-                (y0 + t * dy).floor() as i64,
-                colour,
-                alpha,
-            );
-        }
-    }
-
-    fn dot(&mut self, c: (f32, f32), radius: i64, colour: [f32; 3], alpha: f32) {
-        let (cx, cy) = (c.0.floor() as i64, c.1.floor() as i64);
-        for y in -radius..=radius {
-            for x in -radius..=radius {
-                if x * x + y * y <= radius * radius {
-                    self.blend(cx + x, cy + y, colour, alpha);
-                }
-            }
-        }
-    }
-
-    fn circle(&mut self, c: (f32, f32), radius: f32, colour: [f32; 3], alpha: f32) {
-        let n = (radius.min(4096.0) * 0.8).clamp(16.0, 512.0) as usize;
-        let at = |i: usize| {
-            let phi = i as f32 / n as f32 * std::f32::consts::TAU;
-            (c.0 + radius * phi.cos(), c.1 + radius * phi.sin())
-        };
-        for i in 0..n {
-            self.line(at(i), at(i + 1), colour, alpha);
-        }
-    }
-}
-
-/// The render tone-mapped to `[0, 0.6]` by its 99th luminance percentile, enlarged `scale`
-/// times.
-fn backdrop(image: &Image, scale: u32) -> Image {
+/// The render tone-mapped to `[0, 0.6]` by its 99th luminance percentile.
+fn backdrop(image: &Image) -> Image {
     let lum = |p: [f32; 3]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
     let mut values: Vec<f32> = (0..image.height)
         .flat_map(|y| (0..image.width).map(move |x| (x, y)))
@@ -127,75 +59,268 @@ fn backdrop(image: &Image, scale: u32) -> Image {
             0.0
         }
     };
-    let mut out = Image::new(image.width * scale, image.height * scale);
-    for y in 0..out.height {
-        for x in 0..out.width {
-            out.set(x, y, image.get(x / scale, y / scale).map(tone));
+    let mut out = Image::new(image.width, image.height);
+    for y in 0..image.height {
+        for x in 0..image.width {
+            out.set(x, y, image.get(x, y).map(tone));
         }
     }
     out
 }
 
-/// The explanation image of `plan` over `render` (the size of the plan, enlarged).
-pub fn draw(view: &SceneView, render: &Image, plan: &Plan) -> Image {
-    let camera = &view.scene.camera;
-    let scale = MIN_WIDTH.div_ceil(render.width.max(1)).max(1);
-    let s = scale as f32;
-    let mut canvas = Canvas {
-        image: backdrop(render, scale),
-    };
-    for p in &plan.pixels {
-        let ray = camera.ray(p.x as f32 + 0.5, p.y as f32 + 0.5);
-        // The cones' apex: the pixel centre's first hit, traced once per GA pixel.
-        let from = view
-            .trace(&ray, &mut RayCounts::default())
-            .map_or(ray.origin, |x1| x1.p);
-        let centre = ((p.x as f32 + 0.5) * s, (p.y as f32 + 0.5) * s);
-        let evolved: f64 = p.mixture.weights[1..].iter().sum();
-        for (g, &w) in p.mixture.generators.iter().zip(&p.mixture.weights).skip(1) {
-            if w < MIN_SHARE * evolved {
-                continue;
-            }
-            let alpha = (0.3 + 0.7 * w / evolved) as f32;
-            for (k, step) in g.steps.iter().enumerate() {
-                let colour = STEP_COLOURS[k % STEP_COLOURS.len()];
-                let a = match &step.sampler {
-                    DirectionSampler::Anchor(a) => a,
-                    DirectionSampler::Patch(p) => {
-                        // The parallelogram's outline, where all four corners project.
-                        let corners =
-                            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(su, sv)| {
-                                camera.project((p.center + su * p.half_u + sv * p.half_v).as_vec3())
-                            });
-                        if let [Some(a), Some(b), Some(c), Some(d)] = corners {
-                            let corners = [a, b, c, d].map(|(x, y, _)| (x * s, y * s));
-                            for i in 0..4 {
-                                canvas.line(corners[i], corners[(i + 1) % 4], colour, 0.5 * alpha);
-                            }
-                        }
-                        continue;
-                    }
-                    DirectionSampler::Brdf => continue,
-                };
-                let anchor = a.anchor.as_vec3();
-                let Some((ax, ay, depth)) = camera.project(anchor) else {
-                    continue;
-                };
-                let (ax, ay) = (ax * s, ay * s);
-                canvas.dot((ax, ay), 2, colour, alpha);
-                if k == 0 {
-                    canvas.line(centre, (ax, ay), colour, 0.3 * alpha);
-                    let radius = (anchor - from).length() * (a.theta_c.min(1.5) as f32).tan();
-                    let radius = radius * camera.pixels_per_unit(depth) * s;
-                    canvas.circle((ax, ay), radius, colour, 0.5 * alpha);
-                }
-            }
+/// Where a direction sampler sends paths, as a point in space: an anchor, or a patch's
+/// centre.
+fn target(sampler: &DirectionSampler) -> Option<glam::Vec3> {
+    match sampler {
+        DirectionSampler::Anchor(a) => Some(a.anchor.as_vec3()),
+        DirectionSampler::Patch(p) => Some(p.center.as_vec3()),
+        DirectionSampler::Brdf => None,
+    }
+}
+
+/// The marks of a picture, scaled by `s` from image to picture pixels.
+struct Marks<'a> {
+    camera: &'a Camera,
+    s: f32,
+    strokes: String,
+    /// The strokes again, uncoloured: drawn first, wider and black, so that they stand out.
+    shadows: String,
+    dots: String,
+    /// Every patch sampler of the drawn generators, with its evolved weight summed over the
+    /// GA pixels.
+    patches: Vec<(PatchSampler, f64)>,
+    /// How many path vertices the drawn anchors steer.
+    steps: usize,
+}
+
+impl Marks<'_> {
+    fn project(&self, p: glam::Vec3) -> Option<(f32, f32)> {
+        let (x, y, _) = self.camera.project(p)?;
+        Some((x * self.s, y * self.s)).filter(|(x, y)| x.is_finite() && y.is_finite())
+    }
+
+    /// The stroke of pixel `centre` towards its heaviest generator's first target.
+    fn stroke(&mut self, centre: (f32, f32), g: &PathGenerator, share: f64) {
+        let Some(first) = g.steps.first() else {
+            return;
+        };
+        let Some(to) = target(&first.sampler) else {
+            return;
+        };
+        let colour = match first.sampler {
+            DirectionSampler::Patch(_) => PATCH_COLOUR,
+            _ => STEP_COLOURS[0],
+        };
+        let Some((tx, ty)) = self.project(to) else {
+            return;
+        };
+        let (dx, dy) = (tx - centre.0, ty - centre.1);
+        let length = (dx * dx + dy * dy).sqrt();
+        if length.is_nan() || length < 1e-3 {
+            return;
         }
-        let colour = if p.kept_srt { [0.5; 3] } else { [1.0; 3] };
-        for d in -4..=4i64 {
-            canvas.blend(centre.0 as i64 + d, centre.1 as i64, colour, 1.0);
-            canvas.blend(centre.0 as i64, centre.1 as i64 + d, colour, 1.0);
+        let l = (STROKE * share as f32).max(10.0).min(length);
+        let (ex, ey) = (centre.0 + dx / length * l, centre.1 + dy / length * l);
+        let _ = writeln!(
+            self.shadows,
+            r#"<line x1="{:.1}" y1="{:.1}" x2="{ex:.1}" y2="{ey:.1}"/>"#,
+            centre.0, centre.1
+        );
+        let _ = writeln!(
+            self.strokes,
+            r#"<line x1="{:.1}" y1="{:.1}" x2="{ex:.1}" y2="{ey:.1}" stroke="{colour}"/>"#,
+            centre.0, centre.1
+        );
+    }
+
+    /// The anchors (dots) of generator `g` at `alpha`, and its patches with their weight
+    /// `weight`.
+    fn samplers(&mut self, g: &PathGenerator, alpha: f64, weight: f64) {
+        for (k, step) in g.steps.iter().enumerate() {
+            match &step.sampler {
+                DirectionSampler::Anchor(a) => {
+                    let Some((x, y)) = self.project(a.anchor.as_vec3()) else {
+                        continue;
+                    };
+                    let colour = STEP_COLOURS[k % STEP_COLOURS.len()];
+                    let _ = writeln!(
+                        self.dots,
+                        r#"<circle cx="{x:.1}" cy="{y:.1}" r="3" fill="{colour}" fill-opacity="{alpha:.2}"/>"#
+                    );
+                    self.steps = self.steps.max(k + 1);
+                }
+                DirectionSampler::Patch(p) => match self.patches.iter_mut().find(|e| e.0 == *p) {
+                    Some(e) => e.1 += weight,
+                    None => self.patches.push((*p, weight)),
+                },
+                DirectionSampler::Brdf => {}
+            }
         }
     }
-    canvas.image
+
+    /// The outlines of the [`MAX_PATCHES`] patches of the most weight.
+    fn patch_outlines(&mut self) -> String {
+        self.patches.sort_by(|a, b| b.1.total_cmp(&a.1));
+        self.patches.truncate(MAX_PATCHES);
+        let mut out = String::new();
+        for (p, _) in &self.patches {
+            let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(su, sv)| self.project((p.center + su * p.half_u + sv * p.half_v).as_vec3()));
+            if let [Some(a), Some(b), Some(c), Some(d)] = corners {
+                let points: Vec<String> = [a, b, c, d]
+                    .iter()
+                    .map(|(x, y)| format!("{x:.1},{y:.1}"))
+                    .collect();
+                let _ = writeln!(out, r#"<polygon points="{}"/>"#, points.join(" "));
+            }
+        }
+        out
+    }
+
+    /// A GA pixel: its stroke, its generators' samplers and its cross.
+    fn pixel(&mut self, p: &GaPixel, crosses: &mut String) {
+        let centre = ((p.x as f32 + 0.5) * self.s, (p.y as f32 + 0.5) * self.s);
+        let evolved: f64 = p.mixture.weights[1..].iter().sum();
+        let generators = || p.mixture.generators.iter().zip(&p.mixture.weights).skip(1);
+        if let Some((g, &w)) = generators().max_by(|a, b| a.1.total_cmp(b.1)) {
+            if evolved > 0.0 {
+                self.stroke(centre, g, w / evolved);
+            }
+        }
+        for (g, &w) in generators() {
+            if evolved > 0.0 && w >= MIN_SHARE * evolved {
+                self.samplers(g, 0.3 + 0.7 * w / evolved, w);
+            }
+        }
+        let colour = if p.kept_srt { "#8c8c8c" } else { "#ffffff" };
+        let (x, y) = centre;
+        let _ = writeln!(
+            crosses,
+            r#"<path d="M{:.1} {y:.1}h7M{x:.1} {:.1}v7" stroke="{colour}"/>"#,
+            x - 3.5,
+            y - 3.5
+        );
+    }
+}
+
+/// The legend at the top left: one line per kind of mark, and the counts.
+fn legend(out: &mut String, marks: &Marks, plan: &Plan) {
+    let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
+    let mut lines: Vec<(String, String)> = vec![
+        (
+            r#"<path d="M-4 0h9M0 -4v9" stroke="white"/>"#.to_string(),
+            format!("GA pixel where the GA improved on srt ({improved})"),
+        ),
+        (
+            format!(r#"<path d="M-4 0h9M0 -4v9" stroke="{}"/>"#, "#8c8c8c"),
+            format!(
+                "GA pixel where srt was kept ({})",
+                plan.pixels.len() - improved
+            ),
+        ),
+        (
+            format!(
+                r#"<line x1="-6" y1="3" x2="6" y2="-3" stroke="{}" stroke-width="2"/>"#,
+                STEP_COLOURS[0]
+            ),
+            "towards the heaviest generator's first anchor (length: its weight)".into(),
+        ),
+        (
+            format!(
+                r#"<line x1="-6" y1="3" x2="6" y2="-3" stroke="{PATCH_COLOUR}" stroke-width="2"/>"#
+            ),
+            "towards the heaviest generator's first patch (length: its weight)".into(),
+        ),
+    ];
+    for (k, colour) in STEP_COLOURS.iter().enumerate().take(marks.steps) {
+        let ordinal = ORDINALS.get(k).copied().unwrap_or("later");
+        lines.push((
+            format!(r#"<circle r="3" fill="{colour}"/>"#),
+            format!("anchor point steering the {ordinal} vertex"),
+        ));
+    }
+    if !marks.patches.is_empty() {
+        lines.push((
+            format!(
+                r#"<rect x="-5" y="-4" width="10" height="8" fill="none" stroke="{PATCH_COLOUR}"/>"#
+            ),
+            format!(
+                "patch sampler, of the {} with the most evolved weight",
+                marks.patches.len()
+            ),
+        ));
+    }
+    let height = 14 + 16 * lines.len() + 14;
+    let _ = writeln!(
+        out,
+        r#"<g font-family="sans-serif" font-size="12" fill="white"><rect x="6" y="6" width="470" height="{height}" fill="black" fill-opacity="0.7"/>"#
+    );
+    let _ = writeln!(
+        out,
+        r#"<text x="14" y="22">{} GA pixels; generators with at least {:.0} % of a pixel's evolved weight</text>"#,
+        plan.pixels.len(),
+        MIN_SHARE * 100.0
+    );
+    for (i, (mark, label)) in lines.iter().enumerate() {
+        let y = 22 + 16 * (i + 1);
+        let _ = writeln!(
+            out,
+            r#"<g transform="translate(22 {})">{mark}</g><text x="36" y="{y}">{}</text>"#,
+            y - 4,
+            escape(label)
+        );
+    }
+    out.push_str("</g>\n");
+}
+
+/// The explanation of `plan` over `render` (the size of the plan), seen through `camera`:
+/// an SVG document.
+pub fn svg(camera: &Camera, render: &Image, plan: &Plan) -> Result<String, String> {
+    let scale = MIN_WIDTH.div_ceil(render.width.max(1)).max(1);
+    let (width, height) = (render.width * scale, render.height * scale);
+    let backdrop = backdrop(render);
+    let png = png_bytes(
+        render.width,
+        render.height,
+        &srgb::encode_image_u8(&backdrop),
+    )?;
+    let mut marks = Marks {
+        camera,
+        s: scale as f32,
+        strokes: String::new(),
+        shadows: String::new(),
+        dots: String::new(),
+        patches: Vec::new(),
+        steps: 0,
+    };
+    let mut crosses = String::new();
+    for p in &plan.pixels {
+        marks.pixel(p, &mut crosses);
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}">"#
+    );
+    image_element(&mut out, 0, 0, width, height, &png);
+    let _ = writeln!(
+        out,
+        r#"<g fill="none" stroke="{PATCH_COLOUR}" stroke-width="1.5">{}</g>"#,
+        marks.patch_outlines()
+    );
+    let _ = writeln!(out, "<g>{}</g>", marks.dots);
+    let _ = writeln!(
+        out,
+        r#"<g stroke="black" stroke-opacity="0.6" stroke-width="5" stroke-linecap="round">{}</g>"#,
+        marks.shadows
+    );
+    let _ = writeln!(
+        out,
+        r#"<g stroke-width="2.5" stroke-linecap="round">{}</g>"#,
+        marks.strokes
+    );
+    let _ = writeln!(out, r#"<g stroke-width="1.5">{crosses}</g>"#);
+    legend(&mut out, &marks, plan);
+    out.push_str("</svg>\n");
+    Ok(out)
 }

@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod oiio;
 pub mod rust_writers;
 pub mod srgb;
+pub mod svg;
 
 /// A linear-RGB float image, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]

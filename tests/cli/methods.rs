@@ -224,7 +224,7 @@ fn impossible_ga_flags() {
         &["defensive_weight"],
     );
     assert_fails(&scene, &ga(&["--ga-extra", "NaN"]), &out, &["extra"]);
-    let explain = dir.path().join("e.png");
+    let explain = dir.path().join("e.svg");
     let explain = explain.to_str().unwrap();
     assert_fails(
         &scene,
@@ -235,10 +235,18 @@ fn impossible_ga_flags() {
     assert!(!Path::new(explain).exists());
     assert_fails(
         &scene,
-        &ga(&["--explain", "/nonexistent-dir/e.png"]),
+        &ga(&["--explain", "/nonexistent-dir/e.svg"]),
         &out,
         &["nonexistent-dir"],
     );
+    let png = dir.path().join("e.png");
+    assert_fails(
+        &scene,
+        &["--method", "ga", "--explain", png.to_str().unwrap()],
+        &out,
+        &["the explanation is an SVG picture (FILE.svg)"],
+    );
+    assert!(!png.exists());
 }
 
 /// `--method ga` end to end on a small image: the image, the explanation and the JSON
@@ -250,7 +258,7 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
     let dir = tempfile::tempdir().unwrap();
     let render = |threads: &str, seed: &str, gate: bool| {
         let out = dir.path().join(format!("ga{threads}-{seed}-{gate}.exr"));
-        let explain = dir.path().join(format!("ga{threads}-{seed}-{gate}.png"));
+        let explain = dir.path().join(format!("ga{threads}-{seed}-{gate}.svg"));
         let mut args = vec![
             "--explain",
             explain.to_str().unwrap(),
@@ -266,7 +274,11 @@ fn ga_method_renders_deterministically_with_stats_and_explanation() {
             args.push("--no-gate");
         }
         render_small_fig5(&out, &args);
-        assert!(explain.exists(), "no explanation image");
+        let svg = std::fs::read_to_string(&explain).expect("no explanation picture");
+        assert!(
+            svg.starts_with("<svg") && svg.contains("GA pixels") && svg.contains("<image"),
+            "not an explanation picture"
+        );
         let mut json = out.clone().into_os_string();
         json.push(".json");
         let stats: serde_json::Value =
