@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""Ratios of relMSE at equal time, from the CSVs `genpath sweep --time` writes.
+
+    python3 scripts/ratios.py SCENE...            # reads reports/SCENE-2s-reps.csv and reports/SCENE.csv
+
+For each scene, each method's relMSE over `pg`'s (over `pt`'s for `pg` itself): at 2 s the
+geometric mean of the per-seed ratios over the paired seeds of SCENE-2s-reps.csv, with a
+bootstrap 95 % upper bound (10 000 resamples of the seeds, fixed random seed), and at 8 and
+30 s the single seed of SCENE.csv. Prints a Markdown table.
+"""
+import csv
+import math
+import random
+import sys
+from collections import defaultdict
+
+METHODS = ["ga-pt", "pt"]
+
+
+def rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def paired(path, method, base):
+    """log(relMSE_method / relMSE_base) per (seed, budget) where both rendered."""
+    by = defaultdict(dict)
+    for r in rows(path):
+        by[(r["seed"], r["budget"])][r["method"]] = float(r["relmse"])
+    return {k: math.log(v[method] / v[base]) for k, v in by.items() if method in v and base in v}
+
+
+def geo_and_bound(logs):
+    if not logs:
+        return None, None
+    mean = sum(logs) / len(logs)
+    rng = random.Random(1)
+    means = sorted(
+        sum(rng.choice(logs) for _ in logs) / len(logs) for _ in range(10000)
+    )
+    return math.exp(mean), math.exp(means[int(0.975 * len(means))])
+
+
+def main(scenes):
+    print("| scene | method | over | 2 s (six seeds) | 95 % bound | 8 s | 30 s |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for scene in scenes:
+        for method, base in [("ga-pt", "pg"), ("pt", "pg")]:
+            reps = paired(f"reports/{scene}-2s-reps.csv", method, base)
+            g, ub = geo_and_bound(list(reps.values()))
+            single = paired(f"reports/{scene}.csv", method, base)
+            at = {b: math.exp(v) for (_, b), v in single.items()}
+            fmt = lambda x: "–" if x is None else f"{x:.2f}"
+            print(
+                f"| {scene} | `{method}` | `{base}` | {fmt(g)} | {fmt(ub)} | "
+                f"{fmt(at.get('8'))} | {fmt(at.get('30'))} |"
+            )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:] or ["gap", "shelf", "window", "corridor"])
