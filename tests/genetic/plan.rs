@@ -49,8 +49,10 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
 /// cbox has nothing for a mixture to learn: its pilot fails. On one thread the pilot pixels
 /// run in order and stop once the pilot cannot pay (after `PILOT_PIXELS / 2 + 1` failures),
 /// no baseline runs (no cell is judged by its variance) and every pixel renders with `pt`,
-/// even next to the pilot pixels. The same pilot for a guide runs all its pixels, and without
-/// the gate every pixel gets a mixture: the stop and the closure come from the failed pilot.
+/// even next to the pilot pixels. The same pilot for a guide beside the spatial guide stops
+/// early and closes the plan too, without the spatial guide it runs all its pixels, and
+/// without the gate every pixel gets a mixture: the stop and the closure come from the
+/// failed pilot.
 #[test]
 fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     let mut scene =
@@ -105,10 +107,23 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     }
     assert!((0..48).all(|y| (0..48).all(|x| mixture.local(x, y).is_none())));
 
+    // A guide's pilot beside the spatial guide (`ga-pt`'s default) closes the plan when it
+    // fails, so it stops early too; without the spatial guide the pilot pixels that do not
+    // lose still guide around them, so every one runs.
     let guide = build(PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES));
     assert!(
-        guide.pixels.len() >= PILOT_PIXELS,
-        "a guide's pilot does not stop early"
+        (PILOT_PIXELS / 2 + 1..PILOT_PIXELS).contains(&guide.pixels.len()),
+        "a guide's pilot beside the spatial guide ran {} pixels",
+        guide.pixels.len()
+    );
+    assert!((0..48).all(|y| (0..48).all(|x| guide.local(x, y).is_none())));
+    let alone = build(PlanInputs {
+        spatial_guide: false,
+        ..PlanInputs::new(&ga, &config, PlanFor::Guide, MAX_BOUNCES)
+    });
+    assert!(
+        alone.pixels.len() >= PILOT_PIXELS,
+        "a guide's pilot without the spatial guide does not stop early"
     );
 
     let ungated = build(PlanInputs {

@@ -81,13 +81,17 @@ pub(super) fn pilot_pixels(grid: &[(u32, u32)], gate: bool) -> Vec<(u32, u32, Or
 
 /// Evolves the pilot's pixels for `scout` generations, in parallel, each with its trial.
 ///
-/// For a mixture, a pilot pixel is not started once so many others failed to pay that the
-/// pilot cannot (cbox: the GA phase 0.16 -> 0.12 s). Which pixels that skips depends on the
-/// threads' timing, so a mixture's pilot that fails leaves the whole image to `pt` (see
+/// Where a failed pilot `closes` the plan (a mixture's, or a guide's beside the spatial
+/// guide), a pilot pixel is not started once so many others failed to pay that the pilot
+/// cannot (cbox, `ga`: the GA phase 0.16 -> 0.12 s; `ga-pt`, 8 spp, three runs each: fig1
+/// 0.092 -> 0.070–0.073 s, 6 of 8 pilot pixels evolved, cbox 0.066 -> 0.050–0.064 s). The
+/// image is the same bit for bit. Which pixels that skips depends on the
+/// threads' timing, so such a pilot that fails leaves the whole image to `pt` or the spatial
+/// guide (see
 /// `Plan::closed`), whichever of its pixels ran. With a store (learning kept between
 /// processes, or split over jobs) every pilot pixel runs, as one wave: the store's
 /// results must not depend on timing.
-pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) -> Result<(), PlanError> {
+pub(super) fn scout_pilot(waves: &mut Waves, scout: usize, closes: bool) -> Result<(), PlanError> {
     let plan_for = waves.context.plan_for;
     let pilot = waves.pilot;
     let run = || GaRun {
@@ -101,8 +105,7 @@ pub(super) fn scout_pilot(waves: &mut Waves, scout: usize) -> Result<(), PlanErr
         return waves.evolve(&jobs);
     }
     let losing = AtomicUsize::new(0);
-    let settled =
-        || plan_for == PlanFor::Mixture && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
+    let settled = || closes && 2 * (pilot - losing.load(Ordering::Relaxed)) < pilot;
     let this = &*waves;
     let scouted_pilot: Vec<(usize, Evolved)> = (0..pilot)
         .into_par_iter()

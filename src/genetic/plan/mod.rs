@@ -32,8 +32,10 @@
 //!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
 //!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`); where it passes, the
 //!    spatial guide's training passes try the guides against that guide alone
-//!    ([`crate::integrators::pg::train_spatial`]). (A mixture's pilot stops
-//!    starting pixels once it cannot pay, so there it is `pt` everywhere. cbox, `ga`, 64
+//!    ([`crate::integrators::pg::train_spatial`]). (A pilot that closes the
+//!    plan when it fails — a mixture's, or a guide's beside the spatial guide — stops
+//!    starting pixels once it cannot pay, so there it is `pt` or the spatial guide
+//!    everywhere. cbox, `ga`, 64
 //!    spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the baseline
 //!    first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they do, the pilot pixels go on from their best individuals
 //!    (with a fresh random stream). For a guide the other GA pixels then run no trial and
@@ -291,9 +293,11 @@ impl Plan {
         };
         let mut waves = Waves::new(&context, pilot_pixels(&grid, gate), progress, t0);
         let scout = ga.generations.div_ceil(PILOT_SHARE);
-        scout_pilot(&mut waves, scout)?;
+        // Whether a pilot that fails leaves every pixel to `pt` or the spatial guide.
+        let closes = plan_for == PlanFor::Mixture || inputs.spatial_guide;
+        scout_pilot(&mut waves, scout, closes)?;
         let pilot_pays = pilot_pays(&waves);
-        let closed = gate && !pilot_pays && (plan_for == PlanFor::Mixture || inputs.spatial_guide);
+        let closed = gate && !pilot_pays && closes;
         let mut pt_points = Vec::new();
         // Seconds of the baseline, which runs between GA waves.
         let baseline_part = if !gate || pilot_pays {
