@@ -3,7 +3,7 @@
 
     python3 scripts/ratios.py SCENE...            # reads reports/SCENE-2s-reps.csv and reports/SCENE.csv
 
-For each scene, each method's relMSE over `pg`'s (over `pt`'s for `pg` itself): at 2 s the
+For each scene, `ga-pt`'s and `pt`'s relMSE over `pg`'s: at 2 s the
 geometric mean of the per-seed ratios over the paired seeds of SCENE-2s-reps.csv, with a
 bootstrap 95 % upper bound (10 000 resamples of the seeds, fixed random seed), and at 8 and
 30 s the single seed of SCENE.csv. Prints a Markdown table.
@@ -13,9 +13,6 @@ import math
 import random
 import sys
 from collections import defaultdict
-
-METHODS = ["ga-pt", "pt"]
-
 
 def rows(path):
     with open(path) as f:

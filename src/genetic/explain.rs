@@ -35,6 +35,9 @@ const MAX_PATCHES: usize = 8;
 /// Colours of the path vertices the samplers steer, in order.
 const STEP_COLOURS: [&str; 5] = ["#ffd900", "#00e5ff", "#ff33ff", "#ff8000", "#80ff4d"];
 const PATCH_COLOUR: &str = "#3dff7a";
+/// The crosses of GA pixels where the GA improved on `srt`, and where `srt` was kept.
+const IMPROVED_COLOUR: &str = "#ffffff";
+const KEPT_COLOUR: &str = "#8c8c8c";
 const ORDINALS: [&str; 5] = ["first", "second", "third", "fourth", "fifth"];
 
 /// The render tone-mapped to `[0, 0.6]` by its 99th luminance percentile.
@@ -192,7 +195,11 @@ impl Marks<'_> {
                 self.samplers(g, 0.3 + 0.7 * w / evolved, w);
             }
         }
-        let colour = if p.kept_srt { "#8c8c8c" } else { "#ffffff" };
+        let colour = if p.kept_srt {
+            KEPT_COLOUR
+        } else {
+            IMPROVED_COLOUR
+        };
         let (x, y) = centre;
         let _ = writeln!(
             crosses,
@@ -208,11 +215,11 @@ fn legend(out: &mut String, marks: &Marks, plan: &Plan) {
     let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
     let mut lines: Vec<(String, String)> = vec![
         (
-            r#"<path d="M-4 0h9M0 -4v9" stroke="white"/>"#.to_string(),
+            format!(r#"<path d="M-4 0h9M0 -4v9" stroke="{IMPROVED_COLOUR}"/>"#),
             format!("GA pixel where the GA improved on srt ({improved})"),
         ),
         (
-            format!(r#"<path d="M-4 0h9M0 -4v9" stroke="{}"/>"#, "#8c8c8c"),
+            format!(r#"<path d="M-4 0h9M0 -4v9" stroke="{KEPT_COLOUR}"/>"#),
             format!(
                 "GA pixel where srt was kept ({})",
                 plan.pixels.len() - improved
