@@ -3,6 +3,7 @@
 //! the path tracer's loop evaluates, weighs and samples at every vertex of a guided path
 //! ([`crate::path::pt`]); and [`Guide`] as a [`PathGuide`], which makes it.
 
+use super::field::guide_share;
 use super::guide::Guide;
 use super::vertex::Vertex;
 use crate::path::pt::{Bsdf, GuidedVertex, PathGuide, VertexBsdf};
@@ -16,17 +17,15 @@ use glam::Vec3;
 ///   directions are drawn, never what they carry;
 /// * [`pdf`](VertexBsdf::pdf) is the density of the mixture that `sample` draws from, the
 ///   guide's samplers and the BSDF each with its selection probability (`p_k` of
-///   [`super::guide`]: the level's weights, and [`GUIDE_SHARE`] of the spatial field's
-///   region against the BSDF), the density multiple importance sampling weighs next-event
-///   estimation against;
+///   [`super::guide`]: the level's weights, and the material's [`guide_share`] of the
+///   spatial field's region against the BSDF), the density multiple importance sampling
+///   weighs next-event estimation against;
 /// * [`sample`](VertexBsdf::sample) draws from that mixture with four uniform numbers,
 ///   `u[0]` picking the sampler and the other three driving it, and weighs the direction
-///   by `f · cos / pdf`; `None` where the direction carries nothing;
+///   by `f · |cos| / pdf`; `None` where the direction carries nothing;
 /// * delta lobes (mirrors) are never guided, nor is a vertex where the guide samples only
 ///   the BSDF: there, and with no guide, it is exactly BSDF sampling — the BSDF's own value,
 ///   density and sample, from three uniform numbers, as [`Bsdf`] draws them.
-///
-/// [`GUIDE_SHARE`]: super::field::GUIDE_SHARE
 #[derive(Clone, Copy)]
 pub struct GuidedBsdf<'a> {
     bsdf: Bsdf<'a>,
@@ -34,9 +33,14 @@ pub struct GuidedBsdf<'a> {
 }
 
 impl<'a> GuidedBsdf<'a> {
-    /// `bsdf` guided by `guide`, where it guides (see the type's documentation).
+    /// `bsdf` guided by `guide`, where it guides (see the type's documentation): not at
+    /// all at a delta vertex, and without the spatial field where the material's
+    /// [`guide_share`] is 0 (a rough dielectric, which the BSDF alone samples).
     pub fn new(bsdf: Bsdf<'a>, guide: Option<Vertex<'a>>) -> Self {
-        let guide = guide.filter(|v| !bsdf.material.mirror && v.guides());
+        let unshared = guide_share(bsdf.material) <= 0.0;
+        let guide = guide
+            .map(|v| if unshared { v.without_spatial() } else { v })
+            .filter(|v| !bsdf.material.mirror && v.guides());
         Self { bsdf, guide }
     }
 
@@ -58,7 +62,11 @@ impl VertexBsdf for GuidedBsdf<'_> {
 
     fn pdf(&self, wi: Vec3) -> f64 {
         match &self.guide {
-            Some(v) => v.pdf_with(wi.as_dvec3(), self.bsdf.pdf(wi)),
+            Some(v) => v.pdf_with(
+                wi.as_dvec3(),
+                self.bsdf.pdf(wi),
+                guide_share(self.bsdf.material),
+            ),
             None => self.bsdf.pdf(wi),
         }
     }

@@ -312,6 +312,7 @@ impl Guide {
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
+    use crate::guiding::field::GUIDE_SHARE;
     use crate::path::generator::{PathGenerator, Step};
     use crate::sampling::light_point::LightPointSampler;
     use crate::sampling::{sample_rng, uniform};
@@ -393,9 +394,9 @@ pub(super) mod tests {
             let wi = DVec3::new(r * phi.cos(), z, r * phi.sin());
             let (pa, pb) = (
                 a.at(0, x.as_vec3(), Frame::new(Vec3::Y, Vec3::ZERO), false)
-                    .pdf_with(wi, 0.3),
+                    .pdf_with(wi, 0.3, GUIDE_SHARE),
                 b.at(0, x.as_vec3(), Frame::new(Vec3::Y, Vec3::ZERO), false)
-                    .pdf_with(wi, 0.3),
+                    .pdf_with(wi, 0.3, GUIDE_SHARE),
             );
             worst = worst.max((pa - pb).abs() / pa.max(pb));
         }

@@ -3,7 +3,7 @@
 //! region, or the BRDF alone — and the density and the sampling of the mixture they make
 //! with the BRDF (see [`super::guide`]).
 
-use super::field::{SpatialField, GUIDE_SHARE};
+use super::field::{guide_share, SpatialField};
 use super::guide::Level;
 #[cfg(doc)]
 use super::Guide;
@@ -59,6 +59,18 @@ impl Vertex<'_> {
         !matches!(self.sampler, VertexSampler::Brdf)
     }
 
+    /// This vertex without the spatial field's region, for a material whose
+    /// [`guide_share`] is 0: the same density, without the region's descents (a level's
+    /// cones and patches stay).
+    pub(super) fn without_spatial(self) -> Self {
+        let sampler = match self.sampler {
+            VertexSampler::Spatial(..) => VertexSampler::Brdf,
+            VertexSampler::Level(level, _) => VertexSampler::Level(level, None),
+            VertexSampler::Brdf => VertexSampler::Brdf,
+        };
+        Self { sampler, ..self }
+    }
+
     /// Cones, patches or spatial regions: the densities one evaluation of `pdf` costs.
     pub fn samplers(&self) -> usize {
         match self.sampler {
@@ -68,21 +80,23 @@ impl Vertex<'_> {
         }
     }
 
-    /// The density of a spatially guided vertex from the guide's and the BRDF's.
-    fn spatial_mix(&self, guide_pdf: f64, brdf_pdf: f64) -> f64 {
-        GUIDE_SHARE * self.scale * guide_pdf + (1.0 - GUIDE_SHARE) * brdf_pdf
+    /// The density of a spatially guided vertex from the guide's and the BRDF's, the guide
+    /// sampled with probability `share` ([`guide_share`]).
+    fn spatial_mix(&self, share: f64, guide_pdf: f64, brdf_pdf: f64) -> f64 {
+        share * self.scale * guide_pdf + (1.0 - share) * brdf_pdf
     }
 
-    /// `p(wi)` for the material's BRDF pdf `brdf_pdf` here.
-    pub(super) fn pdf_with(&self, wi: DVec3, brdf_pdf: f64) -> f64 {
+    /// `p(wi)` for the material's BRDF pdf `brdf_pdf` here, the spatial guide's share of
+    /// the BRDF's part being `share` (the material's [`guide_share`]).
+    pub(super) fn pdf_with(&self, wi: DVec3, brdf_pdf: f64, share: f64) -> f64 {
         match self.sampler {
             VertexSampler::Brdf => brdf_pdf,
             VertexSampler::Spatial(s, cell) => {
-                self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf)
+                self.spatial_mix(share, s.pdf(cell, wi.as_vec3()), brdf_pdf)
             }
             VertexSampler::Level(level, spatial) => {
                 let brdf_pdf = match spatial {
-                    Some((s, cell)) => self.spatial_mix(s.pdf(cell, wi.as_vec3()), brdf_pdf),
+                    Some((s, cell)) => self.spatial_mix(share, s.pdf(cell, wi.as_vec3()), brdf_pdf),
                     None => brdf_pdf,
                 };
                 level.brdf * brdf_pdf + self.scale * level.density(self.x, wi)
@@ -93,7 +107,7 @@ impl Vertex<'_> {
     /// `p(wi)` for `material` seen from `wo`.
     pub fn pdf(&self, material: &Material, wo: Vec3, wi: Vec3) -> f64 {
         let brdf_pdf = brdf::pdf(material, self.frame, wo, wi);
-        self.pdf_with(wi.as_dvec3(), brdf_pdf)
+        self.pdf_with(wi.as_dvec3(), brdf_pdf, guide_share(material))
     }
 
     /// A direction out of this vertex of `material` seen from `wo`, from four uniform
@@ -102,6 +116,7 @@ impl Vertex<'_> {
     pub fn sample(&self, material: &Material, wo: Vec3, u: [f64; 4]) -> Option<GuideSample> {
         let rest = [u[1], u[2], u[3]];
         let n = self.frame;
+        let share = guide_share(material);
         let wi = match self.sampler {
             VertexSampler::Brdf => {
                 let s = brdf::sample(material, n, wo, rest)?;
@@ -113,14 +128,14 @@ impl Vertex<'_> {
             }
             VertexSampler::Spatial(s, cell) => {
                 // The guide's own sample brings its density from the descent that drew it.
-                let (wi, guided) = if u[0] < GUIDE_SHARE {
+                let (wi, guided) = if u[0] < share {
                     let (wi, pdf) = s.sample(cell, rest);
                     (wi, Some(pdf))
                 } else {
                     (brdf::sample_direction(material, n, wo, rest)?, None)
                 };
                 return self.finish_sample(material, wo, wi, |brdf_pdf| {
-                    self.spatial_mix(guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
+                    self.spatial_mix(share, guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
                 });
             }
             VertexSampler::Level(level, spatial) => {
@@ -128,13 +143,13 @@ impl Vertex<'_> {
                 match spatial {
                     _ if target >= 0.0 => level.sample(self.x, target, rest),
                     // The BRDF share as the spatial guide samples: `u[0] / brdf` picks.
-                    Some((s, cell)) if u[0] < GUIDE_SHARE * level.brdf => s.sample(cell, rest).0,
+                    Some((s, cell)) if u[0] < share * level.brdf => s.sample(cell, rest).0,
                     _ => brdf::sample_direction(material, n, wo, rest)?,
                 }
             }
         };
         self.finish_sample(material, wo, wi, |brdf_pdf| {
-            self.pdf_with(wi.as_dvec3(), brdf_pdf)
+            self.pdf_with(wi.as_dvec3(), brdf_pdf, share)
         })
     }
 
@@ -148,9 +163,11 @@ impl Vertex<'_> {
         pdf: impl FnOnce(f64) -> f64,
     ) -> Option<GuideSample> {
         let n = self.frame;
-        let cos = n.n.dot(wi);
+        // The guide covers the sphere; the material says where light goes (above the
+        // surface, or through it for a rough dielectric) and with which cosine.
+        let cos = brdf::cosine(material, n, wi)?;
         let f = brdf::eval(material, n, wo, wi);
-        if cos <= 0.0 || f.max_element() <= 0.0 {
+        if f.max_element() <= 0.0 {
             return None;
         }
         let pdf = pdf(brdf::pdf(material, n, wo, wi));

@@ -45,7 +45,7 @@ fn light_sample(
     counts: &mut RayCounts,
 ) -> Vec3 {
     let u = [uniform(rng), uniform(rng), uniform(rng)];
-    match LightCandidate::sample(view, (x, frame.n), u) {
+    match LightCandidate::sample(view, (x, material, frame), u) {
         Some(l) if l.visible(view, x, counts) => {
             brdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
         }

@@ -33,6 +33,11 @@ pub struct Mixture {
     /// of a delta light's pick out of the density of the paths that end at one.
     #[serde(skip)]
     delta_pick_dropped: bool,
+    /// Fault injection for statistical tests: [`Mixture::pdf_path`] evaluates the density
+    /// of every direction that crossed its surface (through a rough dielectric) at its
+    /// mirror image in the surface, as a density that forgot transmission would.
+    #[serde(skip)]
+    transmission_folded: bool,
 }
 
 /// `path` with each vertex's shading normal replaced by its geometric one (the fault of
@@ -43,6 +48,20 @@ fn in_geometric_frame(path: &PathVertices) -> PathVertices {
         v.point.ns = v.point.ng;
     }
     flat
+}
+
+/// `path` with every sampled direction that crossed its vertex's surface (`wo` and `wi` on
+/// either side of the shading normal) mirrored in the surface (the fault of
+/// [`Mixture::with_transmission_folded_density`]).
+fn transmission_folded(path: &PathVertices) -> PathVertices {
+    let mut folded = path.clone();
+    for v in &mut folded.vertices {
+        let n = v.point.ns;
+        if !v.delta && n.dot(v.wo) * n.dot(v.wi) < 0.0 {
+            v.wi = (v.wi - 2.0 * n.dot(v.wi) * n).normalize();
+        }
+    }
+    folded
 }
 
 /// Reusable buffers of one worker, so that sampling allocates nothing per path.
@@ -65,6 +84,7 @@ impl Mixture {
             light_density_dropped: false,
             geometric_frame: false,
             delta_pick_dropped: false,
+            transmission_folded: false,
         }
     }
 
@@ -109,6 +129,15 @@ impl Mixture {
         self
     }
 
+    /// This mixture with the density of every direction that went through a rough
+    /// dielectric evaluated at its mirror image above the surface (a reflection's): a wrong
+    /// input that unbiasedness tests on scenes with rough glass must reject.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn with_transmission_folded_density(mut self) -> Self {
+        self.transmission_folded = true;
+        self
+    }
+
     /// One normalised mixture from several, each scaled by its weight (for pixels between
     /// GA pixels): the union of their components. Still one mixture, so still unbiased.
     pub fn combine(parts: &[(f64, &Mixture)]) -> Self {
@@ -143,6 +172,7 @@ impl Mixture {
             light_density_dropped: parts.iter().any(|(_, m)| m.light_density_dropped),
             geometric_frame: parts.iter().any(|(_, m)| m.geometric_frame),
             delta_pick_dropped: parts.iter().any(|(_, m)| m.delta_pick_dropped),
+            transmission_folded: parts.iter().any(|(_, m)| m.transmission_folded),
         }
     }
 
@@ -156,10 +186,18 @@ impl Mixture {
         max_bounces: u32,
     ) -> f64 {
         let flat;
+        let folded;
         let path = match self.geometric_frame {
             true => {
                 flat = in_geometric_frame(path);
                 &flat
+            }
+            false => path,
+        };
+        let path = match self.transmission_folded {
+            true => {
+                folded = transmission_folded(path);
+                &folded
             }
             false => path,
         };

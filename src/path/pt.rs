@@ -195,27 +195,34 @@ pub struct LightPoint {
     /// The unit direction from `x` to `y`, and their squared distance.
     pub wi: Vec3,
     pub dist2: f32,
-    /// `cos` at `x` (against its facing normal) and at `y` (against `y`'s, towards `x`).
+    /// `|cos|` at `x` (against its facing normal, [`brdf::cosine`]) and `cos` at `y`
+    /// (against `y`'s normal, towards `x`).
     pub cos_x: f32,
     pub cos_light: f32,
     /// The emitters' density of `y` per unit area.
     pub pdf_area: f64,
 }
 
+/// Where a light sample is taken: the surface point, the material that scatters there
+/// towards the path's `wo`, and its shading frame facing `wo`. Which lights can reach it is
+/// the material's to say ([`brdf::cosine`]): those above the surface, or on either side for
+/// a material that transmits.
+pub type Receiver<'a> = (&'a SurfacePoint, &'a Material, Frame);
+
 impl LightPoint {
-    /// A point on the emitters from the next three uniform numbers of `rng`, seen from `x`
-    /// (facing normal `n`); `None` where it lies behind `x` or faces away from it (either
-    /// way it sends `x` nothing), or where the scene has no area emitter. Visibility is not
-    /// tested.
-    pub fn sample(view: &SceneView, (x, n): (&SurfacePoint, Vec3), rng: &mut Rng) -> Option<Self> {
+    /// A point on the emitters from the next three uniform numbers of `rng`, seen from `x`;
+    /// `None` where the material at `x` cannot scatter light from it (behind a surface that
+    /// only reflects), where it faces away from `x` (either way it sends `x` nothing), or
+    /// where the scene has no area emitter. Visibility is not tested.
+    pub fn sample(view: &SceneView, at: Receiver, rng: &mut Rng) -> Option<Self> {
         let u = [uniform(rng), uniform(rng), uniform(rng)];
-        Self::from_uniforms(view, (x, n), u)
+        Self::from_uniforms(view, at, u)
     }
 
     /// [`Self::sample`] from the three uniform numbers `u`.
     pub fn from_uniforms(
         view: &SceneView,
-        (x, n): (&SurfacePoint, Vec3),
+        (x, material, frame): Receiver,
         u: [f32; 3],
     ) -> Option<Self> {
         let scene = view.scene;
@@ -227,8 +234,9 @@ impl LightPoint {
         let d = y.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
-        let (cos_x, cos_light) = (n.dot(wi), -y.ng.dot(wi));
-        (cos_x > 0.0 && cos_light > 0.0 && dist2 > 0.0).then_some(Self {
+        let cos_x = brdf::cosine(material, frame, wi)?;
+        let cos_light = -y.ng.dot(wi);
+        (cos_light > 0.0 && dist2 > 0.0).then_some(Self {
             y,
             wi,
             dist2,
@@ -292,8 +300,8 @@ enum Density {
 /// direction towards the environment, or a delta light's own point or direction.
 #[derive(Clone, Copy, Debug)]
 pub struct LightCandidate {
-    /// Unit direction from `x` towards the light, with `cos` against `x`'s facing normal
-    /// (positive).
+    /// Unit direction from `x` towards the light, with `|cos|` against `x`'s facing normal
+    /// (positive: [`brdf::cosine`]).
     pub wi: Vec3,
     pub cos_x: f32,
     /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
@@ -306,10 +314,12 @@ pub struct LightCandidate {
 }
 
 impl LightCandidate {
-    /// A light sample at `x` (facing normal `n`) from three uniform numbers: `u[0]` picks
+    /// A light sample at `x` (see [`Receiver`]) from three uniform numbers: `u[0]` picks
     /// the emitter (rescaled, it then picks the area emitter), the others place the point or
-    /// direction. `None` where it cannot reach `x` (behind it, facing away, or no emitter).
-    pub fn sample(view: &SceneView, (x, n): (&SurfacePoint, Vec3), u: [f32; 3]) -> Option<Self> {
+    /// direction. `None` where it cannot reach `x` (behind a surface that only reflects,
+    /// facing away, or no emitter).
+    pub fn sample(view: &SceneView, at: Receiver, u: [f32; 3]) -> Option<Self> {
+        let (x, material, frame) = at;
         let scene = view.scene;
         let (pick, u0) = scene.pick_light(f64::from(u[0]))?;
         let pmf = scene.light_pmf();
@@ -333,18 +343,18 @@ impl LightCandidate {
                 (a.wi, a.value, Density::Delta, target)
             }
             LightPick::Area => {
-                let l = LightPoint::from_uniforms(view, (x, n), [u0 as f32, u[1], u[2]])?;
+                let l = LightPoint::from_uniforms(view, at, [u0 as f32, u[1], u[2]])?;
                 let le = view.material(l.y.prim).ke;
                 let density = Density::Area(l.pdf_solid_angle());
                 (l.wi, le, density, Target::Point(l.y))
             }
         };
-        let cos_x = n.dot(wi);
+        let cos_x = brdf::cosine(material, frame, wi)?;
         let density_positive = match density {
             Density::Environment(pdf) => pdf > 0.0,
             _ => true,
         };
-        (cos_x > 0.0 && le.max_element() > 0.0 && density_positive).then_some(Self {
+        (le.max_element() > 0.0 && density_positive).then_some(Self {
             wi,
             cos_x,
             le,
@@ -376,20 +386,22 @@ impl LightCandidate {
     }
 }
 
-/// Next-event estimation at `x` (normal `n`), where it runs with probability `light_share`:
-/// a [`LightCandidate`] from three uniform numbers, and what it brings if it reaches `x`,
-/// weighed against `bsdf`'s density by the power heuristic (a delta light's weight is 1).
-/// With area emitters alone the numbers and the arithmetic are those they always were.
+/// Next-event estimation at `x` (see [`Receiver`]), where it runs with probability
+/// `light_share`: a [`LightCandidate`] from three uniform numbers, and what it brings if it
+/// reaches `x`, weighed against `bsdf`'s density by the power heuristic (a delta light's
+/// weight is 1). With area emitters alone the numbers and the arithmetic are those they
+/// always were.
 fn next_event<B: VertexBsdf>(
     view: &SceneView,
-    (x, n): (&SurfacePoint, Vec3),
+    at: Receiver,
     bsdf: &B,
     light_share: f64,
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Option<LightHit> {
+    let x = at.0;
     let u = [uniform(rng), uniform(rng), uniform(rng)];
-    let light = LightCandidate::sample(view, (x, n), u)?;
+    let light = LightCandidate::sample(view, at, u)?;
     let f = bsdf.eval(light.wi);
     if !(f.max_element() > 0.0 && light.visible(view, x, counts)) {
         return None;
@@ -484,9 +496,9 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         let frame = Frame::facing(&x, wo);
         let n = frame.n;
         let last = bounce == max_bounces;
-        // At a diffuse vertex (no glossy lobe: Phong, rough conductor or rough plastic) the
-        // spatial guide's records leave out the direct light, which next-event estimation
-        // samples well there (see `guiding::field`).
+        // At a diffuse vertex (no glossy lobe: Phong, or a rough conductor, plastic or
+        // dielectric) the spatial guide's records leave out the direct light, which
+        // next-event estimation samples well there (see `guiding::field`).
         let diffuse = !material.mirror && !material.is_glossy();
         let GuidedVertex { light_share, bsdf } = guide.vertex(
             k,
@@ -505,7 +517,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         // Next-event estimation (impossible through a delta BSDF: a mirror, or glass, which
         // blocks shadow rays as in Mitsuba), where it runs.
         if !material.mirror && (light_share >= 1.0 || f64::from(uniform(rng)) < light_share) {
-            let hit = next_event(view, (&x, n), &bsdf, light_share, rng, counts);
+            let hit = next_event(view, (&x, material, frame), &bsdf, light_share, rng, counts);
             if let Some(h) = &hit {
                 radiance += beta * h.f * h.le * h.scale;
                 // A delta light, which no direction finds, is nothing for a guide to learn.
@@ -527,7 +539,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         }
         beta *= bs.weight;
         let wi = bs.wi;
-        if material.dielectric.is_some() {
+        if material.interface_eta().is_some() {
             unscale /= specular::radiance_scale(material, x.ns, wo, wi);
         }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {

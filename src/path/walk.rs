@@ -5,6 +5,7 @@ use super::generator::{
     Connection, Contribution, DirectionSampler, LightEnd, LightVertex, Nee, PathGenerator,
     PathVertex, PathVertices,
 };
+use super::pt::Receiver;
 use super::{emitted, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
@@ -262,7 +263,7 @@ impl Walk {
                 uniform(rng) as f64,
                 uniform(rng) as f64,
             ];
-            let drawn = LightDraw::sample(g, view, &x, frame.n, u)?;
+            let drawn = LightDraw::sample(g, view, (&x, material, frame), u)?;
             path.light = Some(LightVertex {
                 end: drawn.end,
                 wi: drawn.wi,
@@ -353,7 +354,7 @@ impl Walk {
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
-        let drawn = LightDraw::sample(g, view, &self.x, frame.n, u)?;
+        let drawn = LightDraw::sample(g, view, (&self.x, material, frame), u)?;
         let f = brdf::eval(material, frame, self.wo, drawn.wi).as_dvec3() * drawn.le;
         // Also false for a NaN.
         let carries = f.max_element() > 0.0;
@@ -418,9 +419,10 @@ impl Walk {
                 (wi, s.pdf(x.p.as_dvec3(), wi.as_dvec3()))
             }
         };
-        let cos = frame.n.dot(wi);
+        // Above the surface, or anywhere off it through a rough dielectric.
+        let cos = brdf::cosine(material, frame, wi)?;
         let f = brdf::eval(material, frame, wo, wi);
-        if cos <= 0.0 || f.max_element() <= 0.0 {
+        if f.max_element() <= 0.0 {
             return None;
         }
         self.throughput *= f.as_dvec3() * cos as f64;
@@ -429,13 +431,14 @@ impl Walk {
     }
 }
 
-/// A generator's light sample at a vertex `x` (facing normal `n`), before its shadow ray: the
+/// A generator's light sample at a vertex `x` (see [`Receiver`]), before its shadow ray: the
 /// emitter picked as `pt` picks it ([`crate::scene::Scene::pick_light`]), then a point from
 /// the generator's light-point sampler on the area emitters, a direction towards the
 /// environment, or a delta light.
 struct LightDraw {
     end: LightEnd,
-    /// Unit direction from `x` towards it, and its cosine with `n` (positive).
+    /// Unit direction from `x` towards it, and its `|cos|` with the facing normal
+    /// ([`brdf::cosine`], positive).
     wi: Vec3,
     cos_x: f32,
     /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
@@ -453,12 +456,12 @@ struct LightDraw {
 impl LightDraw {
     /// From three uniform numbers: `u[0]` picks the emitter (rescaled, it then serves the
     /// light-point sampler), the others place the point or direction. `None` where the
-    /// sample cannot reach `x` (behind it, facing away, or no emitter).
+    /// sample cannot reach `x` (behind a surface that only reflects, facing away, or no
+    /// emitter).
     fn sample(
         g: &PathGenerator,
         view: &SceneView,
-        x: &SurfacePoint,
-        n: Vec3,
+        (x, material, frame): Receiver,
         u: [f64; 3],
     ) -> Option<Self> {
         let scene = view.scene;
@@ -497,7 +500,7 @@ impl LightDraw {
                 (end, wi, le, (cos_y, dist2), shadow)
             }
         };
-        let cos_x = n.dot(wi);
+        let cos_x = brdf::cosine(material, frame, wi)?;
         let (cos_y, dist2) = area;
         let (area_to_solid_angle, geometry) = match end {
             LightEnd::Area { .. } => (
@@ -506,7 +509,7 @@ impl LightDraw {
             ),
             _ => (1.0, f64::from(cos_x)),
         };
-        (cos_x > 0.0).then(|| Self {
+        Some(Self {
             end,
             wi,
             cos_x,

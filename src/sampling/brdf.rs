@@ -1,16 +1,24 @@
-//! The BRDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
-//! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor or rough
-//! plastic, [`super::microfacet`]), the Lambertian one chosen by albedo; or a delta BSDF (an
-//! ideal mirror or conductor here; dielectrics, which tell their sides apart, in
-//! [`super::specular`]). This is the one BSDF interface of every method: `pt`, `pg`, `srt`,
-//! `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta lobe through it
-//! (the GA's BRDF sampler is [`sample`]).
+//! The BSDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
+//! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor, rough
+//! plastic or rough dielectric, [`super::microfacet`]), the Lambertian one chosen by albedo;
+//! or a delta BSDF (an ideal mirror or conductor here; smooth dielectrics, which tell their
+//! sides apart, in [`super::specular`]). This is the one BSDF interface of every method:
+//! `pt`, `pg`, `srt`, `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta
+//! lobe through it (the GA's BRDF sampler is [`sample`]).
 //!
 //! Directions are unit vectors pointing away from the surface; the [`Frame`]'s `n` is the
 //! shading normal (the geometric one where a mesh has no vertex normals) turned to the side
 //! of `wo` ([`facing_normal`]), its `s` Mitsuba's shading tangent, which only anisotropic
-//! lobes read. Densities are solid-angle densities over the full sphere (zero below the
-//! surface for the Lambertian lobe), in `f64`.
+//! lobes read, and `back` whether `n` is the stored normal turned around (which a rough
+//! dielectric's index of refraction depends on). Densities are solid-angle densities over
+//! the full sphere (zero below the surface for the Lambertian lobe), in `f64`.
+//!
+//! Every lobe but the rough dielectric's reflects only, into the hemisphere of `n`: [`eval`]
+//! is zero below it. The rough dielectric ([`Material::transmits`]) scatters into the whole
+//! sphere, and what scatters into `wi` is weighed by `|cos θ_i|`: [`cosine`] is the one
+//! place that says which directions a material can send light into, and with which
+//! cosine, for every caller (the samplers here, the path tracer's and the generators'
+//! next-event estimation, the guide's samples).
 
 use super::specular;
 use crate::path::SurfacePoint;
@@ -40,19 +48,31 @@ pub struct Frame {
     /// Mitsuba's unit shading tangent (`sh_frame.s`), orthogonal to `n`; read only by
     /// anisotropic lobes (zero, any tangent, for the others).
     pub s: Vec3,
+    /// Whether `n` is the stored shading normal turned around: `wo` lies behind the surface
+    /// (inside a dielectric, whose exterior is on the stored normal's side). Read only by
+    /// the rough dielectric.
+    pub back: bool,
 }
 
 impl Frame {
-    /// The frame of normal `n` (facing `wo`) and tangent `s`.
+    /// The frame of normal `n` (facing `wo`, on the stored normal's side) and tangent `s`.
     pub fn new(n: Vec3, s: Vec3) -> Self {
-        Self { n, s }
+        Self { n, s, back: false }
+    }
+
+    /// The frame of normal `n` facing `wo` where the stored normal is `−n` (`wo` behind the
+    /// surface), tangent `s`.
+    pub fn behind(n: Vec3, s: Vec3) -> Self {
+        Self { n, s, back: true }
     }
 
     /// The frame at `x` seen from `wo`.
     pub fn facing(x: &SurfacePoint, wo: Vec3) -> Self {
+        let n = facing_normal(x.ns, wo);
         Self {
-            n: facing_normal(x.ns, wo),
+            n,
             s: x.ts,
+            back: n != x.ns,
         }
     }
 
@@ -94,6 +114,9 @@ fn diffuse_probability(m: &Material) -> f64 {
         Glossy::Phong { ks, .. } => channel_sum(*ks),
         Glossy::RoughConductor(c) => channel_sum(c.specular_reflectance),
         Glossy::RoughPlastic(p) => channel_sum(p.specular_reflectance + p.diffuse_reflectance),
+        Glossy::RoughDielectric(d) => {
+            channel_sum(d.specular_reflectance + d.specular_transmittance)
+        }
     };
     let d = channel_sum(m.kd);
     if d + s > 0.0 {
@@ -113,10 +136,35 @@ fn cos_lobe(n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
         .dot(wi.as_dvec3().normalize())
 }
 
-/// BRDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta) and below the surface.
+/// The `|cos θ|` of `wi` against the frame's normal where `m` can scatter light arriving
+/// from `wo` into `wi`: above the surface, or anywhere off it for a material that transmits
+/// ([`Material::transmits`]); `None` elsewhere (and at grazing `wi`), where [`eval`] is
+/// zero. The cosine by which every method weighs `f` and tests whether a sampled direction
+/// or a light sample can carry anything.
+pub fn cosine(m: &Material, frame: Frame, wi: Vec3) -> Option<f32> {
+    let c = frame.n.dot(wi);
+    if c > 0.0 {
+        Some(c)
+    } else if c < 0.0 && m.transmits() {
+        Some(-c)
+    } else {
+        None
+    }
+}
+
+/// BSDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta), and below the surface
+/// for every lobe but a rough dielectric's.
 pub fn eval(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     let n = frame.n;
-    if m.mirror || n.dot(wi) <= 0.0 || n.dot(wo) <= 0.0 {
+    if m.mirror || n.dot(wo) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    if let Glossy::RoughDielectric(d) = &m.glossy {
+        let b = frame.basis();
+        let local = |w| Frame::to_local(&b, w);
+        return d.eval(local(wo), local(wi), frame.back);
+    }
+    if n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
     }
     let f = m.kd * std::f32::consts::FRAC_1_PI;
@@ -139,6 +187,7 @@ pub fn eval(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
             let b = frame.basis();
             f + p.eval(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
         }
+        Glossy::RoughDielectric(_) => unreachable!("evaluated above"),
     }
 }
 
@@ -167,8 +216,16 @@ pub fn pdf(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
                 0.0
             }
         }
-        // Microfacet lobes reflect only: nothing below the surface, nor seen from below.
-        _ if n.dot(wo) <= 0.0 || n.dot(wi) <= 0.0 => 0.0,
+        // Seen from below, no microfacet lobe scatters.
+        _ if n.dot(wo) <= 0.0 => 0.0,
+        // The rough dielectric transmits: its density covers the sphere.
+        Glossy::RoughDielectric(d) => {
+            let b = frame.basis();
+            let local = |w| Frame::to_local(&b, w);
+            p_glossy * d.pdf(local(wo), local(wi), frame.back)
+        }
+        // The others reflect only: nothing below the surface.
+        _ if n.dot(wi) <= 0.0 => 0.0,
         Glossy::RoughConductor(c) => {
             let b = frame.basis();
             p_glossy * c.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
@@ -201,8 +258,9 @@ fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
 
 /// The direction [`sample`] draws from `u` for a non-mirror material (`None` for one that
 /// does not scatter), without its density and weight: for callers that evaluate both for a
-/// mixture anyway. `u[0]` picks the lobe (rescaled, it picks a rough plastic's lobe too),
-/// `u[1]` and `u[2]` drive it.
+/// mixture anyway. `u[0]` picks the lobe (rescaled, it picks a rough plastic's lobe, or a
+/// rough dielectric's reflection or refraction, too), `u[1]` and `u[2]` drive it. A rough
+/// dielectric's direction may lie below the surface.
 pub fn sample_direction(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<Vec3> {
     if !m.scatters() {
         return None;
@@ -229,13 +287,21 @@ pub fn sample_direction(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Op
             let pick = ((u[0] - p_diffuse) / (1.0 - p_diffuse)).clamp(0.0, 1.0);
             Frame::to_world(&b, p.sample(Frame::to_local(&b, wo), [pick, u[1], u[2]]))
         }
+        // `u[0]` rescaled picks reflection or refraction by the Fresnel reflectance.
+        Glossy::RoughDielectric(d) => {
+            let b = frame.basis();
+            let pick = ((u[0] - p_diffuse) / (1.0 - p_diffuse)).clamp(0.0, 1.0);
+            let wi = d.sample(Frame::to_local(&b, wo), frame.back, [pick, u[1], u[2]])?;
+            Frame::to_world(&b, wi)
+        }
     };
     Some(wi)
 }
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
-/// (below the surface, or a black material), and for a dielectric, whose sampling needs the
-/// stored (not facing) normal's side: [`specular::sample`] samples every delta BSDF.
+/// (where [`cosine`] says the material sends nothing, or a black material), and for a smooth
+/// dielectric, whose sampling needs the stored (not facing) normal's side:
+/// [`specular::sample`] samples every delta BSDF. The weight is `f |cos θ_i| / pdf`.
 pub fn sample(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
     if m.mirror {
         return match m.dielectric {
@@ -245,8 +311,8 @@ pub fn sample(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<BrdfS
     }
     let wi = sample_direction(m, frame, wo, u)?;
     let pdf = pdf(m, frame, wo, wi);
-    let cos = frame.n.dot(wi);
-    if cos <= 0.0 || pdf <= 0.0 {
+    let cos = cosine(m, frame, wi)?;
+    if pdf <= 0.0 {
         return None;
     }
     let weight = eval(m, frame, wo, wi) * (cos as f64 / pdf) as f32;

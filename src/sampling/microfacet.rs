@@ -1,13 +1,14 @@
-//! Microfacet reflection as Mitsuba 3 models it: the Beckmann and GGX distributions
-//! (`include/mitsuba/render/microfacet.h`), isotropic or anisotropic, with Smith's
-//! masking-shadowing, sampled from the distribution of visible normals or from the full
-//! distribution; and the two BSDFs built on them, `roughconductor` ([`RoughConductor`]) and
-//! `roughplastic` ([`RoughPlastic`]).
+//! Microfacet reflection and refraction as Mitsuba 3 models them: the Beckmann and GGX
+//! distributions (`include/mitsuba/render/microfacet.h`), isotropic or anisotropic, with
+//! Smith's masking-shadowing, sampled from the distribution of visible normals or from the
+//! full distribution; and the three BSDFs built on them, `roughconductor`
+//! ([`RoughConductor`]), `roughplastic` ([`RoughPlastic`]) and `roughdielectric`
+//! ([`RoughDielectric`], the one that transmits).
 //!
 //! Everything here works in the local shading frame (`z` the normal facing `wo`, `x`
 //! Mitsuba's `sh_frame.s`), in `f64`. `wo` is the direction towards the viewer (Mitsuba's
 //! `si.wi`) and `wi` towards the light (Mitsuba's `wo`); values are BSDF values without the
-//! cosine (Mitsuba's `eval` divided by `cos θ_i`).
+//! cosine (Mitsuba's `eval` divided by `|cos θ_i|`).
 
 use super::specular::fresnel_dielectric;
 use crate::scene::fresnel_conductor;
@@ -299,6 +300,147 @@ impl RoughConductor {
     /// A direction from two uniform numbers; it may lie below the surface (no energy).
     pub fn sample(&self, wo: DVec3, u: [f64; 2]) -> DVec3 {
         reflect(wo, self.microfacet.sample(wo, u))
+    }
+}
+
+/// Mitsuba's `roughdielectric`: a rough interface between two dielectrics (Walter et al.
+/// 2007), which reflects off and refracts through the microfacets with the dielectric
+/// Fresnel equations, times `specular_reflectance` or `specular_transmittance`.
+///
+/// Its methods take `wo` in the local frame whose `z` faces `wo` (genpath's facing normal)
+/// and `back`: whether that is the stored shading normal turned around, `wo` seen from
+/// inside. The relative index `η` that light from `wo` meets is then `eta` (the interior's
+/// over the exterior's, the exterior on the side of the stored normal) from the front and
+/// `1/eta` from behind, as Mitsuba selects `m_eta` or `m_inv_eta` by the sign of `cos θ_i`;
+/// mirroring Mitsuba's frame so that `wo` lies above changes nothing else, since its
+/// distribution is symmetric. Transmitted radiance is scaled by `1/η²` (Mitsuba's radiance
+/// mode, the smooth `dielectric`'s `η_ti²` of `crate::sampling::specular`), which makes the
+/// transmission `(1 − F) D G |wo·h| |wi·h| / (|cos θ_o| |cos θ_i| (wo·h + η wi·h)²)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughDielectric {
+    pub microfacet: Microfacet,
+    /// `int_ior / ext_ior`, in single precision as Mitsuba computes it.
+    pub eta: f32,
+    pub specular_reflectance: Vec3,
+    pub specular_transmittance: Vec3,
+}
+
+impl RoughDielectric {
+    /// The relative index of refraction light from `wo` meets: `eta` from the front of the
+    /// stored normal, `1/eta` from behind it (`back`).
+    pub fn eta_seen(&self, back: bool) -> f64 {
+        let eta = f64::from(self.eta);
+        if back {
+            eta.recip()
+        } else {
+            eta
+        }
+    }
+
+    /// The distribution normals are drawn from, seen from `wo`: the lobe's own with visible
+    /// normals, else with its roughness scaled by `1.2 − 0.2 √cos θ_o` (Walter et al.'s
+    /// trick against large weights, Mitsuba's `scale_alpha`, unclamped).
+    pub fn sampling_distribution(&self, wo: DVec3) -> Microfacet {
+        let d = self.microfacet;
+        if d.sample_visible {
+            return d;
+        }
+        let s = 1.2 - 0.2 * wo.z.abs().sqrt();
+        Microfacet {
+            alpha_u: d.alpha_u * s,
+            alpha_v: d.alpha_v * s,
+            ..d
+        }
+    }
+
+    /// The microfacet normal that sends `wo` into `wi` — `wo + wi` for a reflection (`wi`
+    /// above), `wo + η wi` for a refraction —, turned into the upper hemisphere, and whether
+    /// it reflects; `None` where it does not exist or where the microsurface and the
+    /// macrosurface disagree on a side (`wo · h` and `wi · h` against `cos θ`: Mitsuba's
+    /// filter, which `G1` applies too).
+    fn half(wo: DVec3, wi: DVec3, eta: f64) -> Option<(DVec3, bool)> {
+        if wo.z <= 0.0 || wi.z == 0.0 {
+            return None;
+        }
+        let reflect = wi.z > 0.0;
+        let h = match reflect {
+            true => wo + wi,
+            false => wo + wi * eta,
+        }
+        .normalize();
+        let h = if h.z < 0.0 { -h } else { h };
+        (wo.dot(h) > 0.0 && wi.dot(h) * wi.z > 0.0).then_some((h, reflect))
+    }
+
+    /// `f(wo, wi)` without the cosine, for `wo` above the surface; `wi` anywhere on the
+    /// sphere (see the type's documentation).
+    pub fn eval(&self, wo: DVec3, wi: DVec3, back: bool) -> Vec3 {
+        let eta = self.eta_seen(back);
+        let Some((h, reflect)) = Self::half(wo, wi, eta) else {
+            return Vec3::ZERO;
+        };
+        let distr = &self.microfacet;
+        let d = distr.d(h);
+        if d == 0.0 {
+            return Vec3::ZERO;
+        }
+        let g = distr.g(wo, wi, h);
+        let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
+        let fresnel = fresnel_dielectric(cos_o, eta).0;
+        if reflect {
+            self.specular_reflectance * (fresnel * d * g / (4.0 * wo.z * wi.z)) as f32
+        } else {
+            let denom = cos_o + eta * cos_i;
+            let value = (1.0 - fresnel) * d * g * (cos_o * cos_i).abs()
+                / (wo.z * wi.z.abs() * denom * denom);
+            self.specular_transmittance * value as f32
+        }
+    }
+
+    /// The density of [`Self::sample`] in `wi` (solid angle, over the sphere): the sampled
+    /// normal's density, times the Fresnel probability of the branch, times the Jacobian of
+    /// the half-vector map, `1 / (4 |wi · h|)` for a reflection and `η² |wi · h| / (wo · h +
+    /// η wi · h)²` for a refraction.
+    pub fn pdf(&self, wo: DVec3, wi: DVec3, back: bool) -> f64 {
+        let eta = self.eta_seen(back);
+        let Some((h, reflect)) = Self::half(wo, wi, eta) else {
+            return 0.0;
+        };
+        let p = self.sampling_distribution(wo).pdf(wo, h);
+        let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
+        let fresnel = fresnel_dielectric(cos_o, eta).0;
+        if reflect {
+            p * fresnel / (4.0 * cos_i)
+        } else {
+            let denom = cos_o + eta * cos_i;
+            p * (1.0 - fresnel) * eta * eta * cos_i.abs() / (denom * denom)
+        }
+    }
+
+    /// A direction from three uniform numbers: a normal drawn by `u[1]`, `u[2]` (from
+    /// [`Self::sampling_distribution`]), then reflection about it where `u[0]` is below its
+    /// Fresnel reflectance (always under total internal reflection), refraction through it
+    /// otherwise. `None` where the normal faces away from `wo`, or sends it to the side it
+    /// cannot go (a reflection below the surface, a refraction above it), where Mitsuba's
+    /// sample has weight 0.
+    pub fn sample(&self, wo: DVec3, back: bool, u: [f64; 3]) -> Option<DVec3> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let eta = self.eta_seen(back);
+        let m = self.sampling_distribution(wo).sample(wo, [u[1], u[2]]);
+        let cos_i = wo.dot(m);
+        if cos_i.is_nan() || cos_i <= 0.0 {
+            return None;
+        }
+        let (fresnel, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
+        if u[0] < fresnel {
+            let wi = reflect(wo, m);
+            (wi.z > 0.0).then_some(wi)
+        } else {
+            let wi = (m * (cos_i * eta_ti + cos_t) - wo * eta_ti).normalize();
+            (wi.z < 0.0).then_some(wi)
+        }
     }
 }
 

@@ -79,17 +79,15 @@ fn transmitted(d: &Dielectric, ns: DVec3, wo: DVec3) -> (DVec3, f64) {
 }
 
 /// The factor `η_ti²` by which `m`'s weight scales radiance that crossed its interface
-/// from `wi` to `wo` (shading normal `ns`): for a smooth dielectric's refraction, 1
-/// otherwise. A path tracer's Russian roulette undoes it (as Mitsuba's does with its
-/// `eta`), so that a path inside glass is not ended for the compression alone.
+/// from `wi` to `wo` (shading normal `ns`): for a refraction through a smooth dielectric or
+/// a rough one (whose transmission carries the same `1/η²`,
+/// [`crate::sampling::microfacet::RoughDielectric`]), 1 otherwise. A path tracer's Russian
+/// roulette undoes it (as Mitsuba's does with its `eta`), so that a path inside glass is
+/// not ended for the compression alone.
 pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    match &m.dielectric {
-        Some(d) if !d.thin && ns.dot(wo) * ns.dot(wi) < 0.0 => {
-            let eta_ti = if ns.dot(wo) >= 0.0 {
-                d.eta.recip()
-            } else {
-                d.eta
-            };
+    match m.interface_eta() {
+        Some(eta) if ns.dot(wo) * ns.dot(wi) < 0.0 => {
+            let eta_ti = if ns.dot(wo) >= 0.0 { eta.recip() } else { eta };
             eta_ti * eta_ti
         }
         _ => 1.0,

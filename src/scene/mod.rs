@@ -17,7 +17,7 @@ pub use lights::{DeltaArrival, DeltaLight, LightPick};
 pub use shading::Shading;
 
 use crate::accel::TriangleMesh;
-use crate::sampling::microfacet::{RoughConductor, RoughPlastic};
+use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -50,9 +50,9 @@ pub enum SceneError {
 }
 
 /// A surface material (design §3): a two-sided Lambertian lobe plus a glossy lobe
-/// ([`Glossy`]: a normalised modified-Phong lobe, or Mitsuba's rough conductor or rough
-/// plastic), or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or thin
-/// dielectric); and a one-sided emission.
+/// ([`Glossy`]: a normalised modified-Phong lobe, or Mitsuba's rough conductor, rough
+/// plastic or rough dielectric), or a delta BSDF (an ideal mirror, a smooth conductor, a
+/// smooth or thin dielectric); and a one-sided emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -96,6 +96,9 @@ pub enum Glossy {
     RoughConductor(RoughConductor),
     /// Mitsuba's `roughplastic`, its diffuse base included (the material's `kd` is zero).
     RoughPlastic(Box<RoughPlastic>),
+    /// Mitsuba's `roughdielectric` (the material's `kd` is zero): the one non-delta lobe
+    /// that transmits, into the whole sphere ([`Material::transmits`]).
+    RoughDielectric(RoughDielectric),
 }
 
 impl Glossy {
@@ -109,12 +112,20 @@ impl Glossy {
                 p.specular_reflectance.max_element() > 0.0
                     || p.diffuse_reflectance.max_element() > 0.0
             }
+            Glossy::RoughDielectric(d) => {
+                d.specular_reflectance.max_element() > 0.0
+                    || d.specular_transmittance.max_element() > 0.0
+            }
         }
     }
 
     /// Whether the lobe reads the shading frame's tangent (Mitsuba's `sh_frame.s`).
     pub fn is_anisotropic(&self) -> bool {
-        matches!(self, Glossy::RoughConductor(c) if !c.microfacet.is_isotropic())
+        match self {
+            Glossy::RoughConductor(c) => !c.microfacet.is_isotropic(),
+            Glossy::RoughDielectric(d) => !d.microfacet.is_isotropic(),
+            _ => false,
+        }
     }
 }
 
@@ -152,6 +163,25 @@ impl Material {
     /// Whether a glossy lobe is present (and the surface is not a mirror).
     pub fn is_glossy(&self) -> bool {
         !self.mirror && self.glossy.reflects()
+    }
+
+    /// Whether the non-delta BSDF scatters into the whole sphere (a rough dielectric), not
+    /// only into the hemisphere of the normal that faces `wo`: where it does, a direction
+    /// below that hemisphere carries light (weighed by `|cos θ|`), and next-event
+    /// estimation reaches lights behind the surface.
+    pub fn transmits(&self) -> bool {
+        !self.mirror && matches!(self.glossy, Glossy::RoughDielectric(_))
+    }
+
+    /// The relative index of refraction `η` (interior over exterior, the exterior on the
+    /// side of the shading normal) of an interface that refracts: a smooth dielectric that
+    /// is not thin, or a rough dielectric; `None` for every other material.
+    pub fn interface_eta(&self) -> Option<f32> {
+        match (&self.dielectric, &self.glossy) {
+            (Some(d), _) if self.mirror && !d.thin => Some(d.eta),
+            (None, Glossy::RoughDielectric(d)) if !self.mirror => Some(d.eta),
+            _ => None,
+        }
     }
 
     /// The mirror's reflectance for an incident direction at `cos_theta` to the normal:

@@ -296,7 +296,7 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
             match q.object().plugin.as_str() {
                 "twosided" => return Err(q.error("a twosided BSDF inside a twosided BSDF")),
                 // As Mitsuba's twosided refuses them.
-                "dielectric" | "thindielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
+                "dielectric" | "thindielectric" | "roughdielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
                 _ => {}
             }
             let mut m = bsdf(&q, warnings)?;
@@ -307,12 +307,13 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
         "conductor" => conductor(p, name, warnings)?,
         "roughconductor" => super::rough::rough_conductor(p, name, warnings)?,
         "roughplastic" => super::rough::rough_plastic(p, name, warnings)?,
+        "roughdielectric" => super::rough::rough_dielectric(p, name, warnings)?,
         // A delta lobe beside a diffuse one, where genpath's vertices are either delta or
         // not (see docs/scenes.md).
         "plastic" => return Err(p.error("genpath does not implement the smooth `plastic` BSDF (a delta reflection beside a diffuse lobe at one vertex; use `roughplastic` with a small `alpha`)")),
         "dielectric" => dielectric(p, name, false, warnings)?,
         "thindielectric" => dielectric(p, name, true, warnings)?,
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, thindielectric)"))),
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric)"))),
     };
     p.finish()?;
     Ok(m)

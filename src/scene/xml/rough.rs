@@ -1,11 +1,14 @@
-//! Mitsuba's microfacet BSDFs (`roughconductor`, `roughplastic`) as genpath materials: the
+//! Mitsuba's microfacet BSDFs (`roughconductor`, `roughplastic`, `roughdielectric`) as
+//! genpath materials: the
 //! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
 //! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
 
 use super::build::{complex_ior, specular_reflectance};
 use super::props::Props;
 use super::spectrum::ColorUse;
-use crate::sampling::microfacet::{Distribution, Microfacet, RoughConductor, RoughPlastic};
+use crate::sampling::microfacet::{
+    Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
+};
 use crate::scene::{Glossy, Material, SceneError};
 use glam::{DVec3, Vec3};
 
@@ -126,4 +129,45 @@ pub(super) fn rough_plastic(
         nonlinear,
     );
     Ok(glossy(name, Glossy::RoughPlastic(Box::new(lobe))))
+}
+
+/// Mitsuba's `roughdielectric`: the distribution (anisotropic too, along the shading
+/// frame's `dp/du` as `roughconductor`'s), `int_ior` (bk7) over `ext_ior` (air), numbers or
+/// Mitsuba's names, which must differ (as Mitsuba refuses equal ones), and
+/// `specular_reflectance` and `specular_transmittance` (1 by default, constants within
+/// [0, 1]). Two-sided: light meets the interface from either side, with the index inverted
+/// from behind the normal.
+pub(super) fn rough_dielectric(
+    p: &Props,
+    name: String,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let microfacet = microfacet(p)?;
+    let int_ior = super::ior::read(p, "int_ior", "bk7")?;
+    let ext_ior = super::ior::read(p, "ext_ior", "air")?;
+    if int_ior == ext_ior {
+        return Err(p.error("the interior and exterior indices of refraction must differ"));
+    }
+    let mut colour = |what: &str| -> Result<DVec3, SceneError> {
+        let c = p
+            .color(what, ColorUse::Reflectance, warnings)?
+            .unwrap_or(DVec3::ONE);
+        if c.max_element() > 1.0 || c.min_element() < 0.0 {
+            return Err(p.error(format!(
+                "`{what}` {c} is outside [0, 1] (it would create energy)"
+            )));
+        }
+        Ok(c)
+    };
+    let lobe = RoughDielectric {
+        microfacet,
+        // In single precision, as Mitsuba computes it.
+        eta: int_ior / ext_ior,
+        specular_reflectance: colour("specular_reflectance")?.as_vec3(),
+        specular_transmittance: colour("specular_transmittance")?.as_vec3(),
+    };
+    Ok(Material {
+        two_sided: true,
+        ..glossy(name, Glossy::RoughDielectric(lobe))
+    })
 }
