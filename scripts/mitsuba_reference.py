@@ -7,7 +7,7 @@ itself. Run by hand, never by the build or CI:
 Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for each named scene (default: every
 scenes/mitsuba/*.xml with a sensor), rendered with the `scalar_rgb` variant (the box filter and independent
 sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
-(box, smooth and rough: 16384 spp at 64², glass, env, spheres and lights: 16384 spp at 128², legacy and params:
+(box, smooth, rough and roughglass: 16384 spp at 64², glass, env, spheres and lights: 16384 spp at 128², legacy and params:
 16384 spp at their own 64 × 48; the tests' 256 spp). --spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
 e.g. Mitsuba's own render at the test's samples, to compare genpath's error with.
 --variant llvm_ad_rgb (with `apt-get install libllvm19`) is much faster; it renders in
@@ -30,6 +30,7 @@ REFERENCES = {
     "lights": (16384, 128),
     "smooth": (16384, 64),
     "rough": (16384, 64),
+    "roughglass": (16384, 64),
     # 64 × 48, fixed in the files (their film is not square: no `res` parameter).
     "legacy": (16384, None),
     "params": (16384, None),
