@@ -26,7 +26,7 @@ use genpath::scene::Scene;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-const SCENES: [&str; 12] = [
+const SCENES: [&str; 15] = [
     "tiny_light",
     "grazing_light",
     "phong_1e4",
@@ -38,11 +38,14 @@ const SCENES: [&str; 12] = [
     "mirror",
     "rough_1e-4",
     "rough_1",
+    "rough_glass_1e-4",
+    "rough_glass_1",
+    "rough_glass_ior_1",
     "sun_env",
 ];
 
-/// The scene file of stiff scene `name`: its `scene.xml` (the microfacet cases, which MTL
-/// cannot describe, and the environment map's), else its `scene.toml`.
+/// The scene file of stiff scene `name`: its `scene.xml` (the microfacet cases, rough glass
+/// included, which MTL cannot describe, and the environment map's), else its `scene.toml`.
 fn stiff(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenes/stiff")
