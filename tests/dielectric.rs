@@ -33,6 +33,7 @@ fn glass(eta: f32, thin: bool, reflectance: f32, transmittance: f32) -> Material
             transmittance: Vec3::splat(transmittance),
             thin,
         }),
+        textures: None,
     }
 }
 

@@ -416,3 +416,86 @@ fn flags_out_of_range_give_clear_errors() {
         "{errors} errors, {ok} renders"
     );
 }
+
+/// `pt`'s mean pixel of the XML scene `text` (written into `dir` as `name`) at 16², 8 spp.
+fn xml_mean(dir: &Path, name: &str, text: &str) -> [f64; 3] {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    let mut scene = Scene::load(&path).unwrap();
+    scene.resize(16, 16);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let settings = RenderSettings {
+        method: Method::Pt,
+        spp: 8,
+        max_bounces: 3,
+        seed: 5,
+        progress: false,
+        shard: Default::default(),
+        control: Default::default(),
+    };
+    let film = PathTracing { max_bounces: 3 }.render(&view, &settings);
+    let mut sum = [0.0f64; 3];
+    for p in &film.image.pixels {
+        assert!(p.iter().all(|c| c.is_finite() && *c >= 0.0), "{p:?}");
+        for c in 0..3 {
+            sum[c] += f64::from(p[c]);
+        }
+    }
+    sum.map(|s| s / film.image.pixels.len() as f64)
+}
+
+/// A box whose floor's diffuse reflectance is `reflectance` (an XML element).
+fn textured_floor(reflectance: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="60"/>
+<transform name="to_world"><lookat origin="0, 1, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+<film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film></sensor>
+<shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/></transform>
+<bsdf type="diffuse">{reflectance}</bsdf></shape>
+<shape type="sphere"><point name="center" x="0" y="2" z="0"/><float name="radius" value="0.3"/>
+<emitter type="area"><rgb name="radiance" value="4"/></emitter></shape>
+</scene>
+"#
+    )
+}
+
+/// A huge (8192²) and a 1×1 8-bit bitmap of one colour render as that colour does: the
+/// image's mean within 1e-4 of the constant reflectance's (the same paths; only the
+/// lookups' rounding differs).
+#[test]
+fn huge_and_single_texel_textures_render_as_their_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = [200u8, 100, 50];
+    let linear = bytes.map(genpath::image::srgb::decode_u8);
+    for side in [8192u32, 1] {
+        let file = dir.path().join(format!("c{side}.png"));
+        let out = std::io::BufWriter::new(std::fs::File::create(&file).unwrap());
+        let mut encoder = png::Encoder::new(out, side, side);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::Fast);
+        let data: Vec<u8> = bytes.repeat((side * side) as usize);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(&data).unwrap();
+        writer.finish().unwrap();
+        drop(data);
+        let bitmap = format!(
+            r#"<texture type="bitmap" name="reflectance"><string name="filename" value="{}"/></texture>"#,
+            file.display()
+        );
+        let textured = xml_mean(dir.path(), "t.xml", &textured_floor(&bitmap));
+        let rgb = format!(
+            r#"<rgb name="reflectance" value="{}, {}, {}"/>"#,
+            linear[0], linear[1], linear[2]
+        );
+        let constant = xml_mean(dir.path(), "c.xml", &textured_floor(&rgb));
+        for c in 0..3 {
+            assert!(
+                (textured[c] - constant[c]).abs() <= 1e-4 * constant[c].max(1e-3),
+                "{side}²: {textured:?} against {constant:?}"
+            );
+        }
+    }
+}

@@ -1262,3 +1262,107 @@ fn microfacet_refusals_name_file_and_line() {
         );
     }
 }
+
+/// Samples of the textures agreement test: its reference has 4096 (64 × as many).
+const TEXTURES_SPP: u32 = 64;
+
+/// Textures: `textures.xml` (a checkerboard and an 8-bit sRGB bitmap on diffuse and rough
+/// plastic BSDFs, on rectangles, an OBJ with texture coordinates, an analytic sphere turned
+/// by its to_world and a cube) agrees with Mitsuba's render; the same scene with the OBJ's
+/// texture coordinates not flipped (`flip_tex_coords` false: the texture upside down) or
+/// with the wall's bitmap read `raw` (its sRGB decoding skipped) must not.
+#[test]
+fn pt_agrees_with_mitsuba_on_textures_and_a_flipped_or_undecoded_texture_does_not() {
+    let scene = Scene::load(&scene_path("textures.xml")).unwrap();
+    let (_, reference, z) = agrees_with_reference("textures.xml", &scene, TEXTURES_SPP);
+    twin_is_rejected(
+        "textures.xml",
+        &[("obj_flip", "false")],
+        TEXTURES_SPP,
+        &reference,
+        z,
+        "with the OBJ's texture coordinates not flipped",
+    );
+    twin_is_rejected(
+        "textures.xml",
+        &[("wall_raw", "true")],
+        TEXTURES_SPP,
+        &reference,
+        z,
+        "with the wall's bitmap not sRGB-decoded",
+    );
+}
+
+/// As for `glass.xml`: every method renders `textures.xml` at 32² without a bad pixel, with
+/// the mixture of a wrong density seen.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_textures_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("textures.xml");
+}
+
+/// The textures' refusals, each naming the file and line: a missing file, an unreadable
+/// one, a texel that is NaN, infinite or negative, a reflectance texture above 1, an unknown
+/// filter or wrap mode, an unknown texture plugin, a textured roughness and a textured
+/// transmittance.
+#[test]
+fn texture_refusals_name_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("garbage.png"), b"not a png at all").unwrap();
+    let exr = |name: &str, texel: f32| {
+        let mut img = genpath::image::Image::new(2, 2);
+        img.set(1, 0, [0.5, texel, 0.5]);
+        genpath::image::rust_writers::write_exr(&d.join(name), &img).unwrap();
+    };
+    exr("nan.exr", f32::NAN);
+    exr("inf.exr", f32::INFINITY);
+    exr("negative.exr", -0.25);
+    exr("bright.exr", 2.0);
+    let bitmap = |file: &str, extra: &str| {
+        format!(
+            r#"<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="{file}"/>{extra}</texture></bsdf>"#
+        )
+    };
+    let cases = [
+        (bitmap("missing.png", ""), "missing.png"),
+        (bitmap("garbage.png", ""), "garbage.png"),
+        (bitmap("nan.exr", ""), "texel (1, 0)"),
+        (bitmap("inf.exr", ""), "finite and non-negative"),
+        (bitmap("negative.exr", ""), "negative.exr"),
+        (bitmap("bright.exr", ""), "beyond 1"),
+        (bitmap("nan.exr", r#"<string name="filter_type" value="cubic"/>"#), "`filter_type` \"cubic\""),
+        (bitmap("nan.exr", r#"<string name="wrap_mode" value="wrap"/>"#), "`wrap_mode` \"wrap\""),
+        (
+            r#"<bsdf type="diffuse"><texture type="noise" name="reflectance"/></bsdf>"#.to_string(),
+            "`noise` texture",
+        ),
+        (
+            r#"<bsdf type="roughconductor"><texture type="checkerboard" name="alpha"/></bsdf>"#.to_string(),
+            "textured roughness",
+        ),
+        (
+            r#"<bsdf type="dielectric"><texture type="checkerboard" name="specular_transmittance"/></bsdf>"#.to_string(),
+            "specular_transmittance",
+        ),
+    ];
+    for (i, (bsdf, expected)) in cases.iter().enumerate() {
+        let text = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type="cube">
+{bsdf}
+</shape>
+</scene>
+"#
+        );
+        let path = d.join(format!("t{i}.xml"));
+        std::fs::write(&path, text).unwrap();
+        let error = Scene::load(&path).unwrap_err().to_string();
+        assert!(
+            error.contains(expected) && error.contains(&format!("t{i}.xml:5")),
+            "{bsdf}: {error}"
+        );
+    }
+}

@@ -15,7 +15,9 @@
 //! an area light) every method agrees with `pt`, and an `srt` that leaves a delta light's pick
 //! out of its densities is rejected. On `roughglass.xml` (rough glass, GGX and Beckmann)
 //! every method agrees with `pt`, and an `srt` whose densities fold refracted directions
-//! above the surface is rejected.
+//! above the surface is rejected. On `textures.xml` (checkerboard and bitmap textures on
+//! diffuse and rough plastic BSDFs) every method agrees with `pt`, and `srt` on the scene
+//! with its meshes' texture coordinates dropped is rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -57,6 +59,9 @@ enum Which {
     /// `srt` (next-event estimation at every vertex) on the scene with its shading normals
     /// dropped: every vertex shades with its geometric normal.
     SrtShadedFlat,
+    /// `srt` (next-event estimation at every vertex) on the scene with its meshes' texture
+    /// coordinates dropped: every triangle's texture coordinates are its barycentrics.
+    SrtUvDropped,
     /// `srt` with the estimator `nee`, optionally with the light technique's densities left
     /// out of the balance heuristic's denominator.
     Srt {
@@ -136,6 +141,17 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
                 "{name} has no shading normals"
             );
             scene.shading.normals.clear();
+            Which::Srt {
+                nee: Nee::Every,
+                light_dropped: false,
+            }
+        }
+        Which::SrtUvDropped => {
+            assert!(
+                !scene.shading.uvs.is_empty(),
+                "{name} has no texture coordinates"
+            );
+            scene.shading.uvs.clear();
             Which::Srt {
                 nee: Nee::Every,
                 light_dropped: false,
@@ -232,7 +248,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
                 false => srt,
             })
         }
-        Which::SrtShadedFlat => unreachable!("replaced above"),
+        Which::SrtShadedFlat | Which::SrtUvDropped => unreachable!("replaced above"),
         Which::SrtDeltaPickDropped => Some(
             Mixture::new(
                 vec![PathGenerator::srt(
@@ -653,4 +669,48 @@ fn roughglass_methods_agree_and_a_folded_transmission_density_does_not() {
     let wrong = render_with(name, Which::SrtTransmissionFolded, bounces, spp, 23);
     let what = format!("{name}: srt with refracted directions' densities folded above the surface");
     assert_rejected(&what, &wrong, &pt);
+}
+
+/// Textures (`textures.xml`: checkerboards and a bitmap on diffuse and rough plastic BSDFs,
+/// on rectangles, an OBJ, an analytic sphere and a cube): `srt` and `ga` with either
+/// estimator, `ga-pt` (with and without the spatial guide) and `pg` estimate what `pt`
+/// does, each evaluating the textured BSDF at every vertex, its own and the other
+/// generators'; `srt` on the scene with its meshes' texture coordinates dropped does not.
+#[test]
+fn textures_methods_agree_and_dropped_texture_coordinates_do_not() {
+    let name = "textures.xml";
+    let (bounces, spp) = (3, SPP / 4);
+    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+    let srt = |nee| Which::Srt {
+        nee,
+        light_dropped: false,
+    };
+    let ga = |nee| Which::Ga {
+        nee,
+        unnormalised: false,
+        light_dropped: false,
+    };
+    for (label, which) in [
+        ("srt", srt(Nee::Every)),
+        ("srt, nee end", srt(Nee::End)),
+        ("ga", ga(Nee::Every)),
+        ("ga, nee end", ga(Nee::End)),
+        ("ga-pt", Which::GaPt { spatial: false }),
+        ("ga-pt, spatial", Which::GaPt { spatial: true }),
+        (
+            "pg",
+            Which::Pg {
+                every_cell_dark: false,
+            },
+        ),
+    ] {
+        let film = render_with(name, which, bounces, spp, 23);
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
+    }
+    let wrong = render_with(name, Which::SrtUvDropped, bounces, spp, 23);
+    assert_rejected(
+        &format!("{name}: srt without texture coordinates"),
+        &wrong,
+        &pt,
+    );
 }

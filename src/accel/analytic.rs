@@ -17,6 +17,9 @@ pub enum Analytic {
         center: DVec3,
         radius: f64,
         flip: bool,
+        /// The inverse of `to_world`'s linear part (identity for an unturned sphere): the
+        /// texture coordinates are the local direction's spherical angles, as Mitsuba's.
+        to_local: DMat3,
     },
     /// The unit disk `x² + y² ≤ 1, z = 0` placed by an affine `to_world` (an ellipse in
     /// general): `frame` maps local `(x, y, z)` to `center + x·axis_u + y·axis_v + z·normal`,
@@ -56,7 +59,33 @@ impl Analytic {
             center,
             radius,
             flip,
+            to_local: DMat3::IDENTITY,
         })
+    }
+
+    /// A sphere turned by the linear part `linear` of its `to_world` (whose texture
+    /// coordinates it turns; the shape itself is the same); a disk as it is.
+    pub fn turned(self, linear: DMat3) -> Result<Self, AnalyticError> {
+        match self {
+            Analytic::Sphere {
+                center,
+                radius,
+                flip,
+                ..
+            } => {
+                let to_local = linear.inverse();
+                if !(to_local.is_finite() && linear.determinant() != 0.0) {
+                    return Err(AnalyticError::NotFinite);
+                }
+                Ok(Analytic::Sphere {
+                    center,
+                    radius,
+                    flip,
+                    to_local,
+                })
+            }
+            disk => Ok(disk),
+        }
     }
 
     /// Mitsuba's disk placed by `to_world` (only its action on the `z = 0` plane and on
@@ -196,7 +225,7 @@ impl Analytic {
 
     /// The closest crossing of `ray` with the shape in `(tmin, tmax)`: `t`, the unit
     /// geometric normal and a surface parameterisation `(u, v)` (Mitsuba's: the sphere's
-    /// `(φ/2π, θ/π)` in world axes, the disk's `(r, φ/2π)`).
+    /// `(φ/2π, θ/π)` of the local direction (`to_local` applied), the disk's `(r, φ/2π)`).
     pub fn intersect(&self, ray: &Ray, tmax: f64) -> Option<(f64, DVec3, f64, f64)> {
         let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
         let tmin = f64::from(ray.tmin);
@@ -205,14 +234,16 @@ impl Analytic {
                 center,
                 radius,
                 flip,
+                to_local,
             } => {
                 let t = sphere_crossing(o - *center, d, *radius, tmin, tmax)?;
                 let local = o - *center + d * t;
                 let n = local / *radius;
                 let n = n.normalize_or_zero();
-                let phi = n.y.atan2(n.x);
+                let l = (*to_local * n).normalize_or_zero();
+                let phi = l.y.atan2(l.x);
                 let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-                let (u, v) = (phi / (2.0 * PI), n.z.clamp(-1.0, 1.0).acos() / PI);
+                let (u, v) = (phi / (2.0 * PI), l.z.clamp(-1.0, 1.0).acos() / PI);
                 Some((t, if *flip { -n } else { n }, u, v))
             }
             Analytic::Disk {

@@ -37,7 +37,7 @@ impl<'a> GuidedBsdf<'a> {
     /// all at a delta vertex, and without the spatial field where the material's
     /// [`guide_share`] is 0 (a rough dielectric, which the BSDF alone samples).
     pub fn new(bsdf: Bsdf<'a>, guide: Option<Vertex<'a>>) -> Self {
-        let unshared = guide_share(bsdf.material) <= 0.0;
+        let unshared = guide_share(&bsdf.material) <= 0.0;
         let guide = guide
             .map(|v| if unshared { v.without_spatial() } else { v })
             .filter(|v| !bsdf.material.mirror && v.guides());
@@ -65,7 +65,7 @@ impl VertexBsdf for GuidedBsdf<'_> {
             Some(v) => v.pdf_with(
                 wi.as_dvec3(),
                 self.bsdf.pdf(wi),
-                guide_share(self.bsdf.material),
+                guide_share(&self.bsdf.material),
             ),
             None => self.bsdf.pdf(wi),
         }
@@ -141,6 +141,7 @@ mod tests {
             two_sided: true,
             conductor: None,
             dielectric: None,
+            textures: None,
         }
     }
 
@@ -205,7 +206,7 @@ mod tests {
             material(0.9, true),
         ] {
             let bsdf = Bsdf {
-                material: &m,
+                material: (&m).into(),
                 frame: frame(),
                 wo: wo(),
                 ns: N,
@@ -251,7 +252,7 @@ mod tests {
         let guide = Guide::new(&mixture()).with_spatial(Some(field()));
         for m in [material(0.0, false), material(0.3, false)] {
             let bsdf = Bsdf {
-                material: &m,
+                material: (&m).into(),
                 frame: frame(),
                 wo: wo(),
                 ns: N,

@@ -29,7 +29,7 @@ use crate::path::mixture::Mixture;
 use crate::sampling::anchor::{AnchorSampler, ConeTest};
 use crate::sampling::brdf::Frame;
 use crate::sampling::patch::{PatchSampler, PatchShape};
-use crate::scene::Material;
+use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 use std::sync::Arc;
 
@@ -282,10 +282,10 @@ impl Guide {
     }
 
     /// `p_k(wi)` at the surface point `x` of `material` (shading frame facing `wo`).
-    pub fn pdf(
+    pub fn pdf<'m>(
         &self,
         k: usize,
-        material: &Material,
+        material: impl Into<MaterialAt<'m>>,
         x: Vec3,
         frame: Frame,
         wo: Vec3,
@@ -296,10 +296,10 @@ impl Guide {
 
     /// A direction out of the `k`-th non-delta vertex `x`, from four uniform numbers (see
     /// [`Vertex::sample`]).
-    pub fn sample(
+    pub fn sample<'m>(
         &self,
         k: usize,
-        material: &Material,
+        material: impl Into<MaterialAt<'m>>,
         x: Vec3,
         frame: Frame,
         wo: Vec3,

@@ -8,7 +8,7 @@ use super::guide::Level;
 #[cfg(doc)]
 use super::Guide;
 use crate::sampling::brdf::{self, Frame};
-use crate::scene::Material;
+use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 
 /// A direction drawn from a guide.
@@ -105,18 +105,25 @@ impl Vertex<'_> {
     }
 
     /// `p(wi)` for `material` seen from `wo`.
-    pub fn pdf(&self, material: &Material, wo: Vec3, wi: Vec3) -> f64 {
+    pub fn pdf<'m>(&self, material: impl Into<MaterialAt<'m>>, wo: Vec3, wi: Vec3) -> f64 {
+        let material = material.into();
         let brdf_pdf = brdf::pdf(material, self.frame, wo, wi);
-        self.pdf_with(wi.as_dvec3(), brdf_pdf, guide_share(material))
+        self.pdf_with(wi.as_dvec3(), brdf_pdf, guide_share(&material))
     }
 
     /// A direction out of this vertex of `material` seen from `wo`, from four uniform
     /// numbers: `u[0]` picks the sampler, the rest drive it. `None` where the direction
     /// carries nothing.
-    pub fn sample(&self, material: &Material, wo: Vec3, u: [f64; 4]) -> Option<GuideSample> {
+    pub fn sample<'m>(
+        &self,
+        material: impl Into<MaterialAt<'m>>,
+        wo: Vec3,
+        u: [f64; 4],
+    ) -> Option<GuideSample> {
+        let material = material.into();
         let rest = [u[1], u[2], u[3]];
         let n = self.frame;
-        let share = guide_share(material);
+        let share = guide_share(&material);
         let wi = match self.sampler {
             VertexSampler::Brdf => {
                 let s = brdf::sample(material, n, wo, rest)?;
@@ -157,7 +164,7 @@ impl Vertex<'_> {
     /// only where the direction carries something) and weight.
     fn finish_sample(
         &self,
-        material: &Material,
+        material: MaterialAt,
         wo: Vec3,
         wi: Vec3,
         pdf: impl FnOnce(f64) -> f64,
@@ -165,7 +172,7 @@ impl Vertex<'_> {
         let n = self.frame;
         // The guide covers the sphere; the material says where light goes (above the
         // surface, or through it for a rough dielectric) and with which cosine.
-        let cos = brdf::cosine(material, n, wi)?;
+        let cos = brdf::cosine(&material, n, wi)?;
         let f = brdf::eval(material, n, wo, wi);
         if f.max_element() <= 0.0 {
             return None;
@@ -191,6 +198,7 @@ mod tests {
     use crate::guiding::Guide;
     use crate::sampling::patch::PatchShape;
     use crate::sampling::{sample_rng, uniform};
+    use crate::scene::Material;
     use std::sync::Arc;
 
     /// Monte Carlo ∫ p_0(ω) dω over the sphere, uniform directions: 1 for a density.
@@ -228,6 +236,7 @@ mod tests {
             two_sided: true,
             conductor: None,
             dielectric: None,
+            textures: None,
         }
     }
 

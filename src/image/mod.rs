@@ -112,6 +112,24 @@ pub fn read(path: &Path) -> Result<Image, ImageError> {
     }
 }
 
+/// Reads an image as its file stores its values: `true` with integer formats' (8-bit PNG,
+/// and with feature `oiio` JPEG, TGA, BMP …), normalised to [0, 1] but still sRGB-encoded;
+/// `false` with float formats' (EXR, HDR), linear. What [`read()`] decodes; what a `raw`
+/// texture reads.
+pub fn read_encoded(path: &Path) -> Result<(Image, bool), ImageError> {
+    match extension(path).as_deref() {
+        Some("exr") => Ok((read_exr(path)?, false)),
+        Some("png") => Ok((rust_writers::read_png_encoded(path)?, true)),
+        #[cfg(feature = "oiio")]
+        _ => oiio::read_encoded(path),
+        #[cfg(not(feature = "oiio"))]
+        _ => Err(ImageError::UnsupportedFormat {
+            path: path.to_owned(),
+            extra: "",
+        }),
+    }
+}
+
 /// Reads the first RGB(A) layer of an EXR file (alpha ignored), at full float precision.
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
     let file = exr::prelude::read_first_rgba_layer_from_file(

@@ -81,6 +81,23 @@ pub fn write(path: &Path, img: &Image) -> Result<(), ImageError> {
 
 /// Reads any image OpenImageIO can read as linear RGB (integer files are sRGB-decoded).
 pub fn read(path: &Path) -> Result<Image, ImageError> {
+    let (mut img, encoded) = read_encoded(path)?;
+    if encoded {
+        decode(&mut img);
+    }
+    Ok(img)
+}
+
+/// The image's sRGB-encoded values decoded to linear ones.
+fn decode(img: &mut Image) {
+    for px in &mut img.pixels {
+        *px = px.map(srgb::decode);
+    }
+}
+
+/// Reads any image OpenImageIO can read as it stores its values: integer files' values
+/// normalised to [0, 1] but not decoded (`true` with them), float files' as they are.
+pub fn read_encoded(path: &Path) -> Result<(Image, bool), ImageError> {
     let read_err = |message: String| ImageError::Read {
         path: path.to_owned(),
         message,
@@ -107,7 +124,7 @@ pub fn read(path: &Path) -> Result<Image, ImageError> {
             )
         };
         match rc {
-            0 => return Ok(to_image(w, h, is_float != 0, &buf)),
+            0 => return Ok((to_image(w, h, &buf), is_float == 0)),
             1 => {
                 let len = usize::try_from(w)
                     .ok()
@@ -123,12 +140,11 @@ pub fn read(path: &Path) -> Result<Image, ImageError> {
 }
 
 /// Packs the shim's RGB floats; `w` and `h` were validated when the buffer was sized.
-fn to_image(w: c_int, h: c_int, is_float: bool, rgb: &[f32]) -> Image {
+/// Integer files hold display values, float files linear values already.
+fn to_image(w: c_int, h: c_int, rgb: &[f32]) -> Image {
     let mut img = Image::new(w as u32, h as u32);
-    // Integer files hold display values; float files hold linear values already.
-    let linearize = |v: f32| if is_float { v } else { srgb::decode(v) };
     for (px, c) in img.pixels.iter_mut().zip(rgb.chunks_exact(3)) {
-        *px = [linearize(c[0]), linearize(c[1]), linearize(c[2])];
+        *px = [c[0], c[1], c[2]];
     }
     img
 }

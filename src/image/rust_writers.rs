@@ -49,6 +49,16 @@ pub fn write_png(path: &Path, img: &Image) -> Result<(), ImageError> {
 
 /// Reads an 8-bit or 16-bit PNG (grey or RGB, alpha ignored) as linear RGB.
 pub fn read_png(path: &Path) -> Result<Image, ImageError> {
+    let mut img = read_png_encoded(path)?;
+    for px in &mut img.pixels {
+        *px = px.map(srgb::decode);
+    }
+    Ok(img)
+}
+
+/// Reads a PNG as [`read_png`] does, its sRGB-encoded values normalised to [0, 1] and not
+/// decoded (8 bits: a 16-bit file is read at 8 bits).
+pub fn read_png_encoded(path: &Path) -> Result<Image, ImageError> {
     let read_err = |message: String| ImageError::Read {
         path: path.to_owned(),
         message,
@@ -66,14 +76,11 @@ pub fn read_png(path: &Path) -> Result<Image, ImageError> {
     let mut img = Image::new(frame.width, frame.height);
     let bytes = &buf[..frame.buffer_size()];
     for (px, s) in img.pixels.iter_mut().zip(bytes.chunks_exact(stride)) {
+        let v = |b: u8| f32::from(b) / 255.0;
         *px = if stride >= 3 {
-            [
-                srgb::decode_u8(s[0]),
-                srgb::decode_u8(s[1]),
-                srgb::decode_u8(s[2]),
-            ]
+            [v(s[0]), v(s[1]), v(s[2])]
         } else {
-            [srgb::decode_u8(s[0]); 3]
+            [v(s[0]); 3]
         };
     }
     Ok(img)

@@ -12,7 +12,7 @@ use crate::path::pt::LightCandidate;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::{specular, uniform, Rng};
-use crate::scene::Material;
+use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 
 /// Next-event estimation alone, to at most `max_bounces` scattering events.
@@ -40,12 +40,12 @@ impl PixelIntegrator for NeeOnly {
 fn light_sample(
     view: &SceneView,
     (x, frame, wo): (&SurfacePoint, Frame, Vec3),
-    material: &Material,
+    material: MaterialAt,
     rng: &mut Rng,
     counts: &mut RayCounts,
 ) -> Vec3 {
     let u = [uniform(rng), uniform(rng), uniform(rng)];
-    match LightCandidate::sample(view, (x, material, frame), u) {
+    match LightCandidate::sample(view, (x, &material, frame), u) {
         Some(l) if l.visible(view, x, counts) => {
             brdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
         }

@@ -9,9 +9,9 @@ pub mod walk;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::Rng;
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, MaterialAt, Scene};
 use glam::DVec3;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use mixture::{Mixture, MixtureScratch};
 use pt::{PathGuide, NO_RECORDER};
 
@@ -28,6 +28,9 @@ pub struct SurfacePoint {
     /// Unit shading tangent (Mitsuba's `sh_frame.s`, orthogonal to `ns`) where the material
     /// has an anisotropic lobe, which alone reads it; zero elsewhere.
     pub ts: Vec3,
+    /// Texture coordinates (Mitsuba's `si.uv`) where the material is textured, which alone
+    /// reads them; zero elsewhere.
+    pub uv: Vec2,
     pub prim: u32,
 }
 
@@ -39,6 +42,7 @@ impl SurfacePoint {
             ng,
             ns: ng,
             ts: Vec3::ZERO,
+            uv: Vec2::ZERO,
             prim,
         }
     }
@@ -92,33 +96,41 @@ impl<'a> SceneView<'a> {
         }
     }
 
-    pub fn material(&self, prim: u32) -> &Material {
+    pub fn material(&self, prim: u32) -> &'a Material {
         self.scene.material(prim)
     }
 
-    /// The material that scatters at `x` towards `wo`: [`crate::scene::BLACK`] where a
-    /// one-sided material is seen from behind its shading normal (as Mitsuba's BSDFs tell
-    /// their sides apart in the shading frame).
-    pub fn scattering_material(&self, x: &SurfacePoint, wo: Vec3) -> &Material {
+    /// The material that scatters at `x` towards `wo`, its textures evaluated at `x`'s
+    /// texture coordinates ([`Material::at`]): [`crate::scene::BLACK`] where a one-sided
+    /// material is seen from behind its shading normal (as Mitsuba's BSDFs tell their sides
+    /// apart in the shading frame).
+    #[inline]
+    pub fn scattering_material(&self, x: &SurfacePoint, wo: Vec3) -> MaterialAt<'a> {
         let m = self.scene.material(x.prim);
         if m.two_sided || x.ns.dot(wo) > 0.0 {
-            m
+            m.at(x.uv)
         } else {
-            &crate::scene::BLACK
+            MaterialAt::from(&crate::scene::BLACK)
         }
     }
 
     fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
         let ns = self.scene.shading_normal(hit.prim, (hit.u, hit.v), hit.ng);
-        let ts = match self.material(hit.prim).glossy.is_anisotropic() {
+        let material = self.material(hit.prim);
+        let ts = match material.glossy.is_anisotropic() {
             true => self.scene.shading_tangent(hit.prim, hit.ng, ns),
             false => Vec3::ZERO,
+        };
+        let uv = match material.is_textured() {
+            true => self.scene.uv(hit.prim, (hit.u, hit.v)),
+            false => Vec2::ZERO,
         };
         SurfacePoint {
             p: ray.origin + ray.dir * hit.t,
             ng: hit.ng,
             ns,
             ts,
+            uv,
             prim: hit.prim,
         }
     }

@@ -29,7 +29,7 @@ use crate::accel::Ray;
 use crate::sampling::brdf::{self, BrdfSample, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{LightPick, Material};
+use crate::scene::{LightPick, Material, MaterialAt};
 use glam::Vec3;
 
 /// First bounce at which Russian roulette may end a path.
@@ -57,7 +57,7 @@ pub trait VertexBsdf {
 /// [`brdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
 #[derive(Clone, Copy)]
 pub struct Bsdf<'a> {
-    pub material: &'a Material,
+    pub material: MaterialAt<'a>,
     pub frame: Frame,
     pub wo: Vec3,
     /// The shading normal as stored (`n` or `−n`): a dielectric tells its sides apart by
@@ -517,7 +517,14 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         // Next-event estimation (impossible through a delta BSDF: a mirror, or glass, which
         // blocks shadow rays as in Mitsuba), where it runs.
         if !material.mirror && (light_share >= 1.0 || f64::from(uniform(rng)) < light_share) {
-            let hit = next_event(view, (&x, material, frame), &bsdf, light_share, rng, counts);
+            let hit = next_event(
+                view,
+                (&x, &material, frame),
+                &bsdf,
+                light_share,
+                rng,
+                counts,
+            );
             if let Some(h) = &hit {
                 radiance += beta * h.f * h.le * h.scale;
                 // A delta light, which no direction finds, is nothing for a guide to learn.
@@ -540,7 +547,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         beta *= bs.weight;
         let wi = bs.wi;
         if material.interface_eta().is_some() {
-            unscale /= specular::radiance_scale(material, x.ns, wo, wi);
+            unscale /= specular::radiance_scale(&material, x.ns, wo, wi);
         }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
             let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;

@@ -11,7 +11,7 @@ use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{LightPick, Material};
+use crate::scene::{LightPick, MaterialAt};
 use glam::{DVec3, Vec3};
 
 /// The ray a [`Walk`] waits on before it can go on.
@@ -239,7 +239,7 @@ impl Walk {
         view: &SceneView,
         rng: &mut Rng,
         path: &mut PathVertices,
-        material: &Material,
+        material: MaterialAt,
     ) -> Option<Query> {
         let (x, wo, bounce, k) = (self.x, self.wo, self.bounce, self.k);
         let frame = Frame::facing(&x, wo);
@@ -263,7 +263,7 @@ impl Walk {
                 uniform(rng) as f64,
                 uniform(rng) as f64,
             ];
-            let drawn = LightDraw::sample(g, view, (&x, material, frame), u)?;
+            let drawn = LightDraw::sample(g, view, (&x, &material, frame), u)?;
             path.light = Some(LightVertex {
                 end: drawn.end,
                 wi: drawn.wi,
@@ -297,7 +297,7 @@ impl Walk {
         view: &SceneView,
         rng: &mut Rng,
         path: &mut PathVertices,
-        material: &Material,
+        material: MaterialAt,
     ) -> Option<Query> {
         let (x, wo) = (self.x, self.wo);
         let frame = Frame::facing(&x, wo);
@@ -343,7 +343,7 @@ impl Walk {
         g: &PathGenerator,
         view: &SceneView,
         rng: &mut Rng,
-        (material, frame): (&Material, Frame),
+        (material, frame): (MaterialAt, Frame),
     ) -> Option<Ray> {
         self.pending = None;
         if view.scene.light_count() == 0 {
@@ -354,7 +354,7 @@ impl Walk {
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
-        let drawn = LightDraw::sample(g, view, (&self.x, material, frame), u)?;
+        let drawn = LightDraw::sample(g, view, (&self.x, &material, frame), u)?;
         let f = brdf::eval(material, frame, self.wo, drawn.wi).as_dvec3() * drawn.le;
         // Also false for a NaN.
         let carries = f.max_element() > 0.0;
@@ -386,7 +386,7 @@ impl Walk {
         &mut self,
         g: &PathGenerator,
         rng: &mut Rng,
-        (material, frame): (&Material, Frame),
+        (material, frame): (MaterialAt, Frame),
         absorption: f64,
     ) -> Option<(Vec3, f64)> {
         let (x, wo) = (self.x, self.wo);
@@ -420,7 +420,7 @@ impl Walk {
             }
         };
         // Above the surface, or anywhere off it through a rough dielectric.
-        let cos = brdf::cosine(material, frame, wi)?;
+        let cos = brdf::cosine(&material, frame, wi)?;
         let f = brdf::eval(material, frame, wo, wi);
         if f.max_element() <= 0.0 {
             return None;

@@ -22,7 +22,7 @@
 
 use super::specular;
 use crate::path::SurfacePoint;
-use crate::scene::{Glossy, Material};
+use crate::scene::{Glossy, Material, MaterialAt};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 
@@ -107,18 +107,18 @@ fn channel_sum(c: Vec3) -> f64 {
 }
 
 /// Probability of sampling the Lambertian lobe rather than the glossy lobe: by albedo
-/// (Phong's `ks`, a microfacet lobe's reflectance).
-fn diffuse_probability(m: &Material) -> f64 {
+/// (Phong's `ks`, a microfacet lobe's reflectance), at the hit.
+fn diffuse_probability(m: &MaterialAt) -> f64 {
+    let (specular, diffuse) = m.glossy_reflectances();
     let s = match &m.glossy {
         Glossy::None => 0.0,
-        Glossy::Phong { ks, .. } => channel_sum(*ks),
-        Glossy::RoughConductor(c) => channel_sum(c.specular_reflectance),
-        Glossy::RoughPlastic(p) => channel_sum(p.specular_reflectance + p.diffuse_reflectance),
+        Glossy::Phong { .. } | Glossy::RoughConductor(_) => channel_sum(specular),
+        Glossy::RoughPlastic(_) => channel_sum(specular + diffuse),
         Glossy::RoughDielectric(d) => {
             channel_sum(d.specular_reflectance + d.specular_transmittance)
         }
     };
-    let d = channel_sum(m.kd);
+    let d = channel_sum(m.kd());
     if d + s > 0.0 {
         d / (d + s)
     } else {
@@ -153,8 +153,10 @@ pub fn cosine(m: &Material, frame: Frame, wi: Vec3) -> Option<f32> {
 }
 
 /// BSDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta), and below the surface
-/// for every lobe but a rough dielectric's.
-pub fn eval(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+/// for every lobe but a rough dielectric's. `m` is a material at a hit ([`MaterialAt`]), or
+/// a plain `&Material` (its constant parameters), as for every function here.
+pub fn eval<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    let m = m.into();
     let n = frame.n;
     if m.mirror || n.dot(wo) <= 0.0 {
         return Vec3::ZERO;
@@ -167,37 +169,40 @@ pub fn eval(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     if n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
     }
-    let f = m.kd * std::f32::consts::FRAC_1_PI;
+    let f = m.kd() * std::f32::consts::FRAC_1_PI;
+    let (ks, diffuse) = m.glossy_reflectances();
     match &m.glossy {
         Glossy::None => f,
-        Glossy::Phong { ks, ns } => {
+        Glossy::Phong { ns, .. } => {
             let c = cos_lobe(n, wo, wi);
             if c > 0.0 && ks.max_element() > 0.0 {
                 let ns = *ns as f64;
-                f + *ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32
+                f + ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32
             } else {
                 f
             }
         }
         Glossy::RoughConductor(c) => {
             let b = frame.basis();
-            f + c.eval(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+            f + c.eval_with(ks, Frame::to_local(&b, wo), Frame::to_local(&b, wi))
         }
         Glossy::RoughPlastic(p) => {
             let b = frame.basis();
-            f + p.eval(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+            let (wo, wi) = (Frame::to_local(&b, wo), Frame::to_local(&b, wi));
+            f + p.eval_with((ks, diffuse), wo, wi)
         }
         Glossy::RoughDielectric(_) => unreachable!("evaluated above"),
     }
 }
 
 /// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
-pub fn pdf(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
+pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
+    let m = m.into();
     if m.mirror {
         return 0.0;
     }
     let n = frame.n;
-    let p_diffuse = diffuse_probability(m);
+    let p_diffuse = diffuse_probability(&m);
     let cos = n.as_dvec3().normalize().dot(wi.as_dvec3().normalize());
     let diffuse = if cos > 0.0 {
         p_diffuse * cos * FRAC_1_PI
@@ -207,9 +212,9 @@ pub fn pdf(m: &Material, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
     let p_glossy = 1.0 - p_diffuse;
     let glossy = match &m.glossy {
         Glossy::None => return diffuse,
-        Glossy::Phong { ks, ns } => {
+        Glossy::Phong { ns, .. } => {
             let c = cos_lobe(n, wo, wi);
-            if c > 0.0 && ks.max_element() > 0.0 {
+            if c > 0.0 && m.glossy_reflectances().0.max_element() > 0.0 {
                 let ns = *ns as f64;
                 p_glossy * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns)
             } else {
@@ -261,13 +266,19 @@ fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
 /// mixture anyway. `u[0]` picks the lobe (rescaled, it picks a rough plastic's lobe, or a
 /// rough dielectric's reflection or refraction, too), `u[1]` and `u[2]` drive it. A rough
 /// dielectric's direction may lie below the surface.
-pub fn sample_direction(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<Vec3> {
+pub fn sample_direction<'a>(
+    m: impl Into<MaterialAt<'a>>,
+    frame: Frame,
+    wo: Vec3,
+    u: [f64; 3],
+) -> Option<Vec3> {
+    let m = m.into();
     if !m.scatters() {
         return None;
     }
     let n = frame.n;
     let phi = 2.0 * PI * u[2];
-    let p_diffuse = diffuse_probability(m);
+    let p_diffuse = diffuse_probability(&m);
     if u[0] < p_diffuse {
         return Some(around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi).as_vec3());
     }
@@ -302,7 +313,13 @@ pub fn sample_direction(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Op
 /// (where [`cosine`] says the material sends nothing, or a black material), and for a smooth
 /// dielectric, whose sampling needs the stored (not facing) normal's side:
 /// [`specular::sample`] samples every delta BSDF. The weight is `f |cos θ_i| / pdf`.
-pub fn sample(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<BrdfSample> {
+pub fn sample<'a>(
+    m: impl Into<MaterialAt<'a>>,
+    frame: Frame,
+    wo: Vec3,
+    u: [f64; 3],
+) -> Option<BrdfSample> {
+    let m = m.into();
     if m.mirror {
         return match m.dielectric {
             Some(_) => None,
@@ -311,7 +328,7 @@ pub fn sample(m: &Material, frame: Frame, wo: Vec3, u: [f64; 3]) -> Option<BrdfS
     }
     let wi = sample_direction(m, frame, wo, u)?;
     let pdf = pdf(m, frame, wo, wi);
-    let cos = cosine(m, frame, wi)?;
+    let cos = cosine(&m, frame, wi)?;
     if pdf <= 0.0 {
         return None;
     }

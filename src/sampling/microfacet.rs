@@ -286,11 +286,17 @@ pub struct RoughConductor {
 impl RoughConductor {
     /// `f(wo, wi)`, without the cosine.
     pub fn eval(&self, wo: DVec3, wi: DVec3) -> Vec3 {
+        self.eval_with(self.specular_reflectance, wo, wi)
+    }
+
+    /// [`Self::eval`] with `specular_reflectance` in place of the lobe's own (a texture's
+    /// value at the hit).
+    pub fn eval_with(&self, specular_reflectance: Vec3, wo: DVec3, wi: DVec3) -> Vec3 {
         let Some((value, h)) = reflection(&self.microfacet, wo, wi) else {
             return Vec3::ZERO;
         };
         let fresnel = fresnel_conductor(wo.dot(h) as f32, self.eta, self.k);
-        fresnel * self.specular_reflectance * value as f32
+        fresnel * specular_reflectance * value as f32
     }
 
     pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
@@ -532,15 +538,22 @@ impl RoughPlastic {
 
     /// `f(wo, wi)`, without the cosine: the interface's reflection and the base's light.
     pub fn eval(&self, wo: DVec3, wi: DVec3) -> Vec3 {
+        let reflectances = (self.specular_reflectance, self.diffuse_reflectance);
+        self.eval_with(reflectances, wo, wi)
+    }
+
+    /// [`Self::eval`] with the (specular, diffuse) reflectances `reflectances` in place of
+    /// the lobe's own (textures' values at the hit). The share of specular sampling stays
+    /// the one of the lobe's reflectances (a texture's mean, as in Mitsuba).
+    pub fn eval_with(&self, (specular, kd): (Vec3, Vec3), wo: DVec3, wi: DVec3) -> Vec3 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Vec3::ZERO;
         }
         let mut f = Vec3::ZERO;
         if let Some((value, h)) = reflection(&self.microfacet, wo, wi) {
             let fresnel = fresnel_dielectric(wo.dot(h), f64::from(self.eta)).0;
-            f += self.specular_reflectance * (fresnel * value) as f32;
+            f += specular * (fresnel * value) as f32;
         }
-        let kd = self.diffuse_reflectance;
         let fdr = self.internal_reflectance as f32;
         let base = if self.nonlinear {
             kd / (Vec3::ONE - kd * fdr)

@@ -21,7 +21,7 @@
 //! those of the full densities.
 
 use super::brdf::{facing_normal, reflect, BrdfSample};
-use crate::scene::{Dielectric, Material};
+use crate::scene::{Dielectric, Material, MaterialAt};
 use glam::{DVec3, Vec3};
 
 /// The dielectric Fresnel reflectance for `cos_theta_i` (against the normal on the
@@ -99,10 +99,11 @@ pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 /// apart by it, as Mitsuba's in its shading frame) seen from unit `wo`. `u` (uniform in [0, 1)) picks a dielectric's
 /// reflection (`u < F`) or transmission; a mirror does not use it. The sample's `pdf` is 1
 /// (see the module documentation); `None` where it carries nothing.
-pub fn sample(m: &Material, ns: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
+pub fn sample<'a>(m: impl Into<MaterialAt<'a>>, ns: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
+    let m = m.into();
     let n = facing_normal(ns, wo);
     let Some(d) = &m.dielectric else {
-        return (m.ks.max_element() > 0.0).then(|| BrdfSample {
+        return (m.ks().max_element() > 0.0).then(|| BrdfSample {
             wi: reflect(wo, n).normalize(),
             pdf: 1.0,
             weight: m.mirror_reflectance(n.dot(wo)),
@@ -111,7 +112,7 @@ pub fn sample(m: &Material, ns: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
     };
     let (ns64, wo64) = (ns.as_dvec3().normalize(), wo.as_dvec3().normalize());
     let (wi, weight) = if u < reflect_probability(d, ns64.dot(wo64)) {
-        (reflect(wo, n).normalize(), m.ks)
+        (reflect(wo, n).normalize(), m.ks())
     } else {
         let (wi, scale) = transmitted(d, ns64, wo64);
         (wi.as_vec3(), d.transmittance * scale as f32)

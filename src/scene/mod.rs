@@ -7,6 +7,7 @@ pub mod envmap;
 mod file;
 mod lights;
 mod shading;
+pub mod texture;
 mod validate;
 pub mod xml;
 
@@ -15,6 +16,7 @@ pub use environment::Environment;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
 pub use lights::{DeltaArrival, DeltaLight, LightPick};
 pub use shading::Shading;
+pub use texture::{MaterialAt, MaterialTextures, Texture};
 
 use crate::accel::TriangleMesh;
 use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
@@ -79,6 +81,9 @@ pub struct Material {
     /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
     /// [`crate::sampling::specular`]).
     pub dielectric: Option<Dielectric>,
+    /// The textured parameters, if any (see [`texture`]): they override the fields above
+    /// at each hit, through [`Material::at`].
+    pub textures: Option<std::sync::Arc<MaterialTextures>>,
 }
 
 /// The glossy (non-delta, non-Lambertian) lobe of a [`Material`], evaluated, weighed and
@@ -119,6 +124,18 @@ impl Glossy {
         }
     }
 
+    /// The lobe's specular reflectance (Phong's `ks`, a microfacet lobe's
+    /// `specular_reflectance`) and diffuse one (a rough plastic's base); zero where absent.
+    pub fn reflectances(&self) -> (Vec3, Vec3) {
+        match self {
+            Glossy::None => (Vec3::ZERO, Vec3::ZERO),
+            Glossy::Phong { ks, .. } => (*ks, Vec3::ZERO),
+            Glossy::RoughConductor(c) => (c.specular_reflectance, Vec3::ZERO),
+            Glossy::RoughPlastic(p) => (p.specular_reflectance, p.diffuse_reflectance),
+            Glossy::RoughDielectric(d) => (d.specular_reflectance, Vec3::ZERO),
+        }
+    }
+
     /// Whether the lobe reads the shading frame's tangent (Mitsuba's `sh_frame.s`).
     pub fn is_anisotropic(&self) -> bool {
         match self {
@@ -153,6 +170,7 @@ pub static BLACK: Material = Material {
     two_sided: true,
     conductor: None,
     dielectric: None,
+    textures: None,
 };
 
 impl Material {
@@ -410,6 +428,16 @@ impl Scene {
         }
     }
 
+    /// Mitsuba's texture coordinates of primitive `prim` at the hit parameters `(u, v)`: a
+    /// triangle's interpolated vertex coordinates (its barycentrics where its mesh has
+    /// none), an analytic shape's own parameterisation (see [`crate::accel::Analytic`]).
+    pub fn uv(&self, prim: u32, (u, v): (f32, f32)) -> glam::Vec2 {
+        match self.mesh.triangles.get(prim as usize) {
+            Some(&t) => self.shading.uv(t, u, v),
+            None => glam::Vec2::new(u, v),
+        }
+    }
+
     /// Mitsuba's shading tangent (`sh_frame.s`) of primitive `prim`, whose unit geometric
     /// normal is `ng` and whose shading normal is `ns` there: for a triangle its `dp/du`
     /// ([`shading::dp_du`]) made orthogonal to `ns`. Analytic shapes (which the loader keeps
@@ -647,6 +675,7 @@ fn material(
         two_sided: true,
         conductor: None,
         dielectric: None,
+        textures: None,
     })
 }
 

@@ -61,7 +61,7 @@ impl Guided {
     /// The guided BSDF of `guide` at the vertex, as the `k`-th non-delta vertex of a path.
     pub(crate) fn bsdf<'a>(&'a self, guide: &'a Guide, k: usize) -> GuidedBsdf<'a> {
         let bsdf = Bsdf {
-            material: &self.v.m,
+            material: (&self.v.m).into(),
             frame: self.v.frame(),
             wo: self.v.wo,
             ns: self.v.n,

@@ -27,6 +27,7 @@ fn lobe(glossy: Glossy) -> Material {
         two_sided: false,
         conductor: None,
         dielectric: None,
+        textures: None,
     }
 }
 

@@ -49,6 +49,7 @@ fn tinted(
         two_sided: true,
         conductor: None,
         dielectric: None,
+        textures: None,
     }
 }
 

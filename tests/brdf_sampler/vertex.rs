@@ -36,6 +36,7 @@ pub(crate) fn material(kd: Vec3, ks: Vec3, ns: f32) -> Material {
         two_sided: true,
         conductor: None,
         dielectric: None,
+        textures: None,
     }
 }
 

@@ -11,10 +11,11 @@ use super::props::Props;
 use super::shapes::{self, Placement};
 use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
+use super::textures::{material_textures, Textures};
 use crate::accel::{Analytic, TriangleMesh};
 use crate::scene::{
-    triangle_area, Camera, Dielectric, Emitters, Environment, Glossy, Material, RenderDefaults,
-    Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    triangle_area, Camera, Dielectric, Emitters, Environment, Glossy, Material, MaterialTextures,
+    RenderDefaults, Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -36,6 +37,8 @@ struct Geometry {
     degenerate: usize,
     /// The mesh files the shapes were read from.
     files: Vec<PathBuf>,
+    /// The BSDFs' textures, and the files they were read from.
+    textures: Textures,
 }
 
 pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
@@ -90,9 +93,11 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         materials,
         shapes,
         shape_material,
-        files,
+        mut files,
+        textures,
         ..
     } = geometry;
+    files.extend(textures.files);
     if triangles.is_empty() && shapes.is_empty() {
         return Err(doc.error(root.loc(), "the scene has no shapes"));
     }
@@ -243,7 +248,7 @@ fn shape_material(
         Some(&m) => m,
         None => {
             let mut m = match key.0 {
-                Some(b) => bsdf(&Props::new(p.doc, b), warnings)?,
+                Some(b) => bsdf(&Props::new(p.doc, b), &mut g.textures, warnings)?,
                 None => diffuse(DVec3::splat(0.5), "default diffuse".into()),
             };
             if let Some(e) = key.1 {
@@ -269,11 +274,12 @@ fn diffuse(kd: DVec3, name: String) -> Material {
         two_sided: false,
         conductor: None,
         dielectric: None,
+        textures: None,
     }
 }
 
-/// A BSDF as a material (one-sided unless `twosided`).
-fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
+/// A BSDF as a material (one-sided unless `twosided`), its textures built through `tex`.
+fn bsdf(p: &Props, tex: &mut Textures, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
     let name = p
         .object()
         .id
@@ -281,11 +287,10 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
         .unwrap_or_else(|| format!("{} at {}", p.what(), p.doc.at(p.loc())));
     let m = match p.object().plugin.as_str() {
         "diffuse" => {
-            let kd = p.color("reflectance", ColorUse::Reflectance, warnings)?.unwrap_or(DVec3::splat(0.5));
-            if kd.max_element() > 1.0 || kd.min_element() < 0.0 {
-                return Err(p.error(format!("`reflectance` {kd} is outside [0, 1] (it would create energy)")));
-            }
-            diffuse(kd, name)
+            let kd = tex.reflectance(p, "reflectance", 0.5, warnings)?;
+            let mut m = diffuse(kd.constant, name);
+            m.textures = material_textures(MaterialTextures { kd: kd.texture, ..Default::default() });
+            m
         }
         "twosided" => {
             let inner = p.children_of("bsdf");
@@ -299,20 +304,20 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
                 "dielectric" | "thindielectric" | "roughdielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
                 _ => {}
             }
-            let mut m = bsdf(&q, warnings)?;
+            let mut m = bsdf(&q, tex, warnings)?;
             m.two_sided = true;
             m.name = name;
             m
         }
-        "conductor" => conductor(p, name, warnings)?,
-        "roughconductor" => super::rough::rough_conductor(p, name, warnings)?,
-        "roughplastic" => super::rough::rough_plastic(p, name, warnings)?,
+        "conductor" => conductor(p, name, tex, warnings)?,
+        "roughconductor" => super::rough::rough_conductor(p, name, tex, warnings)?,
+        "roughplastic" => super::rough::rough_plastic(p, name, tex, warnings)?,
         "roughdielectric" => super::rough::rough_dielectric(p, name, warnings)?,
         // A delta lobe beside a diffuse one, where genpath's vertices are either delta or
         // not (see docs/scenes.md).
         "plastic" => return Err(p.error("genpath does not implement the smooth `plastic` BSDF (a delta reflection beside a diffuse lobe at one vertex; use `roughplastic` with a small `alpha`)")),
-        "dielectric" => dielectric(p, name, false, warnings)?,
-        "thindielectric" => dielectric(p, name, true, warnings)?,
+        "dielectric" => dielectric(p, name, false, tex, warnings)?,
+        "thindielectric" => dielectric(p, name, true, tex, warnings)?,
         other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric)"))),
     };
     p.finish()?;
@@ -321,34 +326,29 @@ fn bsdf(p: &Props, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
 
 /// Mitsuba's smooth `conductor`: a mirror with the Fresnel reflectance of (η, k), from a
 /// named preset or given; η = 0, k = 1 (a perfect mirror) for `material="none"`, the default.
-fn conductor(p: &Props, name: String, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
-    let ks = specular_reflectance(p, warnings)?;
+fn conductor(
+    p: &Props,
+    name: String,
+    tex: &mut Textures,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let ks = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
     let (eta, k) = complex_ior(p, warnings)?;
     Ok(Material {
         name,
         kd: Vec3::ZERO,
-        ks: ks.as_vec3(),
+        ks: ks.constant.as_vec3(),
         glossy: Glossy::None,
         mirror: true,
         ke: Vec3::ZERO,
         two_sided: false,
         conductor: Some([eta.as_vec3(), k.as_vec3()]),
         dielectric: None,
+        textures: material_textures(MaterialTextures {
+            ks: ks.texture,
+            ..Default::default()
+        }),
     })
-}
-
-/// A conductor's `specular_reflectance` (1 by default), within [0, 1].
-pub(super) fn specular_reflectance(
-    p: &Props,
-    warnings: &mut Vec<String>,
-) -> Result<DVec3, SceneError> {
-    let ks = p
-        .color("specular_reflectance", ColorUse::Reflectance, warnings)?
-        .unwrap_or(DVec3::ONE);
-    if ks.max_element() > 1.0 || ks.min_element() < 0.0 {
-        return Err(p.error(format!("`specular_reflectance` {ks} is outside [0, 1]")));
-    }
-    Ok(ks)
 }
 
 /// A conductor's complex index of refraction (η, k) as Mitsuba's conductors read it: given
@@ -384,12 +384,13 @@ pub(super) fn complex_ior(
 
 /// Mitsuba's smooth `dielectric` (or, `thin`, its `thindielectric`): a two-sided delta BSDF
 /// of η = `int_ior` / `ext_ior` (numbers or Mitsuba's names; bk7 in air by default) that
-/// reflects with `specular_reflectance` and transmits with `specular_transmittance` (both 1
-/// by default; constants only).
+/// reflects with `specular_reflectance` (1 by default, or a texture) and transmits with
+/// `specular_transmittance` (1 by default; a constant).
 fn dielectric(
     p: &Props,
     name: String,
     thin: bool,
+    tex: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let int_ior = super::ior::read(p, "int_ior", "bk7")?;
@@ -405,12 +406,12 @@ fn dielectric(
         }
         Ok(c)
     };
-    let reflectance = colour("specular_reflectance")?;
     let transmittance = colour("specular_transmittance")?;
+    let reflectance = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
     Ok(Material {
         name,
         kd: Vec3::ZERO,
-        ks: reflectance.as_vec3(),
+        ks: reflectance.constant.as_vec3(),
         glossy: Glossy::None,
         mirror: true,
         ke: Vec3::ZERO,
@@ -421,6 +422,10 @@ fn dielectric(
             eta: int_ior / ext_ior,
             transmittance: transmittance.as_vec3(),
             thin,
+        }),
+        textures: material_textures(MaterialTextures {
+            ks: reflectance.texture,
+            ..Default::default()
         }),
     })
 }

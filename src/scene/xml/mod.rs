@@ -14,6 +14,7 @@ mod serialized;
 mod shapes;
 mod spectrum;
 mod tables;
+mod textures;
 mod transform;
 mod values;
 

@@ -3,13 +3,14 @@
 //! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
 //! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
 
-use super::build::{complex_ior, specular_reflectance};
+use super::build::complex_ior;
 use super::props::Props;
 use super::spectrum::ColorUse;
+use super::textures::{material_textures, Textures};
 use crate::sampling::microfacet::{
     Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
 };
-use crate::scene::{Glossy, Material, SceneError};
+use crate::scene::{Glossy, Material, MaterialTextures, SceneError};
 use glam::{DVec3, Vec3};
 
 /// The microfacet distribution of `p`: `distribution` (`beckmann`, Mitsuba's default, or
@@ -46,6 +47,12 @@ fn microfacet(p: &Props) -> Result<Microfacet, SceneError> {
 
 /// A roughness: a positive, finite `<float>` (0.1 by default).
 fn roughness(p: &Props, name: &str) -> Result<f64, SceneError> {
+    if let Some(prop) = p
+        .get(name)
+        .filter(|a| matches!(a.value, super::parse::Value::Object(_)))
+    {
+        return Err(p.prop_error(prop, "a textured roughness is not supported: genpath's roughness is one constant per material (Mitsuba's roughplastic takes a constant too)"));
+    }
     let a = p.float(name, 0.1)?;
     match p.get(name) {
         Some(prop) if !(a.is_finite() && a > 0.0) => Err(p.prop_error(
@@ -68,6 +75,7 @@ fn glossy(name: String, glossy: Glossy) -> Material {
         two_sided: false,
         conductor: None,
         dielectric: None,
+        textures: None,
     }
 }
 
@@ -76,18 +84,24 @@ fn glossy(name: String, glossy: Glossy) -> Material {
 pub(super) fn rough_conductor(
     p: &Props,
     name: String,
+    tex: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let microfacet = microfacet(p)?;
-    let ks = specular_reflectance(p, warnings)?;
+    let ks = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
     let (eta, k) = complex_ior(p, warnings)?;
     let lobe = RoughConductor {
         microfacet,
         eta: eta.as_vec3(),
         k: k.as_vec3(),
-        specular_reflectance: ks.as_vec3(),
+        specular_reflectance: ks.constant.as_vec3(),
     };
-    Ok(glossy(name, Glossy::RoughConductor(lobe)))
+    let mut m = glossy(name, Glossy::RoughConductor(lobe));
+    m.textures = material_textures(MaterialTextures {
+        specular: ks.texture,
+        ..Default::default()
+    });
+    Ok(m)
 }
 
 /// Mitsuba's `roughplastic`: an isotropic distribution, `int_ior` (polypropylene) over
@@ -95,6 +109,7 @@ pub(super) fn rough_conductor(
 pub(super) fn rough_plastic(
     p: &Props,
     name: String,
+    tex: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let microfacet = microfacet(p)?;
@@ -106,29 +121,26 @@ pub(super) fn rough_plastic(
     if int_ior == ext_ior {
         return Err(p.error("the interior and exterior indices of refraction must differ"));
     }
-    let mut reflectance = |what: &str, default: f64| -> Result<DVec3, SceneError> {
-        let c = p
-            .color(what, ColorUse::Reflectance, warnings)?
-            .unwrap_or(DVec3::splat(default));
-        if c.max_element() > 1.0 || c.min_element() < 0.0 {
-            return Err(p.error(format!(
-                "`{what}` {c} is outside [0, 1] (it would create energy)"
-            )));
-        }
-        Ok(c)
-    };
-    let diffuse = reflectance("diffuse_reflectance", 0.5)?;
-    let specular = reflectance("specular_reflectance", 1.0)?;
+    // A texture's constant is its mean: what the lobe's share of specular sampling is
+    // weighed by, as in Mitsuba.
+    let diffuse = tex.reflectance(p, "diffuse_reflectance", 0.5, warnings)?;
+    let specular = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
     let nonlinear = p.bool("nonlinear", false)?;
     let lobe = RoughPlastic::new(
         microfacet,
         // In single precision, as Mitsuba computes it.
         int_ior / ext_ior,
-        diffuse.as_vec3(),
-        specular.as_vec3(),
+        diffuse.constant.as_vec3(),
+        specular.constant.as_vec3(),
         nonlinear,
     );
-    Ok(glossy(name, Glossy::RoughPlastic(Box::new(lobe))))
+    let mut m = glossy(name, Glossy::RoughPlastic(Box::new(lobe)));
+    m.textures = material_textures(MaterialTextures {
+        specular: specular.texture,
+        diffuse: diffuse.texture,
+        ..Default::default()
+    });
+    Ok(m)
 }
 
 /// Mitsuba's `roughdielectric`: the distribution (anisotropic too, along the shading

@@ -144,7 +144,7 @@ pub fn analytic(p: &Props, warnings: &mut Vec<String>) -> Result<Option<Analytic
         }
         let world_center = to_world.transform_point3(center);
         let world_radius = radius * axes[0];
-        Analytic::sphere(world_center, world_radius, flip)
+        Analytic::sphere(world_center, world_radius, flip).and_then(|s| s.turned(linear))
     } else {
         let affine = glam::DAffine3::from_mat4(to_world);
         Analytic::disk(affine, flip)
@@ -181,12 +181,76 @@ pub fn rectangle() -> RawMesh {
     }
 }
 
-/// Mitsuba's cube: [-1, 1]³, four vertices per face with the face's outward normal.
+/// Mitsuba 3.9.1's cube, face by face (normal), its four corners (position) with their
+/// texture coordinates.
+const MITSUBA_CUBE: [([f64; 3], [[f64; 3]; 4], [f32; 8]); 6] = [
+    (
+        [0., -1., 0.],
+        [
+            [1., -1., -1.],
+            [1., -1., 1.],
+            [-1., -1., 1.],
+            [-1., -1., -1.],
+        ],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+    (
+        [0., 1., 0.],
+        [[1., 1., -1.], [-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.]],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+    (
+        [1., 0., 0.],
+        [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+    (
+        [0., 0., 1.],
+        [[1., -1., 1.], [1., 1., 1.], [-1., 1., 1.], [-1., -1., 1.]],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+    (
+        [-1., 0., 0.],
+        [
+            [-1., -1., 1.],
+            [-1., 1., 1.],
+            [-1., 1., -1.],
+            [-1., -1., -1.],
+        ],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+    (
+        [0., 0., -1.],
+        [
+            [1., 1., -1.],
+            [1., -1., -1.],
+            [-1., -1., -1.],
+            [-1., 1., -1.],
+        ],
+        [0., 1., 1., 1., 1., 0., 0., 0.],
+    ),
+];
+
+/// The texture coordinates of Mitsuba's cube at corner `p` of the face of normal `n`.
+fn cube_uv(n: DVec3, p: DVec3) -> Vec2 {
+    let (_, corners, uvs) = MITSUBA_CUBE
+        .iter()
+        .find(|(m, _, _)| DVec3::from(*m) == n)
+        .expect("a cube face");
+    let k = corners
+        .iter()
+        .position(|c| DVec3::from(*c) == p)
+        .expect("a corner of the face");
+    Vec2::new(uvs[2 * k], uvs[2 * k + 1])
+}
+
+/// Mitsuba's cube: [-1, 1]³, four vertices per face with the face's outward normal and
+/// Mitsuba's texture coordinates (genpath's vertices come in another order, which the
+/// image does not see: the coordinates are affine over each face).
 pub fn cube() -> RawMesh {
-    // Mitsuba's cube has texture coordinates too; genpath's, whose vertices come in
-    // another order, has none yet.
     let mut mesh = RawMesh {
         normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
         ..RawMesh::default()
     };
     for axis in 0..3 {
@@ -196,7 +260,11 @@ pub fn cube() -> RawMesh {
             let (u, v) = (DVec3::new(n.y, n.z, n.x), DVec3::new(n.z, n.x, n.y));
             let base = mesh.positions.len() as u32;
             for (a, b) in [(-1., -1.), (1., -1.), (1., 1.), (-1., 1.)] {
-                mesh.positions.push(n + u * a + v * b);
+                let p = n + u * a + v * b;
+                mesh.positions.push(p);
+                if let Some(uvs) = &mut mesh.uvs {
+                    uvs.push(Some(cube_uv(n, p)));
+                }
             }
             // (u × v) is ±n: wind each face so that its normal points outward.
             let t = if u.cross(v).dot(n) > 0.0 {

@@ -1,0 +1,456 @@
+//! Textures (Mitsuba 3's `checkerboard` and `bitmap`) and the materials they vary.
+//!
+//! # How a textured material is evaluated at a hit
+//!
+//! A [`Material`] stays constant per primitive: its untextured parameters are its fields,
+//! and its textures, if any, sit in [`Material::textures`] beside them. Every method looks a
+//! material up at a hit through `SceneView::scattering_material`, which returns a
+//! [`MaterialAt`]: the material by reference plus, for a textured material only, the small
+//! `Copy` value of its textured parameters evaluated at the hit's texture coordinates
+//! ([`Resolved`]: the Lambertian albedo, the delta BSDF's reflectance, the glossy lobe's
+//! specular and diffuse reflectances). The BSDF code ([`crate::sampling::brdf`],
+//! [`crate::sampling::specular`]) reads those parameters through [`MaterialAt`]'s accessors,
+//! which return the material's own field where nothing is textured. So an untextured
+//! scene allocates nothing, clones no name and computes exactly what it computed before
+//! (bit-identical renders), and a textured one costs a texture lookup per material look-up
+//! and no allocation either. Since every method's evaluations at a vertex — its own
+//! sampling, another generator's density at a vertex it did not draw, a guide's training
+//! records — go through the same look-up at the same [`crate::path::SurfacePoint`] (which
+//! carries the hit's texture coordinates), all of them see the same textured values.
+//!
+//! What textures do not vary: a rough plastic's share of specular sampling is computed from
+//! the textures' means, as Mitsuba computes it; roughness (`alpha`) is a constant (a
+//! textured one is refused when the scene is loaded).
+
+use super::Material;
+use crate::image::srgb;
+use glam::{Affine2, Vec2, Vec3};
+use std::path::Path;
+use std::sync::Arc;
+
+/// The most texels a bitmap may hold (16384²: 3 GiB of linear RGB), so that a typo or a
+/// hostile file fails with a message instead of exhausting memory.
+pub const MAX_TEXELS: u64 = 1 << 28;
+
+/// How a bitmap's texels are looked up (Mitsuba's `filter_type`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Nearest,
+    Bilinear,
+}
+
+/// What a bitmap's lookups outside [0, 1]² read (Mitsuba's `wrap_mode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+/// A bitmap texture: linear RGB texels (row 0 at `v = 0`, the image's top), looked up as
+/// Mitsuba 3's `bitmap` looks them up in its RGB variants.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bitmap {
+    width: u32,
+    height: u32,
+    /// Row-major, linear (sRGB-decoded unless `raw`).
+    texels: Vec<[f32; 3]>,
+    filter: Filter,
+    wrap: Wrap,
+    to_uv: Affine2,
+    /// The texels' mean luminance (Mitsuba's `mean()`).
+    mean: f32,
+}
+
+/// Rec. 709 luminance of a linear RGB colour (Mitsuba's `luminance`).
+pub fn luminance(c: Vec3) -> f32 {
+    c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169
+}
+
+impl Bitmap {
+    /// The texture of `width × height` linear texels (row 0 at the top), which must be
+    /// non-empty and match the size.
+    pub fn new(
+        width: u32,
+        height: u32,
+        texels: Vec<[f32; 3]>,
+        (filter, wrap, to_uv): (Filter, Wrap, Affine2),
+    ) -> Self {
+        assert!(width > 0 && height > 0);
+        assert_eq!(texels.len() as u64, u64::from(width) * u64::from(height));
+        let sum: f64 = texels
+            .iter()
+            .map(|t| f64::from(luminance(Vec3::from(*t))))
+            .sum();
+        let mean = (sum / texels.len() as f64) as f32;
+        Self {
+            width,
+            height,
+            texels,
+            filter,
+            wrap,
+            to_uv,
+            mean,
+        }
+    }
+
+    /// The bitmap of the image file at `path` (read by [`crate::image::read_encoded`]), its
+    /// integer formats' values sRGB-decoded unless `raw` (float formats' are linear), looked
+    /// up by `lookup`. The error names the file: unreadable, beyond [`MAX_TEXELS`], or with
+    /// a texel that is not finite or negative.
+    pub fn read(path: &Path, raw: bool, lookup: (Filter, Wrap, Affine2)) -> Result<Self, String> {
+        let (image, encoded) = crate::image::read_encoded(path).map_err(|e| e.to_string())?;
+        let texels = u64::from(image.width) * u64::from(image.height);
+        if texels > MAX_TEXELS || texels == 0 {
+            return Err(format!(
+                "{}: {}×{} texels is not within 1..={MAX_TEXELS}, genpath's limit",
+                path.display(),
+                image.width,
+                image.height
+            ));
+        }
+        let mut pixels = image.pixels;
+        if let Some(i) = pixels
+            .iter()
+            .position(|t| t.iter().any(|c| !(c.is_finite() && *c >= 0.0)))
+        {
+            let w = image.width as usize;
+            return Err(format!(
+                "{}: texel ({}, {}) is {:?}: texels must be finite and non-negative",
+                path.display(),
+                i % w,
+                i / w,
+                pixels[i]
+            ));
+        }
+        if encoded && !raw {
+            decode_srgb(&mut pixels);
+        }
+        Ok(Self::new(image.width, image.height, pixels, lookup))
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The texel index along an axis of `n` texels for the integer coordinate `i`.
+    fn wrap(&self, i: i64, n: u32) -> usize {
+        let n = i64::from(n);
+        let j = match self.wrap {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Mirror => {
+                let m = i.rem_euclid(2 * n);
+                if m >= n {
+                    2 * n - 1 - m
+                } else {
+                    m
+                }
+            }
+        };
+        j as usize
+    }
+
+    fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let (x, y) = (self.wrap(x, self.width), self.wrap(y, self.height));
+        Vec3::from(self.texels[y * self.width as usize + x])
+    }
+
+    /// The colour at texture coordinates `uv` (before `to_uv`).
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        let uv = self.to_uv.transform_point2(uv);
+        let res = Vec2::new(self.width as f32, self.height as f32);
+        // Floats beyond i64 (or NaN) saturate: the wrap still gives a texel.
+        match self.filter {
+            Filter::Nearest => {
+                let p = (uv * res).floor();
+                self.texel(p.x as i64, p.y as i64)
+            }
+            Filter::Bilinear => {
+                let p = uv * res - 0.5;
+                let i = p.floor();
+                let w1 = p - i;
+                let w0 = Vec2::ONE - w1;
+                let (x, y) = (i.x as i64, i.y as i64);
+                let c0 = self.texel(x, y) * w0.x + self.texel(x + 1, y) * w1.x;
+                let c1 = self.texel(x, y + 1) * w0.x + self.texel(x + 1, y + 1) * w1.x;
+                c0 * w0.y + c1 * w1.y
+            }
+        }
+    }
+}
+
+/// Mitsuba's `checkerboard` with constant colours: `color0` where the fractional parts of
+/// `u` and `v` (after `to_uv`) are both above or both at most 1/2, else `color1`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkerboard {
+    pub color0: Vec3,
+    pub color1: Vec3,
+    pub to_uv: Affine2,
+}
+
+impl Checkerboard {
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        let uv = self.to_uv.transform_point2(uv);
+        let f = uv - uv.floor();
+        if (f.x > 0.5) == (f.y > 0.5) {
+            self.color0
+        } else {
+            self.color1
+        }
+    }
+}
+
+/// A spectrum-valued texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    Checkerboard(Checkerboard),
+    Bitmap(Arc<Bitmap>),
+}
+
+impl Texture {
+    /// The texture's colour at texture coordinates `uv`.
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        match self {
+            Texture::Checkerboard(c) => c.eval(uv),
+            Texture::Bitmap(b) => b.eval(uv),
+        }
+    }
+
+    /// Mitsuba's `mean()`: the checkerboard's colours' mean channel values averaged, a
+    /// bitmap's mean luminance.
+    pub fn mean(&self) -> f32 {
+        match self {
+            Texture::Checkerboard(c) => {
+                0.5 * (c.color0.element_sum() + c.color1.element_sum()) / 3.0
+            }
+            Texture::Bitmap(b) => b.mean,
+        }
+    }
+
+    /// The largest and smallest channel value the texture can return (bilinear lookups
+    /// stay within their texels').
+    pub fn range(&self) -> (f32, f32) {
+        match self {
+            Texture::Checkerboard(c) => (
+                c.color0.min_element().min(c.color1.min_element()),
+                c.color0.max_element().max(c.color1.max_element()),
+            ),
+            Texture::Bitmap(b) => b
+                .texels
+                .iter()
+                .fold((f32::INFINITY, 0.0f32), |(lo, hi), t| {
+                    let t = Vec3::from(*t);
+                    (lo.min(t.min_element()), hi.max(t.max_element()))
+                }),
+        }
+    }
+}
+
+/// The textures of a material's spectrum parameters; `None` where the parameter is a
+/// constant (the material's field).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialTextures {
+    /// The Lambertian albedo ([`Material::kd`]: `diffuse`'s `reflectance`).
+    pub kd: Option<Texture>,
+    /// The delta BSDF's reflectance ([`Material::ks`]: `conductor`'s and the dielectrics'
+    /// `specular_reflectance`).
+    pub ks: Option<Texture>,
+    /// The glossy lobe's `specular_reflectance` (`roughconductor`, `roughplastic`).
+    pub specular: Option<Texture>,
+    /// The rough plastic's `diffuse_reflectance`.
+    pub diffuse: Option<Texture>,
+}
+
+/// A material's textured parameters evaluated at one hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolved {
+    pub kd: Vec3,
+    pub ks: Vec3,
+    pub specular: Vec3,
+    pub diffuse: Vec3,
+}
+
+/// A material as it scatters at one hit: the material, and its textured parameters there
+/// (see the module documentation). Dereferences to the material for what textures do not
+/// vary.
+#[derive(Clone, Copy, Debug)]
+pub struct MaterialAt<'a> {
+    pub material: &'a Material,
+    resolved: Option<Resolved>,
+}
+
+impl<'a> From<&'a Material> for MaterialAt<'a> {
+    /// The material with its constant parameters (its textures, if any, unread).
+    fn from(material: &'a Material) -> Self {
+        Self {
+            material,
+            resolved: None,
+        }
+    }
+}
+
+impl std::ops::Deref for MaterialAt<'_> {
+    type Target = Material;
+    fn deref(&self) -> &Material {
+        self.material
+    }
+}
+
+impl Material {
+    /// The material at texture coordinates `uv`: its textures evaluated there.
+    #[inline]
+    pub fn at(&self, uv: Vec2) -> MaterialAt<'_> {
+        let Some(t) = &self.textures else {
+            return MaterialAt::from(self);
+        };
+        let pick = |tex: &Option<Texture>, constant: Vec3| match tex {
+            Some(t) => t.eval(uv),
+            None => constant,
+        };
+        let (specular, diffuse) = self.glossy.reflectances();
+        MaterialAt {
+            material: self,
+            resolved: Some(Resolved {
+                kd: pick(&t.kd, self.kd),
+                ks: pick(&t.ks, self.ks),
+                specular: pick(&t.specular, specular),
+                diffuse: pick(&t.diffuse, diffuse),
+            }),
+        }
+    }
+
+    /// Whether any parameter is textured (the hit's texture coordinates matter).
+    pub fn is_textured(&self) -> bool {
+        self.textures.is_some()
+    }
+}
+
+impl MaterialAt<'_> {
+    /// The Lambertian albedo here.
+    #[inline]
+    pub fn kd(&self) -> Vec3 {
+        self.resolved.map_or(self.material.kd, |r| r.kd)
+    }
+
+    /// The delta BSDF's reflectance here.
+    #[inline]
+    pub fn ks(&self) -> Vec3 {
+        self.resolved.map_or(self.material.ks, |r| r.ks)
+    }
+
+    /// The glossy lobe's specular and diffuse reflectances here (see
+    /// [`super::Glossy::reflectances`]).
+    #[inline]
+    pub fn glossy_reflectances(&self) -> (Vec3, Vec3) {
+        match self.resolved {
+            None => self.material.glossy.reflectances(),
+            Some(r) => (r.specular, r.diffuse),
+        }
+    }
+
+    /// Whether the glossy lobe is present and reflects anything here.
+    pub fn glossy_reflects(&self) -> bool {
+        match self.resolved {
+            None => self.material.glossy.reflects(),
+            Some(r) => match self.material.glossy {
+                super::Glossy::None => false,
+                super::Glossy::RoughPlastic(_) => {
+                    r.specular.max_element() > 0.0 || r.diffuse.max_element() > 0.0
+                }
+                _ => r.specular.max_element() > 0.0,
+            },
+        }
+    }
+
+    /// [`Material::is_glossy`] here.
+    pub fn is_glossy(&self) -> bool {
+        !self.mirror && self.glossy_reflects()
+    }
+
+    /// [`Material::scatters`] here.
+    pub fn scatters(&self) -> bool {
+        if self.resolved.is_none() {
+            return self.material.scatters();
+        }
+        if self.mirror {
+            self.ks().max_element() > 0.0
+                || self
+                    .dielectric
+                    .is_some_and(|d| d.transmittance.max_element() > 0.0)
+        } else {
+            self.kd().max_element() > 0.0 || self.glossy_reflects()
+        }
+    }
+
+    /// [`Material::mirror_reflectance`] here.
+    pub fn mirror_reflectance(&self, cos_theta: f32) -> Vec3 {
+        match self.conductor {
+            None => self.ks(),
+            Some([eta, k]) => self.ks() * super::fresnel_conductor(cos_theta, eta, k),
+        }
+    }
+}
+
+/// The sRGB-encoded values `encoded` decoded to linear ones.
+pub fn decode_srgb(texels: &mut [[f32; 3]]) {
+    for t in texels {
+        *t = t.map(srgb::decode);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bitmap(filter: Filter, wrap: Wrap) -> Bitmap {
+        // Two texels in a row: black, white.
+        Bitmap::new(
+            2,
+            1,
+            vec![[0.0; 3], [1.0; 3]],
+            (filter, wrap, Affine2::IDENTITY),
+        )
+    }
+
+    #[test]
+    fn nearest_lookups_wrap_as_mitsuba() {
+        let at = |w, u: f32| bitmap(Filter::Nearest, w).eval(Vec2::new(u, 0.5)).x;
+        let us = [-1.25, -0.75, -0.25, 0.25, 0.75, 1.25, 1.75, 2.25];
+        // Mitsuba 3.9.1's values.
+        let mirror = [1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0];
+        let repeat = [1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0];
+        let clamp = [0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+        for (u, (m, (r, c))) in us.iter().zip(mirror.iter().zip(repeat.iter().zip(clamp))) {
+            assert_eq!(at(Wrap::Mirror, *u), *m, "mirror {u}");
+            assert_eq!(at(Wrap::Repeat, *u), *r, "repeat {u}");
+            assert_eq!(at(Wrap::Clamp, *u), c, "clamp {u}");
+        }
+    }
+
+    #[test]
+    fn bilinear_lookups_interpolate_between_texel_centres() {
+        let b = bitmap(Filter::Bilinear, Wrap::Clamp);
+        assert_eq!(b.eval(Vec2::new(0.5, 0.5)).x, 0.5);
+        assert_eq!(b.eval(Vec2::new(0.25, 0.5)).x, 0.0);
+        assert_eq!(b.eval(Vec2::new(0.625, 0.5)).x, 0.75);
+        let r = bitmap(Filter::Bilinear, Wrap::Repeat);
+        // Between the last texel and the first again.
+        assert_eq!(r.eval(Vec2::new(1.0, 0.5)).x, 0.5);
+        assert_eq!(b.mean, 0.5 * luminance(Vec3::ONE));
+    }
+
+    #[test]
+    fn the_checkerboard_alternates_by_halves() {
+        let c = Checkerboard {
+            color0: Vec3::X,
+            color1: Vec3::Y,
+            to_uv: Affine2::IDENTITY,
+        };
+        assert_eq!(c.eval(Vec2::new(0.25, 0.25)), Vec3::X);
+        assert_eq!(c.eval(Vec2::new(0.75, 0.75)), Vec3::X);
+        assert_eq!(c.eval(Vec2::new(0.75, 0.25)), Vec3::Y);
+        assert_eq!(c.eval(Vec2::new(-0.25, 0.25)), Vec3::Y);
+        assert_eq!(Texture::Checkerboard(c).mean(), 1.0 / 3.0);
+    }
+}
