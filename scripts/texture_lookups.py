@@ -9,7 +9,9 @@ Writes scenes/mitsuba/textures/{grid,small,grey,one}.png (8-bit, written here by
 so that they need nothing but the standard library), float.exr (through Mitsuba's Bitmap),
 and lookups.tsv: for every texture file, filter_type, wrap_mode, raw and to_uv (none, or
 `st`: scale (2, 3) then translate (0.25, 0.1)), Mitsuba's `bitmap` evaluated (`eval`, the
-`scalar_rgb` variant) at a fixed set of texture coordinates inside and outside [0, 1]²; and
+`scalar_rgb` variant) at a fixed set of texture coordinates inside and outside [0, 1]² (none
+of which lands, after `to_uv`, on a texel boundary, where the last bit of rounding decides
+the texel); and
 the `checkerboard` (colours (0.9, 0.5, 0.1) and (0.05, 0.2, 0.7)) at the same points.
 """
 import os
@@ -60,7 +62,7 @@ floats = [0.0, 0.5, 2.0, 0.25, 1.0, 0.125, 3.0, 0.0, 0.75, 0.1, 0.2, 0.3, 1.5, 0
 mi.Bitmap(mi.TensorXf(floats, shape=(2, 3, 3))).write(os.path.join(HERE, "float.exr"))
 
 UVS = [(0.0, 0.0), (0.1, 0.2), (0.5, 0.5), (0.37, 0.81), (0.999, 0.001), (1.0, 1.0),
-       (-0.3, 0.4), (1.2, -0.7), (2.6, 1.45), (-1.55, -2.2), (0.26, 0.74), (0.74, 0.26)]
+       (-0.3, 0.4), (1.2, -0.7), (2.6, 1.45), (-1.55, -2.23), (0.26, 0.74), (0.74, 0.26)]
 ST = mi.ScalarTransform4f().translate([0.25, 0.1, 0.0]) @ mi.ScalarTransform4f().scale([2.0, 3.0, 1.0])
 
 

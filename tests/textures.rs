@@ -113,6 +113,12 @@ fn compare(twin: Twin, select: impl Fn(&Row) -> bool) -> (f32, usize, usize) {
         let err = err / row.rgb.max_element().max(1.0);
         if err > TOLERANCE {
             bad += 1;
+            if twin == Twin::None {
+                eprintln!(
+                    "{} {} {} raw {} {} at {}: {got} against Mitsuba's {}",
+                    row.file, row.filter, row.wrap, row.raw, row.to_uv, row.uv, row.rgb
+                );
+            }
         }
         worst = worst.max(err);
         n += 1;
