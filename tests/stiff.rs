@@ -7,7 +7,9 @@
 //! light samples alone are not compared (see `NEAR_DELTA_GLASS`). Unit cases push generator
 //! parameters to their bounds. A tiny bright sun in an environment map (`sun_env`: one
 //! pixel of 2e5 in a sky of 0.2) converges: `pt`'s standard error falls as 1/√spp and its
-//! means at 16 and 256 spp agree.
+//! means at 16 and 256 spp agree. Huge and single-texel textures (`textures`: an 8192²
+//! bitmap alternating texel by texel, a 1×1 one) pass the check; the same scene with its
+//! texture file missing fails to load, naming the file and the line.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -29,7 +31,7 @@ use genpath::scene::Scene;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-const SCENES: [&str; 15] = [
+const SCENES: [&str; 16] = [
     "tiny_light",
     "grazing_light",
     "phong_1e4",
@@ -45,6 +47,7 @@ const SCENES: [&str; 15] = [
     "rough_glass_1",
     "rough_glass_ior_1",
     "sun_env",
+    "textures",
 ];
 
 /// The scene file of stiff scene `name`: its `scene.xml` (the microfacet cases, rough glass
@@ -300,5 +303,19 @@ fn a_tiny_sun_in_an_environment_map_converges() {
     assert!(
         z < 4.0,
         "means {m16} and {m256} differ by {z:.1} standard errors"
+    );
+}
+
+/// The `textures` scene with its floor's texture file missing: an error naming the missing
+/// file and the scene file's line, not a panic (what `genpath check` and `render` print).
+#[test]
+fn a_missing_texture_names_its_file_and_line() {
+    let defines = [("floor".to_string(), "no_such_texture.png".to_string())];
+    let error = Scene::load_with(&stiff("textures"), &defines)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("no_such_texture.png") && error.contains("scene.xml:16"),
+        "{error}"
     );
 }
