@@ -1175,8 +1175,8 @@ fn every_method_renders_roughglass_as_pt_does_and_a_wrong_density_is_seen() {
 /// The microfacet BSDFs' refusals, each naming the file and line: a roughness that is not
 /// positive and finite, an unknown distribution, `alpha` beside `alpha_u`, `alpha_u`
 /// without `alpha_v`, an anisotropic `roughplastic` (as Mitsuba refuses it), the smooth
-/// `plastic`, and anisotropic roughness where genpath cannot follow Mitsuba's tangent (a
-/// `cube`, an analytic sphere, a mesh without texture coordinates under `flip_normals`);
+/// `plastic`, and anisotropic roughness where genpath cannot follow Mitsuba's tangent (an
+/// analytic sphere, a mesh without texture coordinates under `flip_normals`);
 /// and inside `twosided` too.
 #[test]
 fn microfacet_refusals_name_file_and_line() {
@@ -1208,12 +1208,6 @@ fn microfacet_refusals_name_file_and_line() {
             "anisotropic",
         ),
         (r#"<bsdf type="plastic"/>"#.to_string(), CUBE.to_string(), "smooth `plastic`"),
-        (aniso.clone(), CUBE.to_string(), "`cube`"),
-        (
-            r#"<bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#.to_string(),
-            CUBE.to_string(),
-            "`cube`",
-        ),
         (
             r#"<bsdf type="roughdielectric"><float name="alpha" value="0"/></bsdf>"#.to_string(),
             CUBE.to_string(),

@@ -218,13 +218,11 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
 }
 
 /// Refuses the triangle shapes whose tangent (Mitsuba's `dp/du`, which anisotropic roughness
-/// follows) genpath cannot reproduce: a `cube` (Mitsuba's has texture coordinates, genpath's
-/// not yet), and a mesh without texture coordinates under `flip_normals` (whose `p1 − p0`
-/// genpath's reversed winding changes).
+/// follows) genpath cannot reproduce: a mesh without texture coordinates under
+/// `flip_normals` (whose `p1 − p0` genpath's reversed winding changes). A `cube` has
+/// Mitsuba's texture coordinates, affine over each face, so its dp/du is Mitsuba's whatever
+/// the triangulation.
 fn anisotropic_tangents(p: &Props, how: &Placement, has_uvs: bool) -> Result<(), SceneError> {
-    if p.object().plugin == "cube" {
-        return Err(p.error("an anisotropic BSDF on a `cube`: genpath's cube has no texture coordinates, whose dp/du Mitsuba's tangent follows (use a mesh with UVs)"));
-    }
     if !has_uvs && how.flip_normals {
         return Err(p.error("an anisotropic BSDF on a mesh without texture coordinates and with `flip_normals`: Mitsuba's tangent p1 − p0 follows a vertex order genpath's flipped winding does not keep"));
     }
