@@ -134,9 +134,12 @@ fn lookups_agree_with_mitsuba() {
     assert_eq!(bad, 0, "{bad} of {n} lookups differ (largest {worst:e})");
 }
 
+/// Which rows a twin is compared on.
+type Select = dyn Fn(&Row) -> bool;
+
 #[test]
 fn wrong_lookups_are_told_apart() {
-    let cases: [(Twin, &dyn Fn(&Row) -> bool); 4] = [
+    let cases: [(Twin, &Select); 4] = [
         (Twin::NearestForBilinear, &|r: &Row| {
             r.filter == "bilinear" && r.file == "grid.png"
         }),

@@ -35,7 +35,7 @@ struct Geometry {
     /// Material index of each (BSDF object, emitter object) pair already made.
     made: HashMap<(Option<usize>, Option<usize>), u32>,
     degenerate: usize,
-    /// The mesh files the shapes were read from.
+    /// The mesh and texture files the shapes were read from.
     files: Vec<PathBuf>,
     /// The BSDFs' textures, and the files they were read from.
     textures: Textures,
@@ -93,11 +93,9 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         materials,
         shapes,
         shape_material,
-        mut files,
-        textures,
+        files,
         ..
     } = geometry;
-    files.extend(textures.files);
     if triangles.is_empty() && shapes.is_empty() {
         return Err(doc.error(root.loc(), "the scene has no shapes"));
     }
@@ -246,7 +244,11 @@ fn shape_material(
         Some(&m) => m,
         None => {
             let mut m = match key.0 {
-                Some(b) => bsdf(&Props::new(p.doc, b), &mut g.textures, warnings)?,
+                Some(b) => {
+                    let m = bsdf(&Props::new(p.doc, b), &mut g.textures, warnings)?;
+                    g.files.append(&mut g.textures.files);
+                    m
+                }
                 None => diffuse(DVec3::splat(0.5), "default diffuse".into()),
             };
             if let Some(e) = key.1 {

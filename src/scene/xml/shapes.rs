@@ -181,9 +181,12 @@ pub fn rectangle() -> RawMesh {
     }
 }
 
+/// A cube face: its normal, its four corners and their texture coordinates (u, v pairs).
+type CubeFace = ([f64; 3], [[f64; 3]; 4], [f32; 8]);
+
 /// Mitsuba 3.9.1's cube, face by face (normal), its four corners (position) with their
 /// texture coordinates.
-const MITSUBA_CUBE: [([f64; 3], [[f64; 3]; 4], [f32; 8]); 6] = [
+const MITSUBA_CUBE: [CubeFace; 6] = [
     (
         [0., -1., 0.],
         [
