@@ -469,7 +469,10 @@ fn xml_spheres_and_disks_are_placed_as_mitsuba_places_them() {
             <transform name="to_world"><scale value="2"/><translate y="1"/></transform>
         </shape>"#,
     );
-    let expected = Analytic::sphere(DVec3::new(2.0, 1.0, 0.0), 1.0, false).unwrap();
+    // The texture coordinates turn with to_world's linear part.
+    let expected = Analytic::sphere(DVec3::new(2.0, 1.0, 0.0), 1.0, false)
+        .and_then(|s| s.turned(glam::DMat3::from_diagonal(DVec3::splat(2.0))))
+        .unwrap();
     assert_eq!(shapes, vec![expected]);
     assert!(warnings.is_empty(), "{warnings:?}");
     let (shapes, warnings) = xml_shapes(
@@ -478,7 +481,9 @@ fn xml_spheres_and_disks_are_placed_as_mitsuba_places_them() {
     );
     assert_eq!(
         shapes,
-        vec![Analytic::sphere(DVec3::ZERO, 3.0, true).unwrap()]
+        vec![Analytic::sphere(DVec3::ZERO, 3.0, true)
+            .and_then(|s| s.turned(glam::DMat3::from_diagonal(DVec3::new(3.0, 1.0, 1.0))))
+            .unwrap()]
     );
     assert!(
         warnings.iter().any(|w| w.contains("unevenly")),
