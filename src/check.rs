@@ -311,8 +311,12 @@ fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<Met
 /// The densities `srt` and every evolved generator sample with, from their GA pixels.
 fn survey_densities(view: &SceneView, config: &CheckConfig, plans: &[Plan]) -> PdfSurvey {
     let methods = &config.methods.srt;
-    let srt = mixture_file::srt(view.scene, config.max_bounces, methods.srt_absorption)
-        .with_nee(methods.nee);
+    let srt = mixture_file::srt(
+        view.scene,
+        config.max_bounces,
+        methods.absorption(methods.nee),
+    )
+    .with_nee(methods.nee);
     let mut survey = PdfSurvey::default();
     let camera = &view.scene.camera;
     let centre = (camera.width / 2, camera.height / 2);

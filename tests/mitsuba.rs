@@ -389,7 +389,11 @@ fn every_method_renders_as_pt_does(name: &str) {
     let view = SceneView::new(&scene, accel.as_ref());
     let bounces = scene.render.max_bounces;
     let mut config = CheckConfig::new(64, bounces, 1);
-    let srt = mixture_file::srt(&scene, bounces, config.methods.srt.srt_absorption);
+    let srt = mixture_file::srt(
+        &scene,
+        bounces,
+        config.methods.srt.absorption(config.methods.srt.nee),
+    );
     config.methods.loaded_mixture = Some(srt.clone());
     let report = check(&view, &config).unwrap();
     for m in &report.methods {

@@ -126,7 +126,11 @@ fn the_check_rejects_a_biased_estimator() {
     let view = SceneView::new(&scene, accel.as_ref());
     // srt, its density scaled by 1.5 when evaluated, rendered as `mixture`.
     let mut config = CheckConfig::new(64, 5, 1);
-    let srt = mixture_file::srt(&scene, 5, config.methods.srt.srt_absorption);
+    let srt = mixture_file::srt(
+        &scene,
+        5,
+        config.methods.srt.absorption(config.methods.srt.nee),
+    );
     config.methods.loaded_mixture = Some(srt.with_pdf_error(0, 1.5));
     let report = check(&view, &config).unwrap();
     assert!(!report.passed(), "a density off by 50 % went unnoticed");

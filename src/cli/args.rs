@@ -79,8 +79,10 @@ pub struct SettingsArgs {
     #[arg(long, value_name = "FILE", help_heading = "Mixture (--method mixture)")]
     pub generators: Option<PathBuf>,
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
-    #[arg(long, default_value_t = SrtConfig::default().srt_absorption, value_parser = parse_absorption, help_heading = "srt (--method srt, and the defensive generator of ga)")]
-    pub srt_absorption: f64,
+    /// Default: 0.1 with next-event estimation at every vertex, the paper's 0.5 with `--nee
+    /// end` (and for ga-pt's GA, whose test paths are end-only)
+    #[arg(long, value_parser = parse_absorption, help_heading = "srt (--method srt, and the defensive generator of ga)")]
+    pub srt_absorption: Option<f64>,
     /// Where srt, mixture and ga do next-event estimation: at every non-delta vertex
     /// (balance heuristic over each generator's direction and light-point techniques), or
     /// only at the path's end (the paper's, for its Fig. 7).
@@ -386,7 +388,7 @@ impl MethodArgs {
 /// Loads `settings.mixture.generators`, if set, for `scene`.
 pub fn load_mixture(settings: &mut Settings, scene: &Scene, max_bounces: u32) -> Result<()> {
     if let Some(file) = &settings.mixture.generators {
-        let absorption = settings.srt.srt_absorption;
+        let absorption = settings.srt.absorption(settings.srt.nee);
         settings.loaded_mixture = Some(mixture_file::load(file, scene, max_bounces, absorption)?);
     }
     Ok(())

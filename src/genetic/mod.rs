@@ -108,7 +108,7 @@ impl Default for GaConfig {
             p_weight: 0.3,
             p_absorb: 0.1,
             defensive_weight: 0.05,
-            srt_absorption: crate::path::generator::SRT_ABSORPTION,
+            srt_absorption: crate::path::generator::Nee::default().default_srt_absorption(),
             nee: crate::path::generator::Nee::default(),
             anchor_shift: 0.05,
             max_steps: None,

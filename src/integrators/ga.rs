@@ -25,7 +25,9 @@ pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareE
         gate: config.gate,
         plan_for,
         max_bounces: settings.max_bounces,
-        srt_absorption: config.srt.srt_absorption,
+        srt_absorption: config
+            .srt
+            .absorption(plan_for.test_path_nee(config.srt.nee)),
         nee: config.srt.nee,
         spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
         store: settings.control.learning.as_deref(),

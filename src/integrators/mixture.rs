@@ -18,8 +18,8 @@ pub struct MixtureIntegrator {
 pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let max_bounces = context.settings.max_bounces;
     let srt = &context.config.srt;
-    let mixture =
-        mixture_file::srt(context.view.scene, max_bounces, srt.srt_absorption).with_nee(srt.nee);
+    let mixture = mixture_file::srt(context.view.scene, max_bounces, srt.absorption(srt.nee))
+        .with_nee(srt.nee);
     Ok(Box::new(MixtureIntegrator {
         mixture,
         max_bounces,

@@ -10,7 +10,7 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
-use crate::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN, SRT_ABSORPTION};
+use crate::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
 use serde::de::{self, Visitor};
 use std::path::PathBuf;
@@ -35,8 +35,10 @@ pub struct Settings {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SrtConfig {
-    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
-    pub srt_absorption: f64,
+    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex; by
+    /// default (unset) 0.1 with next-event estimation at every vertex and the paper's 0.5
+    /// with `nee = end` (also for `ga-pt`'s GA, whose test paths are end-only).
+    pub srt_absorption: Option<f64>,
     /// Where the mixture estimators (`srt`, `mixture`, `ga`) do next-event estimation:
     /// `every` non-delta vertex, with the balance heuristic over each generator's direction
     /// and light-point techniques, or only at the path's `end` (the paper's, for its Fig. 7).
@@ -46,9 +48,19 @@ pub struct SrtConfig {
 impl Default for SrtConfig {
     fn default() -> Self {
         Self {
-            srt_absorption: SRT_ABSORPTION,
+            srt_absorption: None,
             nee: Nee::default(),
         }
+    }
+}
+
+impl SrtConfig {
+    /// The `srt` generator's absorption for an estimator with next-event estimation `nee`:
+    /// `srt_absorption` where set, else that estimator's default
+    /// ([`Nee::default_srt_absorption`]).
+    pub fn absorption(&self, nee: Nee) -> f64 {
+        self.srt_absorption
+            .unwrap_or_else(|| nee.default_srt_absorption())
     }
 }
 
@@ -234,9 +246,10 @@ impl Settings {
 
     /// Every setting within its range.
     pub fn validate(&self) -> Result<(), SettingsError> {
-        let a = self.srt.srt_absorption;
-        if !(ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
-            return Err(SettingsError::SrtAbsorption(a));
+        if let Some(a) = self.srt.srt_absorption {
+            if !(ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
+                return Err(SettingsError::SrtAbsorption(a));
+            }
         }
         self.ga.validate()?;
         self.plan.validate()?;
@@ -317,7 +330,7 @@ mod tests {
         s.set("generators", "anchors.toml").unwrap();
         s.set("anchor_shift", "1").unwrap();
         assert_eq!((s.ga.test_paths, s.ga.population), (1234, 7));
-        assert_eq!(s.srt.srt_absorption, 0.25);
+        assert_eq!(s.srt.srt_absorption, Some(0.25));
         assert_eq!(
             s.srt.nee,
             Nee::Every,
@@ -348,7 +361,7 @@ mod tests {
     fn toml_refuses_unknown_keys_and_tables() {
         let s =
             Settings::from_toml("[ga]\ntest_paths = 99\n[srt]\nsrt_absorption = 0.3", "a").unwrap();
-        assert_eq!((s.ga.test_paths, s.srt.srt_absorption), (99, 0.3));
+        assert_eq!((s.ga.test_paths, s.srt.srt_absorption), (99, Some(0.3)));
         for bad in [
             "[ga]\ntest_pathz = 1",
             "[gaa]\ntest_paths = 1",

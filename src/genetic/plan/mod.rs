@@ -89,6 +89,18 @@ pub enum PlanFor {
     Guide,
 }
 
+impl PlanFor {
+    /// The estimator of the GA's test paths, fitness and mixtures for the estimators' `nee`:
+    /// a guide's GA keeps the end-only one, with which `ga-pt` was tuned (the guided path
+    /// tracer does its own next-event estimation).
+    pub fn test_path_nee(self, nee: Nee) -> Nee {
+        match self {
+            PlanFor::Mixture => nee,
+            PlanFor::Guide => Nee::End,
+        }
+    }
+}
+
 /// What a plan is built from: the settings of the GA, of the plan and of the gate, the
 /// estimator it is for, and what the scene's paths are.
 #[derive(Clone, Copy, Debug)]
@@ -126,7 +138,9 @@ impl<'a> PlanInputs<'a> {
             gate: GateConfig::default(),
             plan_for,
             max_bounces,
-            srt_absorption: crate::path::generator::SRT_ABSORPTION,
+            srt_absorption: plan_for
+                .test_path_nee(Nee::default())
+                .default_srt_absorption(),
             nee: Nee::default(),
             spatial_guide: plan_for == PlanFor::Guide,
             store: None,
@@ -265,12 +279,7 @@ impl Plan {
         }
         let scene = view.scene;
         let (width, height) = (scene.camera.width, scene.camera.height);
-        // A guide's GA keeps the end-only estimator's test paths, with which `ga-pt` was
-        // tuned: the guided path tracer does its own next-event estimation.
-        let nee = match plan_for {
-            PlanFor::Mixture => ga.nee,
-            PlanFor::Guide => Nee::End,
-        };
+        let nee = plan_for.test_path_nee(ga.nee);
         let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(nee);
         let mut stats = PlanStats::default();
 
