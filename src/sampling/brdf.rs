@@ -107,8 +107,11 @@ fn channel_sum(c: Vec3) -> f64 {
 }
 
 /// Probability of sampling the Lambertian lobe rather than the glossy lobe: by albedo
-/// (Phong's `ks`, a microfacet lobe's reflectance), at the hit.
+/// (Phong's `ks`, a microfacet lobe's reflectance), at the hit; 1 without a glossy lobe.
 fn diffuse_probability(m: &MaterialAt) -> f64 {
+    if matches!(m.glossy, Glossy::None) {
+        return 1.0;
+    }
     let (specular, diffuse) = m.glossy_reflectances();
     let s = match &m.glossy {
         Glossy::None => 0.0,
@@ -170,12 +173,19 @@ pub fn eval<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) 
         return Vec3::ZERO;
     }
     let f = m.kd() * std::f32::consts::FRAC_1_PI;
+    if matches!(m.glossy, Glossy::None) {
+        return f;
+    }
     let (ks, diffuse) = m.glossy_reflectances();
     match &m.glossy {
         Glossy::None => f,
         Glossy::Phong { ns, .. } => {
-            let c = cos_lobe(n, wo, wi);
-            if c > 0.0 && ks.max_element() > 0.0 {
+            let c = if ks.max_element() > 0.0 {
+                cos_lobe(n, wo, wi)
+            } else {
+                0.0
+            };
+            if c > 0.0 {
                 let ns = *ns as f64;
                 f + ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32
             } else {
@@ -203,9 +213,10 @@ pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -
     }
     let n = frame.n;
     let p_diffuse = diffuse_probability(&m);
-    let cos = n.as_dvec3().normalize().dot(wi.as_dvec3().normalize());
+    // Both are unit vectors: their `f32` dot is the cosine to rounding (no renormalising).
+    let cos = n.dot(wi);
     let diffuse = if cos > 0.0 {
-        p_diffuse * cos * FRAC_1_PI
+        p_diffuse * f64::from(cos) * FRAC_1_PI
     } else {
         0.0
     };
@@ -213,8 +224,12 @@ pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -
     let glossy = match &m.glossy {
         Glossy::None => return diffuse,
         Glossy::Phong { ns, .. } => {
-            let c = cos_lobe(n, wo, wi);
-            if c > 0.0 && m.glossy_reflectances().0.max_element() > 0.0 {
+            let c = if m.glossy_reflectances().0.max_element() > 0.0 {
+                cos_lobe(n, wo, wi)
+            } else {
+                0.0
+            };
+            if c > 0.0 {
                 let ns = *ns as f64;
                 p_glossy * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns)
             } else {
@@ -261,6 +276,17 @@ fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
     (t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c).normalize()
 }
 
+/// A direction about the unit normal `n` with density `cos θ / π` (the Lambertian lobe's)
+/// from two uniform numbers: `cos θ = √(1 − u1)`, so `sin θ = √u1`, and azimuth `2π u2`. In
+/// `f32`, in Duff et al.'s branchless basis ("Building an Orthonormal Basis, Revisited",
+/// glam's `any_orthonormal_pair`); unit to rounding, as the basis is, so not renormalised.
+fn cosine_weighted(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let (t, b) = n.any_orthonormal_pair();
+    let (cos_theta, sin_theta) = ((1.0 - u1).max(0.0).sqrt(), u1.max(0.0).sqrt());
+    let (sin_phi, cos_phi) = (std::f32::consts::TAU * u2).sin_cos();
+    t * (sin_theta * cos_phi) + b * (sin_theta * sin_phi) + n * cos_theta
+}
+
 /// The direction [`sample`] draws from `u` for a non-mirror material (`None` for one that
 /// does not scatter), without its density and weight: for callers that evaluate both for a
 /// mixture anyway. `u[0]` picks the lobe (rescaled, it picks a rough plastic's lobe, or a
@@ -277,16 +303,15 @@ pub fn sample_direction<'a>(
         return None;
     }
     let n = frame.n;
-    let phi = 2.0 * PI * u[2];
     let p_diffuse = diffuse_probability(&m);
     if u[0] < p_diffuse {
-        return Some(around(n.as_dvec3(), (1.0 - u[1]).max(0.0).sqrt(), phi).as_vec3());
+        return Some(cosine_weighted(n, u[1] as f32, u[2] as f32));
     }
     let wi = match &m.glossy {
         Glossy::None => return None,
         Glossy::Phong { ns, .. } => {
             let c = u[1].powf(1.0 / (*ns as f64 + 1.0));
-            around(reflect(wo, n).as_dvec3().normalize(), c, phi).as_vec3()
+            around(reflect(wo, n).as_dvec3().normalize(), c, 2.0 * PI * u[2]).as_vec3()
         }
         _ if n.dot(wo) <= 0.0 => return None,
         Glossy::RoughConductor(c) => {

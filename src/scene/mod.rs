@@ -663,7 +663,9 @@ fn material(
         name: m.name.clone(),
         kd: if mirror { Vec3::ZERO } else { kd },
         ks: if mirror { ks } else { Vec3::ZERO },
-        glossy: match mirror {
+        // Without `Ks` (or as a mirror) there is no glossy lobe: the material is Lambertian,
+        // and the BSDF code runs the Lambertian lobe alone.
+        glossy: match mirror || ks.max_element() <= 0.0 {
             true => Glossy::None,
             false => Glossy::Phong {
                 ks,
