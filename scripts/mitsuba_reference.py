@@ -9,7 +9,9 @@ scenes/mitsuba/*.xml with a sensor), rendered with the `scalar_rgb` variant (the
 sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
 (box, smooth, rough and roughglass: 16384 spp at 64², glass, env, spheres and lights: 16384 spp at 128², legacy and params:
 16384 spp at their own 64 × 48; the tests' 256 spp). --spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
-e.g. Mitsuba's own render at the test's samples, to compare genpath's error with.
+e.g. Mitsuba's own render at the test's samples, to compare genpath's error with, or
+sunroom.xml's reference for the GA's reports (reports/refs/sunroom_ref.exr: its .json says
+how it was made).
 --variant llvm_ad_rgb (with `apt-get install libllvm19`) is much faster; it renders in
 passes of at most 256 spp (seeds seed·1000 + pass) and averages them, to bound its memory.
 Prints each render's time.
