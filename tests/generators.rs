@@ -8,7 +8,8 @@
 
 use genpath::accel::{self, AccelKind};
 use genpath::path::generator::{
-    Contribution, DirectionSampler, Nee, PathGenerator, PathVertices, Step,
+    Contribution, DirectionSampler, Nee, PathGenerator, PathVertices, Step, ABSORPTION_MIN,
+    SRT_ABSORPTION, SRT_ABSORPTION_NEE_EVERY, SRT_ROULETTE_FROM,
 };
 use genpath::path::{mixture_file, RayCounts, SceneView};
 use genpath::sampling::anchor::AnchorSampler;
@@ -62,6 +63,8 @@ fn generators(scene: &Scene) -> Vec<PathGenerator> {
             ],
             light: focused,
         },
+        // No absorption before step 5, 0.1 from there: srt's default with NEE everywhere.
+        PathGenerator::srt(8, Nee::Every.default_srt_absorption(), light),
     ]
 }
 
@@ -183,7 +186,7 @@ fn pdf_path_of_another_generator_differs() {
     let scene = load("fig5");
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
     let view = SceneView::new(&scene, accel.as_ref());
-    let [srt, anchored] = <[PathGenerator; 2]>::try_from(generators(&scene)).unwrap();
+    let [srt, anchored, _] = <[PathGenerator; 3]>::try_from(generators(&scene)).unwrap();
     let mut counts = RayCounts::default();
     let mut path = PathVertices::default();
     let mut differ = 0;
@@ -220,4 +223,32 @@ fn pdf_path_of_another_generator_differs() {
         differ > 10,
         "only {differ} paths had a different density under another generator"
     );
+}
+
+/// `srt`'s default absorption with NEE at every vertex does not absorb before step
+/// `SRT_ROULETTE_FROM` (as `pt`'s roulette), then absorbs `SRT_ABSORPTION_NEE_EVERY`; with
+/// NEE at the end alone, and as a plain number, it is the same at every step.
+#[test]
+fn srt_absorbs_from_the_roulette_step_with_nee_everywhere() {
+    let scene = load("cbox");
+    let light = mixture_file::uniform_light(&scene);
+    let absorptions = |g: PathGenerator| g.steps.iter().map(|s| s.absorption).collect::<Vec<_>>();
+    let every = absorptions(PathGenerator::srt(
+        8,
+        Nee::Every.default_srt_absorption(),
+        light,
+    ));
+    let mut expected = vec![ABSORPTION_MIN; SRT_ROULETTE_FROM];
+    expected.resize(8, SRT_ABSORPTION_NEE_EVERY);
+    assert_eq!(every, expected);
+    let end = absorptions(PathGenerator::srt(
+        8,
+        Nee::End.default_srt_absorption(),
+        light,
+    ));
+    assert_eq!(end, vec![SRT_ABSORPTION; 8]);
+    assert_eq!(absorptions(PathGenerator::srt(3, 0.3, light)), vec![0.3; 3]);
+    for g in generators(&scene) {
+        mixture_file::check_generator(&g, &scene).unwrap();
+    }
 }

@@ -116,7 +116,7 @@ fn small_plan(
     };
     let inputs = PlanInputs {
         gate: GateConfig { gate: false },
-        srt_absorption: SRT_ABSORPTION,
+        srt_absorption: SRT_ABSORPTION.into(),
         nee,
         ..PlanInputs::new(&ga, &plan, plan_for, max_bounces)
     };
@@ -237,7 +237,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             let srt = Mixture::new(
                 vec![PathGenerator::srt(
                     max_bounces,
-                    SRT_ABSORPTION,
+                    nee.default_srt_absorption(),
                     mixture_file::uniform_light(&scene),
                 )],
                 vec![1.0],

@@ -79,8 +79,9 @@ pub struct SettingsArgs {
     #[arg(long, value_name = "FILE", help_heading = "Mixture (--method mixture)")]
     pub generators: Option<PathBuf>,
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex.
-    /// Default: 0.1 with next-event estimation at every vertex, the paper's 0.5 with `--nee
-    /// end` (and for ga-pt's GA, whose test paths are end-only)
+    /// Default: with next-event estimation at every vertex none before the fifth vertex and
+    /// 0.1 from it (as pt's roulette), the paper's 0.5 at every vertex with `--nee end` (and
+    /// for ga-pt's GA, whose test paths are end-only)
     #[arg(long, value_parser = parse_absorption, help_heading = "srt (--method srt, and the defensive generator of ga)")]
     pub srt_absorption: Option<f64>,
     /// Where srt, mixture and ga do next-event estimation: at every non-delta vertex

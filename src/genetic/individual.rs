@@ -8,7 +8,7 @@
 use super::test_paths::TestPaths;
 use super::GaConfig;
 use crate::path::generator::{
-    DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN,
+    DirectionSampler, PathGenerator, SrtAbsorption, Step, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use crate::path::mixture::Mixture;
 use crate::path::mixture_file;
@@ -135,7 +135,7 @@ pub struct GenePool<'a> {
     arrivals: Vec<Vec<Arrival>>,
     patches: f64,
     /// `GaConfig::directions_only`: the absorption of every step.
-    fixed_absorption: Option<f64>,
+    fixed_absorption: Option<SrtAbsorption>,
 }
 
 /// A uniform number in `[lo, hi)`.
@@ -460,7 +460,7 @@ impl<'a> GenePool<'a> {
         for k in 0..n {
             let (sampler, prim) = self.random_sampler(k, rng);
             let absorption = match self.fixed_absorption {
-                Some(a) => a,
+                Some(a) => a.at(k),
                 None => Self::random_absorption(rng),
             };
             steps.push(Step {
@@ -487,13 +487,14 @@ impl<'a> GenePool<'a> {
         let mut genes = vec![self.srt()];
         for gene in &ind.genes[1..] {
             let mut gene = gene.clone();
-            gene.generator.steps.resize(
-                self.steps,
-                Step {
+            let from = gene.generator.steps.len();
+            gene.generator
+                .steps
+                .extend((from..self.steps).map(|k| Step {
                     sampler: DirectionSampler::Brdf,
-                    absorption: self.fixed_absorption.unwrap_or(0.5),
-                },
-            );
+                    absorption: self.fixed_absorption.map_or(0.5, |a| a.at(k)),
+                }));
+            gene.generator.steps.truncate(self.steps);
             gene.anchor_prims.resize(self.steps, None);
             gene.id = self.fresh_id();
             genes.push(gene);

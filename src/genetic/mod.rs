@@ -50,9 +50,9 @@ pub struct GaConfig {
     pub p_absorb: f64,
     /// Smallest weight of the defensive `srt` component (at least `mixture_file::W_MIN`).
     pub defensive_weight: f64,
-    /// Absorption of the defensive `srt` generator (Russian roulette at every vertex).
+    /// Absorption of the defensive `srt` generator (Russian roulette at its vertices).
     #[serde(skip)]
-    pub srt_absorption: f64,
+    pub srt_absorption: crate::path::generator::SrtAbsorption,
     /// The estimator whose test paths, fitness and mixtures the GA works with (`srt.nee`).
     #[serde(skip)]
     pub nee: crate::path::generator::Nee,
@@ -172,10 +172,10 @@ impl GaConfig {
             crate::path::generator::ABSORPTION_MIN,
             crate::path::generator::ABSORPTION_MAX,
         );
-        if !(lo..=hi).contains(&self.srt_absorption) {
+        if !(lo..=hi).contains(&self.srt_absorption.per_vertex) {
             return fail(format!(
                 "srt_absorption {} is not in [{lo}, {hi}]",
-                self.srt_absorption
+                self.srt_absorption.per_vertex
             ));
         }
         if !(self.anchor_shift.is_finite() && self.anchor_shift >= 0.0) {

@@ -10,7 +10,7 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
-use crate::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN};
+use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
 use serde::de::{self, Visitor};
 use std::path::PathBuf;
@@ -36,8 +36,9 @@ pub struct Settings {
 #[serde(default, deny_unknown_fields)]
 pub struct SrtConfig {
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex; by
-    /// default (unset) 0.1 with next-event estimation at every vertex and the paper's 0.5
-    /// with `nee = end` (also for `ga-pt`'s GA, whose test paths are end-only).
+    /// default (unset) with next-event estimation at every vertex none before the fifth
+    /// vertex and 0.1 from it (as `pt`'s roulette), with `nee = end` the paper's 0.5 at
+    /// every vertex (also for `ga-pt`'s GA, whose test paths are end-only).
     pub srt_absorption: Option<f64>,
     /// Where the mixture estimators (`srt`, `mixture`, `ga`) do next-event estimation:
     /// `every` non-delta vertex, with the balance heuristic over each generator's direction
@@ -58,9 +59,9 @@ impl SrtConfig {
     /// The `srt` generator's absorption for an estimator with next-event estimation `nee`:
     /// `srt_absorption` where set, else that estimator's default
     /// ([`Nee::default_srt_absorption`]).
-    pub fn absorption(&self, nee: Nee) -> f64 {
+    pub fn absorption(&self, nee: Nee) -> SrtAbsorption {
         self.srt_absorption
-            .unwrap_or_else(|| nee.default_srt_absorption())
+            .map_or_else(|| nee.default_srt_absorption(), SrtAbsorption::from)
     }
 }
 

@@ -47,14 +47,53 @@ pub const ABSORPTION_MAX: f64 = 1.0 - 1e-3;
 /// where next-event estimation runs at the path's end alone ([`Nee::End`]): the paper's
 /// estimator, and the test paths of `ga-pt`'s GA.
 pub const SRT_ABSORPTION: f64 = 0.5;
-/// The default absorption of the `srt` generator with next-event estimation at every vertex
-/// ([`Nee::Every`]), where each vertex gathers direct light and absorption only shortens the
-/// paths that gather it. `srt`'s relMSE over `pt`'s at 2 s (256², max bounces 5, seeds
-/// 401–403, geometric mean) with 0.5 / 0.1 / 0.05: fig5 1.7 / 1.02 / 0.97, cbox 1.7 / 1.23 /
-/// 1.27, fig1 – / 1.20 / 1.16, glossy – / 1.22 / 1.18; `ga` without the gate on fig5 1.0–1.7
-/// at 0.5, 0.57–0.63 at 0.1. 0.1 keeps paths of about ten vertices where `max_depth` leaves
-/// them unbounded.
+/// The absorption of the `srt` generator with next-event estimation at every vertex
+/// ([`Nee::Every`]) from its [`SRT_ROULETTE_FROM`]-th step on, where each vertex gathers
+/// direct light and absorption only shortens the paths that gather it: about ten vertices
+/// past that step where `max_depth` leaves paths unbounded.
 pub const SRT_ABSORPTION_NEE_EVERY: f64 = 0.1;
+/// With [`Nee::Every`], the `srt` generator's steps before this one do not absorb (their
+/// absorption is [`ABSORPTION_MIN`]), as `pt`'s Russian roulette starts at bounce
+/// [`RR_START`](crate::path::pt::RR_START). Absorbing from the first vertex made `srt` noisier
+/// than `pt` per sample: cbox at 32 spp, relMSE over `pt`'s 1.26 with 0.1 at every vertex,
+/// 1.045 without absorption.
+pub const SRT_ROULETTE_FROM: usize = crate::path::pt::RR_START as usize;
+
+/// The `srt` generator's absorption: `per_vertex` at each step from step `from` on, and
+/// [`ABSORPTION_MIN`] before it. A plain number is the paper's fixed absorption at every
+/// vertex (`from` 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SrtAbsorption {
+    pub per_vertex: f64,
+    pub from: usize,
+}
+
+impl SrtAbsorption {
+    /// The absorption of step `k`.
+    pub fn at(self, k: usize) -> f64 {
+        if k < self.from {
+            ABSORPTION_MIN
+        } else {
+            self.per_vertex
+        }
+    }
+}
+
+impl Default for SrtAbsorption {
+    /// [`Nee::default`]'s.
+    fn default() -> Self {
+        Nee::default().default_srt_absorption()
+    }
+}
+
+impl From<f64> for SrtAbsorption {
+    fn from(per_vertex: f64) -> Self {
+        Self {
+            per_vertex,
+            from: 0,
+        }
+    }
+}
 
 /// Where a mixture's estimator does next-event estimation (the setting `nee`).
 #[derive(
@@ -79,12 +118,16 @@ pub enum Nee {
 }
 
 impl Nee {
-    /// The `srt` generator's default absorption with this estimator
-    /// ([`SRT_ABSORPTION_NEE_EVERY`], [`SRT_ABSORPTION`]).
-    pub fn default_srt_absorption(self) -> f64 {
+    /// The `srt` generator's default absorption with this estimator: with [`Nee::Every`]
+    /// [`SRT_ABSORPTION_NEE_EVERY`] from step [`SRT_ROULETTE_FROM`] on, none before; with
+    /// [`Nee::End`] the paper's [`SRT_ABSORPTION`] at every vertex.
+    pub fn default_srt_absorption(self) -> SrtAbsorption {
         match self {
-            Nee::Every => SRT_ABSORPTION_NEE_EVERY,
-            Nee::End => SRT_ABSORPTION,
+            Nee::Every => SrtAbsorption {
+                per_vertex: SRT_ABSORPTION_NEE_EVERY,
+                from: SRT_ROULETTE_FROM,
+            },
+            Nee::End => SRT_ABSORPTION.into(),
         }
     }
 }
@@ -291,12 +334,18 @@ impl Contribution {
 
 impl PathGenerator {
     /// The paper's "stochastic ray tracing" generator: BRDF sampling at every vertex with the
-    /// fixed absorption `absorption`, uniform light sampling by area.
-    pub fn srt(max_bounces: u32, absorption: f64, light: LightPointSampler) -> Self {
-        let steps = (0..max_bounces)
-            .map(|_| Step {
+    /// absorption `absorption` (a number: the paper's fixed absorption at every vertex),
+    /// uniform light sampling by area.
+    pub fn srt(
+        max_bounces: u32,
+        absorption: impl Into<SrtAbsorption>,
+        light: LightPointSampler,
+    ) -> Self {
+        let absorption = absorption.into();
+        let steps = (0..max_bounces as usize)
+            .map(|k| Step {
                 sampler: DirectionSampler::Brdf,
-                absorption,
+                absorption: absorption.at(k),
             })
             .collect();
         Self { steps, light }

@@ -12,7 +12,9 @@
 //! ]
 //! ```
 
-use super::generator::{DirectionSampler, PathGenerator, Step, ABSORPTION_MAX, ABSORPTION_MIN};
+use super::generator::{
+    DirectionSampler, PathGenerator, SrtAbsorption, Step, ABSORPTION_MAX, ABSORPTION_MIN,
+};
 use super::mixture::Mixture;
 use crate::sampling::anchor::AnchorSampler;
 use crate::sampling::light_point::{LightPointError, LightPointSampler};
@@ -59,7 +61,7 @@ pub fn uniform_light(scene: &Scene) -> LightPointSampler {
 }
 
 /// The `srt` method as a mixture: the one `srt` generator with uniform light sampling.
-pub fn srt(scene: &Scene, max_bounces: u32, absorption: f64) -> Mixture {
+pub fn srt(scene: &Scene, max_bounces: u32, absorption: impl Into<SrtAbsorption>) -> Mixture {
     Mixture::new(
         vec![PathGenerator::srt(
             max_bounces,
@@ -115,7 +117,7 @@ pub fn load(
     path: &Path,
     scene: &Scene,
     max_bounces: u32,
-    srt_absorption: f64,
+    srt_absorption: impl Into<SrtAbsorption>,
 ) -> Result<Mixture, MixtureFileError> {
     let error = |message: String| MixtureFileError {
         path: path.to_path_buf(),

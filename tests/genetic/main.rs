@@ -384,7 +384,7 @@ fn config_defaults_are_valid_and_bad_values_rejected() {
             ..config.clone()
         },
         GaConfig {
-            srt_absorption: 1.0,
+            srt_absorption: 1.0.into(),
             ..config.clone()
         },
     ] {

@@ -66,7 +66,7 @@ pub use stages::{LearnStore, PlanError, WaveEntry};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
-use crate::path::generator::Nee;
+use crate::path::generator::{Nee, SrtAbsorption};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::scene::SceneAnalysis;
@@ -111,7 +111,7 @@ pub struct PlanInputs<'a> {
     pub plan_for: PlanFor,
     pub max_bounces: u32,
     /// Absorption of the defensive `srt` generator.
-    pub srt_absorption: f64,
+    pub srt_absorption: SrtAbsorption,
     /// The estimator a mixture plan's test paths, fitness and mixtures are those of (a
     /// guide's GA keeps the end-only one).
     pub nee: Nee,
