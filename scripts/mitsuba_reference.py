@@ -35,6 +35,7 @@ REFERENCES = {
     "roughglass": (16384, 64),
     # 4096 spp: 16 × its test's samples (the reference's own variance enters the test).
     "textures": (4096, 64),
+    "maps": (4096, 64),
     # 64 × 48, fixed in the files (their film is not square: no `res` parameter).
     "legacy": (16384, None),
     "params": (16384, None),

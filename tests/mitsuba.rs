@@ -14,7 +14,9 @@
 //! with `flip_normals`, a conductor's `eta`/`k`) a render with a 3 × 3 matrix transposed,
 //! for `rough.xml` (rough conductors and a rough plastic) the other distribution or the
 //! anisotropy exchanged, for `roughglass.xml` (`roughdielectric`, GGX and Beckmann) the
-//! roughnesses exchanged or a sphere's normals flipped; and `hide_emitters`. Vertex normals and texture
+//! roughnesses exchanged or a sphere's normals flipped, for `textures.xml` a texture upside
+//! down or not sRGB-decoded, for `maps.xml` (`normalmap` and `bumpmap`) the normal map's
+//! green channel flipped or the bump scale 30 % off; and `hide_emitters`. Vertex normals and texture
 //! coordinates as Mitsuba places them. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
@@ -1360,6 +1362,199 @@ fn texture_refusals_name_file_and_line() {
         let error = Scene::load(&path).unwrap_err().to_string();
         assert!(
             error.contains(expected) && error.contains(&format!("t{i}.xml:5")),
+            "{bsdf}: {error}"
+        );
+    }
+}
+
+/// Samples of the maps agreement test: its reference has 4096 (64 × as many).
+const MAPS_SPP: u32 = 64;
+
+/// Normal and bump maps: `maps.xml` (a `normalmap` around a rough plastic, a `bumpmap`
+/// around a diffuse BSDF and, on a smooth-shaded OBJ under a `twosided`, around a rough
+/// conductor; two cards seen from behind, a normal map around a `twosided` and a `twosided`
+/// around a normal map) agrees with Mitsuba's render; the same scene with the normal map's
+/// green channel flipped, or with the floor's bump scale 30 % off, must not (at 64 spp a
+/// scale 3 % off gives a largest |z| of 2.53, 10 % off 3.00, 20 % off 6.83, against a
+/// critical 4.56: the bumps of a diffuse floor move little light).
+#[test]
+fn pt_agrees_with_mitsuba_on_normal_and_bump_maps_and_a_flipped_or_rescaled_map_does_not() {
+    let scene = Scene::load(&scene_path("maps.xml")).unwrap();
+    let (_, reference, z) = agrees_with_reference("maps.xml", &scene, MAPS_SPP);
+    twin_is_rejected(
+        "maps.xml",
+        &[("nmap", "normals_gflip")],
+        MAPS_SPP,
+        &reference,
+        z,
+        "with the normal map's green channel flipped",
+    );
+    twin_is_rejected(
+        "maps.xml",
+        &[("bump_scale", "0.13")],
+        MAPS_SPP,
+        &reference,
+        z,
+        "with the floor's bump scale 30 % off",
+    );
+}
+
+/// As for `glass.xml`: every method renders `maps.xml` at 32² without a bad pixel, with the
+/// mixture of a wrong density seen.
+#[cfg(feature = "testing")]
+#[test]
+fn every_method_renders_maps_as_pt_does_and_a_wrong_density_is_seen() {
+    every_method_renders_as_pt_does("maps.xml");
+}
+
+/// The refusals of `normalmap` and `bumpmap`, each naming the file and line: no nested BSDF,
+/// a delta, transmitting or anisotropic one, a map inside a map, a twosided both around and
+/// inside, `flip_invalid_normals` or `use_shadowing_function` false, no normal-map texture
+/// or one that is not a texture, a normal map whose blue channel reaches 1/2, a bump map
+/// without a texture or with a checkerboard, a scale that is not finite, and a map on an
+/// analytic shape or on a mesh without texture coordinates under `flip_normals`.
+#[test]
+fn map_refusals_name_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let maps = scene_path("maps");
+    let normals = maps.join("normals.png");
+    let heights = maps.join("heights.png");
+    let mut low = genpath::image::Image::new(2, 2);
+    low.set(1, 1, [0.5, 0.5, 0.5]);
+    genpath::image::rust_writers::write_exr(&d.join("low.exr"), &low).unwrap();
+    let nmap = |inner: &str, extra: &str| {
+        format!(
+            r#"<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{}"/></texture>{extra}{inner}</bsdf>"#,
+            normals.display()
+        )
+    };
+    let bump = |inner: &str, extra: &str| {
+        format!(
+            r#"<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="{}"/></texture>{extra}{inner}</bsdf>"#,
+            heights.display()
+        )
+    };
+    let diffuse = r#"<bsdf type="diffuse"/>"#;
+    let cases = [
+        ("cube", nmap("", ""), "exactly one nested BSDF"),
+        (
+            "cube",
+            nmap(r#"<bsdf type="conductor"/>"#, ""),
+            "not `conductor`",
+        ),
+        (
+            "cube",
+            bump(r#"<bsdf type="roughdielectric"/>"#, ""),
+            "not `roughdielectric`",
+        ),
+        (
+            "cube",
+            nmap(
+                r#"<bsdf type="twosided"><bsdf type="conductor"/></bsdf>"#,
+                "",
+            ),
+            "not `twosided`",
+        ),
+        (
+            "cube",
+            bump(
+                r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+                "",
+            ),
+            "anisotropic",
+        ),
+        ("cube", nmap(&bump(diffuse, ""), ""), "inside a `normalmap`"),
+        (
+            "cube",
+            format!(
+                r#"<bsdf type="twosided">{}</bsdf>"#,
+                nmap(r#"<bsdf type="twosided"><bsdf type="diffuse"/></bsdf>"#, "")
+            ),
+            "both around and inside",
+        ),
+        (
+            "cube",
+            nmap(
+                diffuse,
+                r#"<boolean name="flip_invalid_normals" value="false"/>"#,
+            ),
+            "`flip_invalid_normals` false",
+        ),
+        (
+            "cube",
+            bump(
+                diffuse,
+                r#"<boolean name="use_shadowing_function" value="false"/>"#,
+            ),
+            "`use_shadowing_function` false",
+        ),
+        (
+            "cube",
+            format!(r#"<bsdf type="normalmap">{diffuse}</bsdf>"#),
+            "needs a texture `normalmap`",
+        ),
+        (
+            "cube",
+            format!(
+                r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/>{diffuse}</bsdf>"#
+            ),
+            "must be a <texture>",
+        ),
+        (
+            "cube",
+            format!(
+                r#"<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{}"/></texture>{diffuse}</bsdf>"#,
+                d.join("low.exr").display()
+            ),
+            "blue channel reaches 0",
+        ),
+        (
+            "cube",
+            format!(r#"<bsdf type="bumpmap">{diffuse}</bsdf>"#),
+            "exactly one nested texture",
+        ),
+        (
+            "cube",
+            format!(r#"<bsdf type="bumpmap"><texture type="checkerboard"/>{diffuse}</bsdf>"#),
+            "checkerboard has no gradient",
+        ),
+        (
+            "cube",
+            bump(diffuse, r#"<float name="scale" value="1e9"/>"#),
+            "`scale` 1000000000",
+        ),
+        ("sphere", nmap(diffuse, ""), "analytic shape"),
+        (
+            "ply",
+            bump(diffuse, ""),
+            "without texture coordinates and with `flip_normals`",
+        ),
+    ];
+    let ply = scene_path("smooth_blob.ply");
+    for (i, (shape, bsdf, expected)) in cases.iter().enumerate() {
+        let shape = match *shape {
+            "ply" => format!(
+                r#""ply"><string name="filename" value="{}"/><boolean name="flip_normals" value="true"/"#,
+                ply.display()
+            ),
+            s => format!(r#""{s}""#),
+        };
+        let text = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type={shape}>
+{bsdf}
+</shape>
+</scene>
+"#
+        );
+        let path = d.join(format!("m{i}.xml"));
+        std::fs::write(&path, text).unwrap();
+        let error = Scene::load(&path).unwrap_err().to_string();
+        assert!(
+            error.contains(expected) && error.contains(&format!("m{i}.xml:")),
             "{bsdf}: {error}"
         );
     }

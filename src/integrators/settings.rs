@@ -32,7 +32,7 @@ pub struct Settings {
 
 /// `srt`, the paper's stochastic ray tracing (and the defensive generator of every evolved
 /// mixture).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SrtConfig {
     /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex; by
@@ -44,15 +44,6 @@ pub struct SrtConfig {
     /// `every` non-delta vertex, with the balance heuristic over each generator's direction
     /// and light-point techniques, or only at the path's `end` (the paper's, for its Fig. 7).
     pub nee: Nee,
-}
-
-impl Default for SrtConfig {
-    fn default() -> Self {
-        Self {
-            srt_absorption: None,
-            nee: Nee::default(),
-        }
-    }
 }
 
 impl SrtConfig {

@@ -26,7 +26,8 @@ pub struct Mixture {
     light_density_dropped: bool,
     /// Fault injection for statistical tests: [`Mixture::pdf_path`] evaluates the BSDF
     /// densities in the geometric frame (each vertex's shading normal replaced by its
-    /// geometric one), while paths are sampled in the shading frame.
+    /// geometric one, its normal or bump map dropped), while paths are sampled in the
+    /// shading frame.
     #[serde(skip)]
     geometric_frame: bool,
     /// Fault injection for statistical tests: [`Mixture::pdf_path`] leaves the probability
@@ -40,12 +41,13 @@ pub struct Mixture {
     transmission_folded: bool,
 }
 
-/// `path` with each vertex's shading normal replaced by its geometric one (the fault of
-/// [`Mixture::with_geometric_frame_density`]).
+/// `path` with each vertex's shading normal replaced by its geometric one, and its normal or
+/// bump map's dropped (the fault of [`Mixture::with_geometric_frame_density`]).
 fn in_geometric_frame(path: &PathVertices) -> PathVertices {
     let mut flat = path.clone();
     for v in &mut flat.vertices {
         v.point.ns = v.point.ng;
+        v.point.np = Vec3::ZERO;
     }
     flat
 }
@@ -112,8 +114,8 @@ impl Mixture {
     }
 
     /// This mixture with its densities evaluated in the geometric frame where paths were
-    /// sampled in the shading frame: a wrong input that unbiasedness tests on smooth-shaded
-    /// scenes must reject.
+    /// sampled in the shading frame (a normal or bump map's included): a wrong input that
+    /// unbiasedness tests on smooth-shaded or normal-mapped scenes must reject.
     #[cfg(any(test, feature = "testing"))]
     pub fn with_geometric_frame_density(mut self) -> Self {
         self.geometric_frame = true;

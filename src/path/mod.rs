@@ -9,7 +9,7 @@ pub mod walk;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::Rng;
-use crate::scene::{Material, MaterialAt, Scene};
+use crate::scene::{normals, Material, MaterialAt, Scene};
 use glam::DVec3;
 use glam::{Vec2, Vec3};
 use mixture::{Mixture, MixtureScratch};
@@ -31,6 +31,12 @@ pub struct SurfacePoint {
     /// Texture coordinates (Mitsuba's `si.uv`) where the material is textured, which alone
     /// reads them; zero elsewhere.
     pub uv: Vec2,
+    /// The unit shading normal of a normal or bump map (Mitsuba's `normalmap`, `bumpmap`),
+    /// before it is turned towards any `wo` ([`crate::scene::normals`]); zero where the
+    /// material has none (the BSDF then scatters about `ns`).
+    pub np: Vec3,
+    /// Whether a `twosided` wraps that map (see [`crate::scene::normals::resolve`]).
+    pub np_twosided_outside: bool,
     pub prim: u32,
 }
 
@@ -43,6 +49,8 @@ impl SurfacePoint {
             ns: ng,
             ts: Vec3::ZERO,
             uv: Vec2::ZERO,
+            np: Vec3::ZERO,
+            np_twosided_outside: false,
             prim,
         }
     }
@@ -103,11 +111,21 @@ impl<'a> SceneView<'a> {
     /// The material that scatters at `x` towards `wo`, its textures evaluated at `x`'s
     /// texture coordinates ([`Material::at`]): [`crate::scene::BLACK`] where a one-sided
     /// material is seen from behind its shading normal (as Mitsuba's BSDFs tell their sides
-    /// apart in the shading frame).
+    /// apart in the shading frame; with a normal or bump map, the perturbed one that the
+    /// nested BSDF sees from `wo`, [`crate::scene::normals::resolve`]).
     #[inline]
     pub fn scattering_material(&self, x: &SurfacePoint, wo: Vec3) -> MaterialAt<'a> {
         let m = self.scene.material(x.prim);
-        if m.two_sided || x.ns.dot(wo) > 0.0 {
+        let front = if x.np == Vec3::ZERO {
+            m.two_sided || x.ns.dot(wo) > 0.0
+        } else if m.two_sided && !x.np_twosided_outside {
+            // Two-sided inside the map: the nested BSDF turns to `wo` whatever the side.
+            true
+        } else {
+            let (n, _) = normals::resolve(x.ns, x.np, x.np_twosided_outside, wo);
+            n.dot(wo) > 0.0
+        };
+        if front {
             m.at(x.uv)
         } else {
             MaterialAt::from(&crate::scene::BLACK)
@@ -117,7 +135,8 @@ impl<'a> SceneView<'a> {
     fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
         let ns = self.scene.shading_normal(hit.prim, (hit.u, hit.v), hit.ng);
         let material = self.material(hit.prim);
-        let ts = match material.glossy.is_anisotropic() {
+        let perturbation = material.perturbation();
+        let ts = match material.glossy.is_anisotropic() || perturbation.is_some() {
             true => self.scene.shading_tangent(hit.prim, hit.ng, ns),
             false => Vec3::ZERO,
         };
@@ -125,12 +144,22 @@ impl<'a> SceneView<'a> {
             true => self.scene.uv(hit.prim, (hit.u, hit.v)),
             false => Vec2::ZERO,
         };
+        let (np, np_twosided_outside) = match perturbation {
+            Some(p) => (
+                self.scene
+                    .perturbed_normal(p, hit.prim, (hit.ng, ns, ts), uv),
+                p.twosided_outside,
+            ),
+            None => (Vec3::ZERO, false),
+        };
         SurfacePoint {
             p: ray.origin + ray.dir * hit.t,
             ng: hit.ng,
             ns,
             ts,
             uv,
+            np,
+            np_twosided_outside,
             prim: hit.prim,
         }
     }

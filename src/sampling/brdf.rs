@@ -22,7 +22,7 @@
 
 use super::specular;
 use crate::path::SurfacePoint;
-use crate::scene::{Glossy, Material, MaterialAt};
+use crate::scene::{normals, Glossy, Material, MaterialAt};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 
@@ -52,27 +52,60 @@ pub struct Frame {
     /// (inside a dielectric, whose exterior is on the stored normal's side). Read only by
     /// the rough dielectric.
     pub back: bool,
+    /// Where a normal or bump map perturbs the frame (`n` is then the perturbed normal):
+    /// the unperturbed shading normal, turned with `n`; zero elsewhere. No light scatters
+    /// into a `wi` on different sides of `n` and `base`, and what scatters is attenuated by
+    /// Mitsuba's shadowing term ([`crate::scene::normals`]).
+    pub base: Vec3,
 }
 
 impl Frame {
     /// The frame of normal `n` (facing `wo`, on the stored normal's side) and tangent `s`.
     pub fn new(n: Vec3, s: Vec3) -> Self {
-        Self { n, s, back: false }
+        Self {
+            n,
+            s,
+            back: false,
+            base: Vec3::ZERO,
+        }
     }
 
     /// The frame of normal `n` facing `wo` where the stored normal is `−n` (`wo` behind the
     /// surface), tangent `s`.
     pub fn behind(n: Vec3, s: Vec3) -> Self {
-        Self { n, s, back: true }
+        Self {
+            n,
+            s,
+            back: true,
+            base: Vec3::ZERO,
+        }
     }
 
-    /// The frame at `x` seen from `wo`.
+    /// The frame at `x` seen from `wo`: about its shading normal, or about its normal or
+    /// bump map's as the nested BSDF sees it from `wo` ([`normals::resolve`]; lobes inside a
+    /// map are isotropic, so any tangent serves).
     pub fn facing(x: &SurfacePoint, wo: Vec3) -> Self {
+        if x.np != Vec3::ZERO {
+            let (n, base) = normals::resolve(x.ns, x.np, x.np_twosided_outside, wo);
+            // Turned towards `wo` (a two-sided BSDF inside the map; one-sided ones seen from
+            // behind are black already).
+            let (n, base) = match n.dot(wo) >= 0.0 {
+                true => (n, base),
+                false => (-n, -base),
+            };
+            return Self {
+                n,
+                s: Vec3::ZERO,
+                back: false,
+                base,
+            };
+        }
         let n = facing_normal(x.ns, wo);
         Self {
             n,
             s: x.ts,
             back: n != x.ns,
+            base: Vec3::ZERO,
         }
     }
 
@@ -146,6 +179,10 @@ fn cos_lobe(n: Vec3, wo: Vec3, wi: Vec3) -> f64 {
 /// or a light sample can carry anything.
 pub fn cosine(m: &Material, frame: Frame, wi: Vec3) -> Option<f32> {
     let c = frame.n.dot(wi);
+    if frame.base != Vec3::ZERO && frame.base.dot(wi) * c <= 0.0 {
+        // A normal or bump map's refusal (see [`Frame::base`]).
+        return None;
+    }
     if c > 0.0 {
         Some(c)
     } else if c < 0.0 && m.transmits() {
@@ -157,9 +194,24 @@ pub fn cosine(m: &Material, frame: Frame, wi: Vec3) -> Option<f32> {
 
 /// BSDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta), and below the surface
 /// for every lobe but a rough dielectric's. `m` is a material at a hit ([`MaterialAt`]), or
-/// a plain `&Material` (its constant parameters), as for every function here.
+/// a plain `&Material` (its constant parameters), as for every function here. In a frame
+/// that a normal or bump map perturbs ([`Frame::base`]): zero for a `wi` on different sides
+/// of the two normals, else attenuated by Mitsuba's shadowing term.
 pub fn eval<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     let m = m.into();
+    let base = frame.base;
+    if base == Vec3::ZERO {
+        return eval_in_frame(m, frame, wo, wi);
+    }
+    if base.dot(wi) * frame.n.dot(wi) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    eval_in_frame(m, frame, wo, wi) * normals::shadow_terminator(frame.n, base, wi)
+}
+
+/// [`eval`] in the frame, whether or not a map perturbs it.
+#[inline]
+fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     let n = frame.n;
     if m.mirror || n.dot(wo) <= 0.0 {
         return Vec3::ZERO;
@@ -206,6 +258,9 @@ pub fn eval<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) 
 }
 
 /// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
+/// In a frame that a normal or bump map perturbs, the nested BSDF's in the perturbed frame,
+/// also for the directions whose value [`eval`] zeroes (Mitsuba zeroes their density: they
+/// carry nothing either way).
 pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
     let m = m.into();
     if m.mirror {

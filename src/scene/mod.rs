@@ -6,6 +6,7 @@ mod environment;
 pub mod envmap;
 mod file;
 mod lights;
+pub mod normals;
 mod shading;
 pub mod texture;
 mod validate;
@@ -448,6 +449,33 @@ impl Scene {
             None => glam::DVec3::ZERO,
         };
         shading::tangent(dp_du, ns)
+    }
+
+    /// The perturbed shading normal `p` gives primitive `prim` at the hit parameters
+    /// `(u, v)` (see [`normals`]), where its unit geometric normal is `ng`, its shading
+    /// normal and tangent `ns` and `ts`, and its texture coordinates `uv`: zero for an
+    /// analytic shape (the loader keeps perturbations off them) and where the perturbation
+    /// is undefined.
+    pub fn perturbed_normal(
+        &self,
+        p: &normals::Perturbation,
+        prim: u32,
+        (ng, ns, ts): (Vec3, Vec3, Vec3),
+        uv: glam::Vec2,
+    ) -> Vec3 {
+        let Some(&t) = self.mesh.triangles.get(prim as usize) else {
+            return Vec3::ZERO;
+        };
+        let (dp_du, dp_dv) =
+            shading::dp_duv(self.mesh.vertices(prim), self.shading.corner_uvs(t), ng);
+        p.normal(&normals::HitFrame {
+            ns,
+            ts,
+            ng,
+            dp_du: dp_du.as_vec3(),
+            dp_dv: dp_dv.as_vec3(),
+            uv,
+        })
     }
 
     /// The probability with which light sampling picks the environment: 0 without one, else

@@ -70,17 +70,27 @@ impl Shading {
 /// degenerate, the first axis of `coordinate_system(ng)`; `p1 − p0` without texture
 /// coordinates (the barycentric parameterisation).
 pub fn dp_du(p: [Vec3; 3], uvs: Option<[Vec2; 3]>, ng: Vec3) -> DVec3 {
+    dp_duv(p, uvs, ng).0
+}
+
+/// Mitsuba's `dp_du` and `dp_dv` of a triangle (see [`dp_du`]): `p2 − p0` for `dp_dv`
+/// without texture coordinates, the second axis of `coordinate_system(ng)` where they are
+/// degenerate.
+pub fn dp_duv(p: [Vec3; 3], uvs: Option<[Vec2; 3]>, ng: Vec3) -> (DVec3, DVec3) {
     let [p0, p1, p2] = p.map(|x| x.as_dvec3());
     let (dp0, dp1) = (p1 - p0, p2 - p0);
     let Some([uv0, uv1, uv2]) = uvs.map(|u| u.map(|x| x.as_dvec2())) else {
-        return dp0;
+        return (dp0, dp1);
     };
     let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
     let det = duv0.x * duv1.y - duv0.y * duv1.x;
     if det == 0.0 {
-        crate::sampling::basis(ng.as_dvec3()).0
+        crate::sampling::basis(ng.as_dvec3())
     } else {
-        (duv1.y * dp0 - duv0.y * dp1) / det
+        (
+            (duv1.y * dp0 - duv0.y * dp1) / det,
+            (duv0.x * dp1 - duv1.x * dp0) / det,
+        )
     }
 }
 
@@ -171,8 +181,12 @@ mod tests {
             let d = dp_du(order.map(|i| p[i]), Some(order.map(|i| uvs[i])), Vec3::Z);
             assert!((d - DVec3::Y).length() < 1e-12, "{d}");
         }
-        // Without texture coordinates: p1 − p0.
+        // Without texture coordinates: p1 − p0 and p2 − p0.
         assert_eq!(dp_du(p, None, Vec3::Z), DVec3::X);
+        assert_eq!(dp_duv(p, None, Vec3::Z).1, DVec3::Y);
+        // dp/dv: v runs along x here.
+        let d = dp_duv(p, Some(uvs), Vec3::Z).1;
+        assert!((d - DVec3::X).length() < 1e-12, "{d}");
         // A tilted shading normal: s is orthogonal to it, in the plane of n and dp/du.
         let ns = Vec3::new(0.0, 0.6, 0.8);
         let s = tangent(DVec3::Y, ns);

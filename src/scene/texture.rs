@@ -178,6 +178,30 @@ impl Bitmap {
             }
         }
     }
+
+    /// Mitsuba's `eval_1_grad`: the gradient in texture coordinates `uv` (before `to_uv`) of
+    /// the bilinear interpolation of the texels' luminance; zero for nearest lookups.
+    pub fn gradient(&self, uv: Vec2) -> Vec2 {
+        if self.filter == Filter::Nearest {
+            return Vec2::ZERO;
+        }
+        let res = Vec2::new(self.width as f32, self.height as f32);
+        let p = self.to_uv.transform_point2(uv) * res - 0.5;
+        let i = p.floor();
+        let w1 = p - i;
+        let w0 = Vec2::ONE - w1;
+        let (x, y) = (i.x as i64, i.y as i64);
+        let f = |dx, dy| luminance(self.texel(x + dx, y + dy));
+        let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
+        let dx = w0.y * (f10 - f00) + w1.y * (f11 - f01);
+        let dy = w0.x * (f01 - f00) + w1.x * (f11 - f10);
+        // The partials in u and v: through the transpose of to_uv's linear part.
+        let m = self.to_uv.matrix2;
+        Vec2::new(
+            m.x_axis.x * dx + m.x_axis.y * dy,
+            m.y_axis.x * dx + m.y_axis.y * dy,
+        ) * res
+    }
 }
 
 /// Mitsuba's `checkerboard` with constant colours: `color0` where the fractional parts of
@@ -228,6 +252,14 @@ impl Texture {
         }
     }
 
+    /// The smallest value channel `c` (0, 1, 2: red, green, blue) can return.
+    pub fn channel_min(&self, c: usize) -> f32 {
+        match self {
+            Texture::Checkerboard(k) => k.color0[c].min(k.color1[c]),
+            Texture::Bitmap(b) => b.texels.iter().fold(f32::INFINITY, |m, t| m.min(t[c])),
+        }
+    }
+
     /// The largest and smallest channel value the texture can return (bilinear lookups
     /// stay within their texels').
     pub fn range(&self) -> (f32, f32) {
@@ -260,6 +292,9 @@ pub struct MaterialTextures {
     pub specular: Option<Texture>,
     /// The rough plastic's `diffuse_reflectance`.
     pub diffuse: Option<Texture>,
+    /// The shading normals of a `normalmap` or `bumpmap` around the BSDF (see
+    /// [`super::normals`]).
+    pub perturbation: Option<super::normals::Perturbation>,
 }
 
 /// A material's textured parameters evaluated at one hit.
@@ -323,6 +358,12 @@ impl Material {
     /// Whether any parameter is textured (the hit's texture coordinates matter).
     pub fn is_textured(&self) -> bool {
         self.textures.is_some()
+    }
+
+    /// The perturbation of the shading normal (`normalmap`, `bumpmap`), if any.
+    #[inline]
+    pub fn perturbation(&self) -> Option<&super::normals::Perturbation> {
+        self.textures.as_ref().and_then(|t| t.perturbation.as_ref())
     }
 }
 
@@ -452,5 +493,37 @@ mod tests {
         assert_eq!(c.eval(Vec2::new(0.75, 0.25)), Vec3::Y);
         assert_eq!(c.eval(Vec2::new(-0.25, 0.25)), Vec3::Y);
         assert_eq!(Texture::Checkerboard(c).mean(), 1.0 / 3.0);
+    }
+
+    #[test]
+    fn the_gradient_is_the_bilinear_interpolants_and_follows_to_uv() {
+        // Luminances 0, 1 along x, 0, 0 in the next row: a 2 × 2 bitmap, clamped.
+        let texels = vec![[0.0; 3], [1.0; 3], [0.0; 3], [0.0; 3]];
+        let lookup = |to_uv| (Filter::Bilinear, Wrap::Clamp, to_uv);
+        let b = Bitmap::new(2, 2, texels.clone(), lookup(Affine2::IDENTITY));
+        // On the top row's centres (v = 0.25), halfway between them: d/du of the
+        // interpolant is (1 − 0) per texel, d/dv (0 − 1/2) per texel, times 2 texels per unit.
+        let g = b.gradient(Vec2::new(0.5, 0.25));
+        assert!((g - Vec2::new(2.0, -1.0)).length() < 1e-5, "{g}");
+        // Halfway down, the rows mix: d/du halves, d/dv is −(1/2) per texel.
+        let g = b.gradient(Vec2::new(0.5, 0.5));
+        assert!((g - Vec2::new(1.0, -1.0)).length() < 1e-5, "{g}");
+        // With u scaled by 3 in to_uv, d/du triples (the lookup moving with it).
+        let scaled = Bitmap::new(
+            2,
+            2,
+            texels.clone(),
+            lookup(Affine2::from_scale(Vec2::new(3.0, 1.0))),
+        );
+        let g = scaled.gradient(Vec2::new(0.5 / 3.0, 0.25));
+        assert!((g - Vec2::new(6.0, -1.0)).length() < 1e-5, "{g}");
+        // Nearest lookups: zero.
+        let nearest = Bitmap::new(
+            2,
+            2,
+            texels,
+            (Filter::Nearest, Wrap::Clamp, Affine2::IDENTITY),
+        );
+        assert_eq!(nearest.gradient(Vec2::new(0.5, 0.5)), Vec2::ZERO);
     }
 }

@@ -164,6 +164,9 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
         if g.materials[material as usize].glossy.is_anisotropic() {
             return Err(p.error("an anisotropic BSDF on an analytic shape: genpath reads the tangent of anisotropic roughness from triangles only"));
         }
+        if g.materials[material as usize].perturbation().is_some() {
+            return Err(p.error("a normalmap or bumpmap on an analytic shape: genpath reads the tangents (dp/du, dp/dv) that they follow from triangles only"));
+        }
         g.shapes.push(shape);
         g.shape_material.push(material);
         return Ok(());
@@ -178,8 +181,9 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     let material = shape_material(p, g, warnings)?;
     p.finish()?;
     let placed = shapes::place(raw, &how, p.loc(), p)?;
-    if g.materials[material as usize].glossy.is_anisotropic() {
-        anisotropic_tangents(p, &how, placed.uvs.is_some())?;
+    let m = &g.materials[material as usize];
+    if m.glossy.is_anisotropic() || m.perturbation().is_some() {
+        tangents_kept(p, &how, placed.uvs.is_some())?;
     }
     if placed.normals.is_some() && g.materials[material as usize].is_emitter() {
         // Mitsuba's area emitter then emits, and converts its light samples' densities, by
@@ -215,14 +219,14 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
     Ok(())
 }
 
-/// Refuses the triangle shapes whose tangent (Mitsuba's `dp/du`, which anisotropic roughness
-/// follows) genpath cannot reproduce: a mesh without texture coordinates under
-/// `flip_normals` (whose `p1 − p0` genpath's reversed winding changes). A `cube` has
-/// Mitsuba's texture coordinates, affine over each face, so its dp/du is Mitsuba's whatever
-/// the triangulation.
-fn anisotropic_tangents(p: &Props, how: &Placement, has_uvs: bool) -> Result<(), SceneError> {
+/// Refuses the triangle shapes whose tangents (Mitsuba's `dp/du` and `dp/dv`, which
+/// anisotropic roughness and normal and bump maps follow) genpath cannot reproduce: a mesh
+/// without texture coordinates under `flip_normals` (whose `p1 − p0` and `p2 − p0` genpath's
+/// reversed winding changes). A `cube` has Mitsuba's texture coordinates, affine over each
+/// face, so its tangents are Mitsuba's whatever the triangulation.
+fn tangents_kept(p: &Props, how: &Placement, has_uvs: bool) -> Result<(), SceneError> {
     if !has_uvs && how.flip_normals {
-        return Err(p.error("an anisotropic BSDF on a mesh without texture coordinates and with `flip_normals`: Mitsuba's tangent p1 − p0 follows a vertex order genpath's flipped winding does not keep"));
+        return Err(p.error("an anisotropic, normal-mapped or bump-mapped BSDF on a mesh without texture coordinates and with `flip_normals`: Mitsuba's tangents p1 − p0 and p2 − p0 follow a vertex order genpath's flipped winding does not keep"));
     }
     Ok(())
 }
@@ -279,7 +283,11 @@ fn diffuse(kd: DVec3, name: String) -> Material {
 }
 
 /// A BSDF as a material (one-sided unless `twosided`), its textures built through `tex`.
-fn bsdf(p: &Props, tex: &mut Textures, warnings: &mut Vec<String>) -> Result<Material, SceneError> {
+pub(super) fn bsdf(
+    p: &Props,
+    tex: &mut Textures,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
     let name = p
         .object()
         .id
@@ -304,7 +312,15 @@ fn bsdf(p: &Props, tex: &mut Textures, warnings: &mut Vec<String>) -> Result<Mat
                 "dielectric" | "thindielectric" | "roughdielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
                 _ => {}
             }
-            let mut m = bsdf(&q, tex, warnings)?;
+            let mut m = match q.object().plugin.as_str() {
+                // The map sees `wo` mirrored where it is behind the surface.
+                "normalmap" | "bumpmap" => {
+                    let m = super::maps::adapter(&q, name.clone(), tex, warnings, true)?;
+                    q.finish()?;
+                    m
+                }
+                _ => bsdf(&q, tex, warnings)?,
+            };
             m.two_sided = true;
             m.name = name;
             m
@@ -318,7 +334,8 @@ fn bsdf(p: &Props, tex: &mut Textures, warnings: &mut Vec<String>) -> Result<Mat
         "plastic" => return Err(p.error("genpath does not implement the smooth `plastic` BSDF (a delta reflection beside a diffuse lobe at one vertex; use `roughplastic` with a small `alpha`)")),
         "dielectric" => dielectric(p, name, false, tex, warnings)?,
         "thindielectric" => dielectric(p, name, true, tex, warnings)?,
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric)"))),
+        "normalmap" | "bumpmap" => super::maps::adapter(p, name, tex, warnings, false)?,
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap)"))),
     };
     p.finish()?;
     Ok(m)

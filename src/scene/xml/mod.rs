@@ -6,6 +6,7 @@
 mod build;
 mod emitters;
 mod ior;
+mod maps;
 mod parse;
 mod ply;
 mod props;

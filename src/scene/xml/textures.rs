@@ -84,7 +84,11 @@ impl Textures {
     }
 
     /// The texture object `p`, built once.
-    fn texture(&mut self, p: &Props, warnings: &mut Vec<String>) -> Result<Texture, SceneError> {
+    pub fn texture(
+        &mut self,
+        p: &Props,
+        warnings: &mut Vec<String>,
+    ) -> Result<Texture, SceneError> {
         if let Some(t) = self.built.get(&p.index) {
             return Ok(t.clone());
         }
@@ -184,6 +188,10 @@ fn to_uv(p: &Props) -> Result<Affine2, SceneError> {
 
 /// The textures of a material, `None` without any.
 pub fn material_textures(t: MaterialTextures) -> Option<Arc<MaterialTextures>> {
-    let any = t.kd.is_some() || t.ks.is_some() || t.specular.is_some() || t.diffuse.is_some();
+    let any = t.kd.is_some()
+        || t.ks.is_some()
+        || t.specular.is_some()
+        || t.diffuse.is_some()
+        || t.perturbation.is_some();
     any.then(|| Arc::new(t))
 }
