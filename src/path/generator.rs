@@ -132,6 +132,29 @@ impl Nee {
     }
 }
 
+/// A generator's density of the first `vertices` vertices of a path (the product over
+/// its `steps` non-delta ones of `(1 − absorption) × direction density`), kept between the
+/// contributions of one path by [`PathGenerator::pdf_techniques_after`]; `absorbed` where a
+/// step's absorption of 1 makes every longer contribution's density 0.
+#[derive(Clone, Copy, Debug)]
+pub struct Prefix {
+    vertices: usize,
+    steps: usize,
+    pdf: f64,
+    absorbed: bool,
+}
+
+impl Default for Prefix {
+    fn default() -> Self {
+        Self {
+            vertices: 0,
+            steps: 0,
+            pdf: 1.0,
+            absorbed: false,
+        }
+    }
+}
+
 /// How a generator picks the direction out of a vertex. In text (JSON, TOML) it is tagged by
 /// `type` (`{ type = "anchor", anchor = […], … }`); in binary formats (a plan file), which
 /// cannot read such tags, by the variant's index ([`serde_direction`]).
@@ -455,19 +478,46 @@ impl PathGenerator {
         c: &Contribution,
         max_bounces: u32,
     ) -> (f64, f64) {
-        let mut prefix = 1.0;
-        let mut k = 0;
-        for (j, v) in path.vertices[..c.len - 1].iter().enumerate() {
-            if v.delta {
+        self.pdf_techniques_after(view, path, c, max_bounces, &mut Prefix::default())
+    }
+
+    /// [`Self::pdf_techniques`], continuing `prefix`, this generator's density of the
+    /// path's first vertices from an earlier (shorter) contribution of the same path: the
+    /// contributions of a path then cost one direction density per vertex, not one per vertex
+    /// and contribution. The same products in the same order: the same densities, bit for
+    /// bit.
+    pub fn pdf_techniques_after(
+        &self,
+        view: &SceneView,
+        path: &PathVertices,
+        c: &Contribution,
+        max_bounces: u32,
+        prefix: &mut Prefix,
+    ) -> (f64, f64) {
+        if prefix.vertices > c.len - 1 {
+            *prefix = Prefix::default();
+        }
+        for (j, v) in path.vertices[..c.len - 1]
+            .iter()
+            .enumerate()
+            .skip(prefix.vertices)
+        {
+            prefix.vertices = j + 1;
+            if prefix.absorbed || v.delta {
                 continue;
             }
-            let a = self.absorption(k, j + 1, max_bounces);
+            let a = self.absorption(prefix.steps, j + 1, max_bounces);
             if a >= 1.0 {
-                return (0.0, 0.0);
+                prefix.absorbed = true;
+                continue;
             }
-            prefix *= (1.0 - a) * self.direction_pdf(view, k, v);
-            k += 1;
+            prefix.pdf *= (1.0 - a) * self.direction_pdf(view, prefix.steps, v);
+            prefix.steps += 1;
         }
+        if prefix.absorbed {
+            return (0.0, 0.0);
+        }
+        let (prefix, k) = (prefix.pdf, prefix.steps);
         let direction = |last: &PathVertex| {
             let a = self.absorption_after_light(k, c.len, max_bounces);
             if a >= 1.0 {

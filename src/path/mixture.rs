@@ -1,7 +1,7 @@
 //! Weighted sets of path generators (paper eq. 7) and the balance-heuristic estimator
 //! (paper eq. 8), with next-event estimation at the path's end or at every vertex ([`Nee`]).
 
-use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices};
+use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices, Prefix};
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{uniform, Rng};
 use glam::{DVec3, Vec3};
@@ -71,6 +71,8 @@ fn transmission_folded(path: &PathVertices) -> PathVertices {
 pub struct MixtureScratch {
     path: PathVertices,
     contributions: Vec<Contribution>,
+    /// Each generator's density of the path's first vertices, between its contributions.
+    prefixes: Vec<Prefix>,
 }
 
 impl Mixture {
@@ -187,6 +189,21 @@ impl Mixture {
         c: &Contribution,
         max_bounces: u32,
     ) -> f64 {
+        let mut prefixes = vec![Prefix::default(); self.generators.len()];
+        self.pdf_path_after(view, path, c, max_bounces, &mut prefixes)
+    }
+
+    /// [`Self::pdf_path`], continuing each generator's density of the path's first vertices
+    /// from an earlier contribution of the same path (`prefixes`, one per generator, default
+    /// for a new path; [`PathGenerator::pdf_techniques_after`]).
+    fn pdf_path_after(
+        &self,
+        view: &SceneView,
+        path: &PathVertices,
+        c: &Contribution,
+        max_bounces: u32,
+        prefixes: &mut [Prefix],
+    ) -> f64 {
         let flat;
         let folded;
         let path = match self.geometric_frame {
@@ -204,15 +221,23 @@ impl Mixture {
             false => path,
         };
         let mut pdf = 0.0;
-        for (i, (g, &w)) in self.generators.iter().zip(&self.weights).enumerate() {
+        let generators = self.generators.iter().zip(&self.weights).zip(prefixes);
+        for (i, ((g, &w), prefix)) in generators.enumerate() {
             if w > 0.0 {
                 let scale = match self.pdf_error {
                     Some((index, factor)) if index == i => factor,
                     _ => 1.0,
                 };
-                let p = match (self.nee, self.light_density_dropped) {
-                    (Nee::Every, true) => g.pdf_techniques(view, path, c, max_bounces).0,
-                    (nee, _) => g.pdf_contribution(view, path, c, (max_bounces, nee)),
+                let p = match self.nee {
+                    Nee::Every => {
+                        let (dir, light) =
+                            g.pdf_techniques_after(view, path, c, max_bounces, prefix);
+                        match self.light_density_dropped {
+                            true => dir,
+                            false => dir + light,
+                        }
+                    }
+                    Nee::End => g.pdf_contribution(view, path, c, (max_bounces, Nee::End)),
                 };
                 pdf += w * scale * p;
             }
@@ -264,13 +289,18 @@ impl Mixture {
             &mut scratch.contributions,
         );
         let mut sum = DVec3::ZERO;
+        scratch.prefixes.clear();
+        scratch
+            .prefixes
+            .resize(self.generators.len(), Prefix::default());
         let components = self.weights.iter().filter(|&&w| w > 0.0).count() as u64;
         // With a light point at every vertex, each density has one sampler more: the
         // other technique's at the last vertex.
         let extra = u64::from(self.nee == Nee::Every);
         for c in &scratch.contributions {
             counts.densities += components * (c.len as u64 + extra);
-            let pdf = self.pdf_path(view, &scratch.path, c, max_bounces);
+            let pdf =
+                self.pdf_path_after(view, &scratch.path, c, max_bounces, &mut scratch.prefixes);
             if pdf > 0.0 {
                 sum += c.f / pdf;
             }
