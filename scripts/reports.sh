@@ -64,6 +64,18 @@ for scene in ${NEW_SCENES:-gap shelf window corridor}; do
         --quiet --seed 401 -o "reports/$scene-2s-reps" > "reports/$scene-2s-reps.md"
     echo "reports/$scene: done"
 done
+# sunroom (issue 26: an environment map through a window, a rough gold sphere, rough glass),
+# a Mitsuba XML scene made before any method ran on it; Mitsuba's own efficiency at equal
+# time beside it comes from scripts/mitsuba_equal_time.py (reports/README.md).
+if [ -z "${NEW_SCENES+x}" ] || [[ " $NEW_SCENES " == *" sunroom "* ]]; then
+    "$bin" sweep scenes/mitsuba/sunroom.xml --ref reports/refs/sunroom_ref.exr \
+        --time --budgets "$budgets" --methods pt,pg,ga-pt --max-bounces 5 --quiet --seed 101 \
+        -o reports/sunroom > reports/sunroom.md
+    "$bin" sweep scenes/mitsuba/sunroom.xml --ref reports/refs/sunroom_ref.exr \
+        --time --budgets 2 --reps 6 --methods pt,pg,ga-pt --max-bounces 5 \
+        --quiet --seed 401 -o reports/sunroom-2s-reps > reports/sunroom-2s-reps.md
+    echo "reports/sunroom: done"
+fi
 # Best of 10 passes: on the shared machine the packet rates swing by a third from one
 # half-minute to the next (reports/README.md), single rays much less.
 "$bin" bench scenes/cbox/scene.toml --passes 10 --json reports/bench.json > reports/bench.txt
