@@ -609,16 +609,9 @@ fn smooth_shading_methods_agree_and_a_wrong_frame_does_not() {
     }
 }
 
-/// Every kind of emitter at once (`lights.xml`: an environment map with a small bright sun, a
-/// point light, a directional light and an area light, each picked by light sampling with
-/// probability 1/4): `srt` and `ga` with either estimator, `ga-pt` (with and without the
-/// spatial guide) and `pg` estimate what `pt` does, and an `srt` that leaves a delta light's
-/// pick out of its densities (as if it were the only emitter) does not.
-#[test]
-fn lights_methods_agree_and_a_dropped_delta_pick_does_not() {
-    let name = "lights.xml";
-    let (bounces, spp) = (4, SPP / 4);
-    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+/// Every method beside `pt` with its defaults: `srt` and `ga` with either estimator, `ga-pt`
+/// with and without the spatial guide, and `pg`.
+fn every_method() -> [(&'static str, Which); 7] {
     let srt = |nee| Which::Srt {
         nee,
         light_dropped: false,
@@ -628,7 +621,7 @@ fn lights_methods_agree_and_a_dropped_delta_pick_does_not() {
         unnormalised: false,
         light_dropped: false,
     };
-    for (label, which) in [
+    [
         ("srt", srt(Nee::Every)),
         ("srt, nee end", srt(Nee::End)),
         ("ga", ga(Nee::Every)),
@@ -641,7 +634,20 @@ fn lights_methods_agree_and_a_dropped_delta_pick_does_not() {
                 every_cell_dark: false,
             },
         ),
-    ] {
+    ]
+}
+
+/// Every kind of emitter at once (`lights.xml`: an environment map with a small bright sun, a
+/// point light, a directional light and an area light, each picked by light sampling with
+/// probability 1/4): `srt` and `ga` with either estimator, `ga-pt` (with and without the
+/// spatial guide) and `pg` estimate what `pt` does, and an `srt` that leaves a delta light's
+/// pick out of its densities (as if it were the only emitter) does not.
+#[test]
+fn lights_methods_agree_and_a_dropped_delta_pick_does_not() {
+    let name = "lights.xml";
+    let (bounces, spp) = (4, SPP / 4);
+    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+    for (label, which) in every_method() {
         let film = render_with(name, which, bounces, spp, 23);
         assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
@@ -706,29 +712,7 @@ fn textures_methods_agree_and_dropped_texture_coordinates_do_not() {
     let name = "textures.xml";
     let (bounces, spp) = (3, SPP / 4);
     let pt = render_with(name, Which::Pt, bounces, spp, 11);
-    let srt = |nee| Which::Srt {
-        nee,
-        light_dropped: false,
-    };
-    let ga = |nee| Which::Ga {
-        nee,
-        unnormalised: false,
-        light_dropped: false,
-    };
-    for (label, which) in [
-        ("srt", srt(Nee::Every)),
-        ("srt, nee end", srt(Nee::End)),
-        ("ga", ga(Nee::Every)),
-        ("ga, nee end", ga(Nee::End)),
-        ("ga-pt", Which::GaPt { spatial: false }),
-        ("ga-pt, spatial", Which::GaPt { spatial: true }),
-        (
-            "pg",
-            Which::Pg {
-                every_cell_dark: false,
-            },
-        ),
-    ] {
+    for (label, which) in every_method() {
         let film = render_with(name, which, bounces, spp, 23);
         assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
@@ -753,29 +737,7 @@ fn maps_methods_agree_and_dropped_maps_do_not() {
     let name = "maps.xml";
     let (bounces, spp) = (3, SPP / 4);
     let pt = render_with(name, Which::Pt, bounces, spp, 11);
-    let srt = |nee| Which::Srt {
-        nee,
-        light_dropped: false,
-    };
-    let ga = |nee| Which::Ga {
-        nee,
-        unnormalised: false,
-        light_dropped: false,
-    };
-    for (label, which) in [
-        ("srt", srt(Nee::Every)),
-        ("srt, nee end", srt(Nee::End)),
-        ("ga", ga(Nee::Every)),
-        ("ga, nee end", ga(Nee::End)),
-        ("ga-pt", Which::GaPt { spatial: false }),
-        ("ga-pt, spatial", Which::GaPt { spatial: true }),
-        (
-            "pg",
-            Which::Pg {
-                every_cell_dark: false,
-            },
-        ),
-    ] {
+    for (label, which) in every_method() {
         let film = render_with(name, which, bounces, spp, 23);
         assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
