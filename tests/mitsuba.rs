@@ -16,7 +16,8 @@
 //! anisotropy exchanged, for `roughglass.xml` (`roughdielectric`, GGX and Beckmann) the
 //! roughnesses exchanged or a sphere's normals flipped, for `textures.xml` a texture upside
 //! down or not sRGB-decoded, for `maps.xml` (`normalmap` and `bumpmap`) the normal map's
-//! green channel flipped or the bump scale 30 % off; and `hide_emitters`. Vertex normals and texture
+//! green channel flipped or the bump scale 30 % off, for `mask.xml` (`mask`) the opacities
+//! inverted or shadow rays stopped by every mask; and `hide_emitters`. Vertex normals and texture
 //! coordinates as Mitsuba places them. And the
 //! mesh formats: ASCII and binary PLY and Mitsuba's serialized format give the same
 //! triangles; and the glass's indices as Mitsuba reads them.
