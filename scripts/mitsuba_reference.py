@@ -36,6 +36,9 @@ REFERENCES = {
     # 4096 spp: 16 × its test's samples (the reference's own variance enters the test).
     "textures": (4096, 64),
     "maps": (4096, 64),
+    # 1024 × its test's samples: Mitsuba's `path` meets masks with opaque shadow rays and
+    # is far noisier there than genpath's `pt` (see docs/scenes.md).
+    "mask": (65536, 64),
     # 64 × 48, fixed in the files (their film is not square: no `res` parameter).
     "legacy": (16384, None),
     "params": (16384, None),

@@ -162,7 +162,7 @@ impl PdfSurvey {
                 j as u64,
             );
             let ray = camera_ray(camera, (x, y), &mut rng);
-            let Some(x1) = view.trace(&ray, &mut counts) else {
+            let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) else {
                 continue;
             };
             contributions.clear();

@@ -19,7 +19,8 @@
 //! diffuse and rough plastic BSDFs) every method agrees with `pt`, and `srt` on the scene
 //! with its meshes' texture coordinates dropped is rejected. On `maps.xml` (normal and bump
 //! maps) every method agrees with `pt`, and `srt` on the scene with its maps dropped is
-//! rejected.
+//! rejected. On `mask.xml` (opacity masks) every method agrees with `pt`, and an `srt`
+//! whose shadow rays stop at every mask is rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -68,6 +69,9 @@ enum Which {
     /// maps dropped: every vertex scatters about its unperturbed shading normal, as a method
     /// that ignored the maps would.
     SrtMapsDropped,
+    /// `srt` (next-event estimation at every vertex) whose shadow rays stop at every masked
+    /// surface, while the directions it samples pass through them (fault injection).
+    SrtMasksBlockShadows,
     /// `srt` with the estimator `nee`, optionally with the light technique's densities left
     /// out of the balance heuristic's denominator.
     Srt {
@@ -140,6 +144,7 @@ fn scene_file(name: &str) -> PathBuf {
 fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) -> Film {
     let mut scene = Scene::load(&scene_file(name)).unwrap();
     scene.resize(SIZE, SIZE);
+    let mut block_shadows = false;
     let which = match which {
         Which::SrtShadedFlat => {
             assert!(
@@ -180,10 +185,22 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
                 light_dropped: false,
             }
         }
+        Which::SrtMasksBlockShadows => {
+            block_shadows = true;
+            Which::Srt {
+                nee: Nee::Every,
+                light_dropped: false,
+            }
+        }
         which => which,
     };
     let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
-    let view = SceneView::new(&scene, accel.as_ref());
+    let mut view = SceneView::new(&scene, accel.as_ref());
+    if block_shadows {
+        assert!(view.has_masks(), "{name} has no masks");
+        view.fault_masks_block_shadows = true;
+    }
+    let view = view;
     let mut plan = None;
     let mut guided = false;
     let mut spatial = None;
@@ -271,7 +288,10 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
                 false => srt,
             })
         }
-        Which::SrtShadedFlat | Which::SrtUvDropped | Which::SrtMapsDropped => {
+        Which::SrtShadedFlat
+        | Which::SrtUvDropped
+        | Which::SrtMapsDropped
+        | Which::SrtMasksBlockShadows => {
             unreachable!("replaced above")
         }
         Which::SrtDeltaPickDropped => Some(
@@ -744,6 +764,51 @@ fn maps_methods_agree_and_dropped_maps_do_not() {
     let wrong = render_with(name, Which::SrtMapsDropped, bounces, spp, 23);
     assert_rejected(
         &format!("{name}: srt without the normal and bump maps"),
+        &wrong,
+        &pt,
+    );
+}
+
+/// Opacity masks (`mask.xml`: Mitsuba's `mask` with a bitmap, a checkerboard and a constant
+/// opacity around twosided diffuse, one-sided diffuse and rough plastic BSDFs): `srt` and
+/// `ga` with either estimator, `ga-pt` (with and without the spatial guide) and `pg`
+/// estimate what `pt` does, their rays passing through the masks at random; an `srt` whose
+/// shadow rays stop at every masked surface (while its sampled directions pass through
+/// them) does not.
+#[test]
+fn mask_methods_agree_and_opaque_shadow_rays_do_not() {
+    let name = "mask.xml";
+    let (bounces, spp) = (3, SPP / 4);
+    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+    let srt = |nee| Which::Srt {
+        nee,
+        light_dropped: false,
+    };
+    let ga = |nee| Which::Ga {
+        nee,
+        unnormalised: false,
+        light_dropped: false,
+    };
+    for (label, which) in [
+        ("srt", srt(Nee::Every)),
+        ("srt, nee end", srt(Nee::End)),
+        ("ga", ga(Nee::Every)),
+        ("ga, nee end", ga(Nee::End)),
+        ("ga-pt", Which::GaPt { spatial: false }),
+        ("ga-pt, spatial", Which::GaPt { spatial: true }),
+        (
+            "pg",
+            Which::Pg {
+                every_cell_dark: false,
+            },
+        ),
+    ] {
+        let film = render_with(name, which, bounces, spp, 23);
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
+    }
+    let wrong = render_with(name, Which::SrtMasksBlockShadows, bounces, spp, 23);
+    assert_rejected(
+        &format!("{name}: srt with masks opaque to shadow rays"),
         &wrong,
         &pt,
     );

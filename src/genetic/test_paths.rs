@@ -176,8 +176,15 @@ impl Packet {
             *ray = camera_ray(&view.scene.camera, pixel, &mut lane.rng);
         }
         let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
-        // One pixel's camera rays: the coherent case packets are made for.
-        view.trace_packet(rays, points, Coherence::Coherent, counts);
+        if view.has_masks() {
+            // Each lane passes masks with its own random numbers.
+            for ((lane, ray), point) in lanes.iter_mut().zip(rays).zip(points.iter_mut()) {
+                *point = view.trace_through(ray, &mut lane.rng, counts);
+            }
+        } else {
+            // One pixel's camera rays: the coherent case packets are made for.
+            view.trace_packet(rays, points, Coherence::Coherent, counts);
+        }
         for ((lane, ray), x1) in lanes.iter_mut().zip(rays).zip(points.iter()) {
             lane.contributions.clear();
             lane.query = None;
@@ -213,7 +220,12 @@ impl Packet {
     fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
         let count = self.gather(false);
         let (rays, points) = (&self.rays[..count], &mut self.points[..count]);
-        if count >= MIN_INCOHERENT_PACKET {
+        if view.has_masks() {
+            // Each lane passes masks with its own random numbers.
+            for ((ray, point), &i) in rays.iter().zip(points.iter_mut()).zip(&self.owner) {
+                *point = view.trace_through(ray, &mut self.lanes[i].rng, counts);
+            }
+        } else if count >= MIN_INCOHERENT_PACKET {
             view.trace_packet(rays, points, Coherence::Incoherent, counts);
         } else {
             for (ray, point) in rays.iter().zip(points.iter_mut()) {
@@ -235,7 +247,12 @@ impl Packet {
     /// how many.
     fn trace_shadows(&mut self, view: &SceneView, counts: &mut RayCounts) -> usize {
         let count = self.gather(true);
-        if count >= MIN_INCOHERENT_PACKET {
+        if view.has_masks() {
+            let (rays, free) = (&self.rays[..count], &mut self.free[..count]);
+            for ((ray, free), &i) in rays.iter().zip(free.iter_mut()).zip(&self.owner) {
+                *free = view.unblocked_through(ray, &mut self.lanes[i].rng, counts);
+            }
+        } else if count >= MIN_INCOHERENT_PACKET {
             view.unblocked_packet(&self.rays[..count], &mut self.free[..count], counts);
         } else {
             for (ray, free) in self.rays[..count].iter().zip(&mut self.free) {
@@ -360,7 +377,7 @@ impl TestPaths {
             let mut rng: Rng = sample_rng(seed, pixel, j as u64);
             let ray = camera_ray(&view.scene.camera, (x, y), &mut rng);
             contributions.clear();
-            if let Some(x1) = view.trace(&ray, &mut counts) {
+            if let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) {
                 let g = q.choose(uniform(&mut rng) as f64);
                 q.generators[g].sample_path(
                     view,

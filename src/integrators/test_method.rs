@@ -46,7 +46,7 @@ fn light_sample(
 ) -> Vec3 {
     let u = [uniform(rng), uniform(rng), uniform(rng)];
     match LightCandidate::sample(view, (x, &material, frame), u) {
-        Some(l) if l.visible(view, x, counts) => {
+        Some(l) if l.visible(view, x, rng, counts) => {
             brdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
         }
         _ => Vec3::ZERO,
@@ -66,7 +66,7 @@ impl PixelEstimator for NeeOnly {
         // Whether emission at the next hit counts: no light sample could have found it.
         let mut count_emission = true;
         for bounce in 0..=self.max_bounces {
-            let hit = view.trace(&ray, counts);
+            let hit = view.trace_through(&ray, rng, counts);
             if count_emission {
                 // The camera ray's as the scene shows it (`hide_emitters`).
                 radiance += beta

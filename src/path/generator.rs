@@ -585,10 +585,13 @@ impl PathGenerator {
         while let Some(q) = query {
             query = match q {
                 Query::Closest(ray) => {
-                    let y = view.trace(&ray, counts);
+                    let y = view.trace_through(&ray, rng, counts);
                     walk.hit(self, view, rng, path, contributions, y)
                 }
-                Query::Shadow(ray) => walk.shadow(view.unblocked(&ray, counts), contributions),
+                Query::Shadow(ray) => {
+                    let free = view.unblocked_through(&ray, rng, counts);
+                    walk.shadow(free, contributions)
+                }
             };
         }
     }

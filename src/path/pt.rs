@@ -377,11 +377,18 @@ impl LightCandidate {
         }
     }
 
-    /// Whether nothing blocks the light from `x` (one shadow ray).
-    pub fn visible(&self, view: &SceneView, x: &SurfacePoint, counts: &mut RayCounts) -> bool {
+    /// Whether nothing blocks the light from `x` (one shadow ray; masks passed at random,
+    /// [`SceneView::unblocked_through`]).
+    pub fn visible(
+        &self,
+        view: &SceneView,
+        x: &SurfacePoint,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> bool {
         match &self.target {
-            Target::Point(y) => view.unoccluded(x, y, counts),
-            Target::Infinity => view.escapes(x, self.wi, counts),
+            Target::Point(y) => view.unoccluded(x, y, rng, counts),
+            Target::Infinity => view.escapes(x, self.wi, rng, counts),
         }
     }
 }
@@ -403,7 +410,7 @@ fn next_event<B: VertexBsdf>(
     let u = [uniform(rng), uniform(rng), uniform(rng)];
     let light = LightCandidate::sample(view, at, u)?;
     let f = bsdf.eval(light.wi);
-    if !(f.max_element() > 0.0 && light.visible(view, x, counts)) {
+    if !(f.max_element() > 0.0 && light.visible(view, x, rng, counts)) {
         return None;
     }
     let pdf_light = light.pdf(light_share);
@@ -477,7 +484,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
     guide: &G,
     mut recorder: Option<&mut R>,
 ) -> Vec3 {
-    let Some(mut x) = view.trace(ray, counts) else {
+    let Some(mut x) = view.trace_through(ray, rng, counts) else {
         return view.seen_directly(None, ray.dir);
     };
     let mut wo = -ray.dir;
@@ -554,7 +561,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             r.sampled(x.p, n, wi, cos_over_pdf, beta, radiance);
         }
         let next_ray = view.spawn(&x, wi);
-        let Some(y) = view.trace(&next_ray, counts) else {
+        let Some(y) = view.trace_through(&next_ray, rng, counts) else {
             // The environment's light stays in a diffuse vertex's record (unlike an area
             // emitter's): its light samples, uniform over the sphere, do not sample it well.
             if view.scene.environment.is_some() {

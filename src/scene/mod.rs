@@ -17,7 +17,7 @@ pub use environment::Environment;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
 pub use lights::{DeltaArrival, DeltaLight, LightPick};
 pub use shading::Shading;
-pub use texture::{MaterialAt, MaterialTextures, Texture};
+pub use texture::{MaterialAt, MaterialTextures, Opacity, Texture};
 
 use crate::accel::TriangleMesh;
 use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};

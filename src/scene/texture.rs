@@ -215,13 +215,30 @@ pub struct Checkerboard {
 
 impl Checkerboard {
     pub fn eval(&self, uv: Vec2) -> Vec3 {
-        let uv = self.to_uv.transform_point2(uv);
-        let f = uv - uv.floor();
-        if (f.x > 0.5) == (f.y > 0.5) {
+        if self.first_colour(uv) {
             self.color0
         } else {
             self.color1
         }
+    }
+
+    /// Mitsuba 3.9.1's `eval_1` of the checkerboard (what a `mask` reads its opacity by), for
+    /// grey colours: the other colour than [`Self::eval`]'s, `color1` where both fractional
+    /// parts are above or both at most 1/2 (measured: at `uv` (0.25, 0.25) its `eval` gives
+    /// `color0`, its `eval_1` `color1`).
+    pub fn eval_1(&self, uv: Vec2) -> f32 {
+        if self.first_colour(uv) {
+            self.color1.x
+        } else {
+            self.color0.x
+        }
+    }
+
+    /// Whether `eval` gives `color0` at `uv`.
+    fn first_colour(&self, uv: Vec2) -> bool {
+        let uv = self.to_uv.transform_point2(uv);
+        let f = uv - uv.floor();
+        (f.x > 0.5) == (f.y > 0.5)
     }
 }
 
@@ -260,6 +277,15 @@ impl Texture {
         }
     }
 
+    /// Whether every texel or colour is grey (its three channels equal).
+    pub fn is_grey(&self) -> bool {
+        let grey = |c: Vec3| c.x == c.y && c.y == c.z;
+        match self {
+            Texture::Checkerboard(c) => grey(c.color0) && grey(c.color1),
+            Texture::Bitmap(b) => b.texels.iter().all(|t| grey(Vec3::from(*t))),
+        }
+    }
+
     /// The largest and smallest channel value the texture can return (bilinear lookups
     /// stay within their texels').
     pub fn range(&self) -> (f32, f32) {
@@ -295,6 +321,38 @@ pub struct MaterialTextures {
     /// The shading normals of a `normalmap` or `bumpmap` around the BSDF (see
     /// [`super::normals`]).
     pub perturbation: Option<super::normals::Perturbation>,
+    /// The opacity of a `mask` around the BSDF (see [`Opacity`]).
+    pub opacity: Option<Opacity>,
+}
+
+/// Mitsuba's `mask` around a BSDF: at a hit, the surface scatters (by the nested BSDF) with
+/// probability `opacity` and lets the ray pass straight through otherwise, a forward delta
+/// that every method takes where a ray meets the surface ([`crate::path::SceneView`]'s
+/// `trace_through` and `unblocked_through`), so that no path vertex is ever a pass-through.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Opacity {
+    /// A constant opacity in [0, 1].
+    Constant(f32),
+    /// A grey texture (every texel's or colour's channels equal) whose value is the opacity,
+    /// within [0, 1], read as Mitsuba's `eval_1` reads it (for a checkerboard, see
+    /// [`Checkerboard::eval_1`]).
+    Texture(Texture),
+}
+
+impl Opacity {
+    /// The opacity at texture coordinates `uv`, clamped to [0, 1] as Mitsuba clamps it.
+    pub fn at(&self, uv: Vec2) -> f32 {
+        match self {
+            Opacity::Constant(a) => *a,
+            Opacity::Texture(Texture::Checkerboard(c)) => c.eval_1(uv).clamp(0.0, 1.0),
+            Opacity::Texture(Texture::Bitmap(b)) => b.eval(uv).x.clamp(0.0, 1.0),
+        }
+    }
+
+    /// Whether the opacity varies over the surface (the hit's texture coordinates matter).
+    pub fn is_textured(&self) -> bool {
+        matches!(self, Opacity::Texture(_))
+    }
 }
 
 /// A material's textured parameters evaluated at one hit.
@@ -364,6 +422,12 @@ impl Material {
     #[inline]
     pub fn perturbation(&self) -> Option<&super::normals::Perturbation> {
         self.textures.as_ref().and_then(|t| t.perturbation.as_ref())
+    }
+
+    /// The opacity of a `mask` around the material, if any.
+    #[inline]
+    pub fn opacity(&self) -> Option<&Opacity> {
+        self.textures.as_ref().and_then(|t| t.opacity.as_ref())
     }
 }
 

@@ -161,7 +161,7 @@ fn baseline(
                     for s in 0..config.baseline_spp {
                         let mut rng = sample_rng(seed, pixel, s as u64);
                         let ray = camera_ray(camera, (x, y), &mut rng);
-                        let Some(x1) = view.trace(&ray, &mut counts) else {
+                        let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) else {
                             continue;
                         };
                         let material = view.material(x1.prim);

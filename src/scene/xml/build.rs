@@ -257,6 +257,9 @@ fn shape_material(
             };
             if let Some(e) = key.1 {
                 m.ke = area_emitter(&Props::new(p.doc, e), warnings)?;
+                if m.opacity().is_some() {
+                    return Err(p.error("a `mask` on an area emitter: genpath's rays pass through a masked surface before it could emit (Mitsuba counts its emission, then passes); put the mask on another shape"));
+                }
             }
             g.materials.push(m);
             let index = g.materials.len() as u32 - 1;
@@ -310,6 +313,7 @@ pub(super) fn bsdf(
                 "twosided" => return Err(q.error("a twosided BSDF inside a twosided BSDF")),
                 // As Mitsuba's twosided refuses them.
                 "dielectric" | "thindielectric" | "roughdielectric" => return Err(q.error("only materials without a transmission component can be nested in twosided (a dielectric is two-sided already)")),
+                "mask" => return Err(q.error("only materials without a transmission component can be nested in twosided (a mask transmits: put the twosided inside the mask)")),
                 _ => {}
             }
             let mut m = match q.object().plugin.as_str() {
@@ -335,7 +339,8 @@ pub(super) fn bsdf(
         "dielectric" => dielectric(p, name, false, tex, warnings)?,
         "thindielectric" => dielectric(p, name, true, tex, warnings)?,
         "normalmap" | "bumpmap" => super::maps::adapter(p, name, tex, warnings, false)?,
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap)"))),
+        "mask" => super::mask::mask(p, name, tex, warnings)?,
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap, mask)"))),
     };
     p.finish()?;
     Ok(m)

@@ -7,6 +7,7 @@ mod build;
 mod emitters;
 mod ior;
 mod maps;
+mod mask;
 mod parse;
 mod ply;
 mod props;
