@@ -780,29 +780,7 @@ fn mask_methods_agree_and_opaque_shadow_rays_do_not() {
     let name = "mask.xml";
     let (bounces, spp) = (3, SPP / 4);
     let pt = render_with(name, Which::Pt, bounces, spp, 11);
-    let srt = |nee| Which::Srt {
-        nee,
-        light_dropped: false,
-    };
-    let ga = |nee| Which::Ga {
-        nee,
-        unnormalised: false,
-        light_dropped: false,
-    };
-    for (label, which) in [
-        ("srt", srt(Nee::Every)),
-        ("srt, nee end", srt(Nee::End)),
-        ("ga", ga(Nee::Every)),
-        ("ga, nee end", ga(Nee::End)),
-        ("ga-pt", Which::GaPt { spatial: false }),
-        ("ga-pt, spatial", Which::GaPt { spatial: true }),
-        (
-            "pg",
-            Which::Pg {
-                every_cell_dark: false,
-            },
-        ),
-    ] {
+    for (label, which) in every_method() {
         let film = render_with(name, which, bounces, spp, 23);
         assert_agrees(&format!("{name}: {label}"), &film, &pt);
     }
