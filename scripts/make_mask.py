@@ -10,8 +10,8 @@ once sRGB-decoded) and a clear midrib, so that the opacity takes fractional valu
 """
 import math
 import os
-import struct
-import zlib
+
+from png_write import write_png
 
 HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scenes", "mitsuba", "masks")
 N = 16
@@ -19,18 +19,7 @@ N = 16
 
 def png(name, pixels):
     """An 8-bit RGB PNG of N × N `pixels` (row 0 at the top)."""
-    raw = b""
-    for y in range(N):
-        raw += b"\0" + bytes(v for x in range(N) for v in pixels[y * N + x])
-
-    def chunk(kind, data):
-        body = kind + data
-        return struct.pack(">I", len(data)) + body + struct.pack(">I", zlib.crc32(body) & 0xFFFFFFFF)
-
-    header = struct.pack(">IIBBBBB", N, N, 8, 2, 0, 0, 0)
-    data = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b"")
-    with open(os.path.join(HERE, name), "wb") as f:
-        f.write(data)
+    write_png(os.path.join(HERE, name), N, N, pixels)
 
 
 def leaf():
