@@ -189,20 +189,20 @@ impl Mixture {
         c: &Contribution,
         max_bounces: u32,
     ) -> f64 {
-        let mut prefixes = vec![Prefix::default(); self.generators.len()];
-        self.pdf_path_after(view, path, c, max_bounces, &mut prefixes)
+        self.pdf_path_after(view, path, c, max_bounces, None)
     }
 
     /// [`Self::pdf_path`], continuing each generator's density of the path's first vertices
     /// from an earlier contribution of the same path (`prefixes`, one per generator, default
-    /// for a new path; [`PathGenerator::pdf_techniques_after`]).
+    /// for a new path; [`PathGenerator::pdf_techniques_after`]); without them, from the
+    /// path's start.
     fn pdf_path_after(
         &self,
         view: &SceneView,
         path: &PathVertices,
         c: &Contribution,
         max_bounces: u32,
-        prefixes: &mut [Prefix],
+        mut prefixes: Option<&mut [Prefix]>,
     ) -> f64 {
         let flat;
         let folded;
@@ -221,9 +221,13 @@ impl Mixture {
             false => path,
         };
         let mut pdf = 0.0;
-        let generators = self.generators.iter().zip(&self.weights).zip(prefixes);
-        for (i, ((g, &w), prefix)) in generators.enumerate() {
+        for (i, (g, &w)) in self.generators.iter().zip(&self.weights).enumerate() {
             if w > 0.0 {
+                let mut fresh = Prefix::default();
+                let prefix = match prefixes.as_deref_mut() {
+                    Some(prefixes) => &mut prefixes[i],
+                    None => &mut fresh,
+                };
                 let scale = match self.pdf_error {
                     Some((index, factor)) if index == i => factor,
                     _ => 1.0,
@@ -299,8 +303,13 @@ impl Mixture {
         let extra = u64::from(self.nee == Nee::Every);
         for c in &scratch.contributions {
             counts.densities += components * (c.len as u64 + extra);
-            let pdf =
-                self.pdf_path_after(view, &scratch.path, c, max_bounces, &mut scratch.prefixes);
+            let pdf = self.pdf_path_after(
+                view,
+                &scratch.path,
+                c,
+                max_bounces,
+                Some(&mut scratch.prefixes),
+            );
             if pdf > 0.0 {
                 sum += c.f / pdf;
             }
