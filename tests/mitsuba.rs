@@ -428,6 +428,34 @@ fn with_mesh(dir: &Path, shape: &str) -> Scene {
     Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A shape without a BSDF gets Mitsuba's default, a diffuse of reflectance 0.5, and an area
+/// emitter without one a black diffuse (Mitsuba 3.9.1's `Shape` sets reflectance 0 when the
+/// shape emits): the emitter reflects nothing.
+#[test]
+fn a_shape_without_a_bsdf_is_grey_diffuse_and_an_emitter_without_one_is_black() {
+    let dir = tempfile::tempdir().unwrap();
+    for (inside, kd) in [
+        ("", 0.5),
+        (
+            r#"<emitter type="area"><rgb name="radiance" value="2"/></emitter>"#,
+            0.0,
+        ),
+    ] {
+        let shape = format!(
+            r#"<shape type="rectangle"><transform name="to_world"><translate y="0.7"/></transform>{inside}</shape>"#
+        );
+        let scene = with_mesh(dir.path(), &shape);
+        let bare: Vec<_> = scene
+            .materials
+            .iter()
+            .filter(|m| m.name.starts_with("default"))
+            .collect();
+        assert_eq!(bare.len(), 1, "{inside}");
+        assert_eq!(bare[0].kd, Vec3::splat(kd), "{inside}");
+        assert_eq!(bare[0].ke.max_element() > 0.0, !inside.is_empty());
+    }
+}
+
 const QUAD: [[f32; 3]; 4] = [
     [-0.5, 0.2, 0.0],
     [0.5, 0.2, 0.0],

@@ -253,6 +253,8 @@ fn shape_material(
                     g.files.append(&mut g.textures.files);
                     m
                 }
+                // Mitsuba's default BSDF: diffuse 0.5, black on an emitter.
+                None if key.1.is_some() => diffuse(DVec3::ZERO, "default black diffuse".into()),
                 None => diffuse(DVec3::splat(0.5), "default diffuse".into()),
             };
             if let Some(e) = key.1 {
