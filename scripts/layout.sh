@@ -14,7 +14,9 @@ echo
 first_doc() {
     case $1 in
     *.rs) grep -m1 '^//!' "$1" | sed 's|^//! *||' || true ;;
-    *.sh | *.py) sed -n '2,6p' "$1" | grep -m1 '^#' | sed 's|^# *||' || true ;;
+    *.sh) sed -n '2,6p' "$1" | grep -m1 '^#' | sed 's|^# *||' || true ;;
+    # A Python script's docstring's first line, else its first comment.
+    *.py) sed -n '1,6p' "$1" | grep -v '^#!' | grep -m1 -E '^("""|#)' | sed -E 's/^("""|# *)//' || true ;;
     *) true ;;
     esac
 }
