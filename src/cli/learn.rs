@@ -1,7 +1,10 @@
 //! `genpath learn`: prepares a method that learns (`ga`, `ga-pt`, `pg`) exactly as `render`
 //! does and saves what it learned in a plan file ([`genpath::shard::plan_file`]), with the
 //! training's samples (pg, ga-pt) in a training shard beside it; and `render --plan`'s side
-//! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md).
+//! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md). With
+//! `--for-reference` it learns the two halves of `genpath reference` instead, each as the
+//! reference does (its own derived seed, half the samples), into one plan file and one
+//! training shard with a layer per half, for `reference --plan`.
 //!
 //! Learning keeps what it finished in a folder ([`LearnDir`]): a GA plan's waves of GA
 //! pixels as they finish, the spatial guide's training after each pass. Learning stopped by

@@ -1,4 +1,6 @@
 //! `genpath reference`: a long render in two independent halves, with its own noise estimate.
+//! A method that learns learns in each half, or takes each half's learned state from a plan
+//! file (`--plan`, written by `genpath learn --for-reference`), which lets it shard.
 
 use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
@@ -29,8 +31,6 @@ pub struct ReferenceArgs {
     /// Samples per pixel, split into two independent halves.
     #[arg(long, default_value_t = DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(2..=1 << 24))]
     pub spp: u32,
-    /// The method (default `pt`) and its settings: each half prepares it anew, from its own
-    /// seed.
     #[command(flatten)]
     pub shard: ShardArgs,
     /// Render each half with its learned state in FILE (`genpath learn --for-reference`,
@@ -40,6 +40,8 @@ pub struct ReferenceArgs {
     /// checkpointed (docs/shards.md).
     #[arg(long, value_name = "FILE")]
     pub plan: Option<PathBuf>,
+    /// The method (default `pt`) and its settings: each half prepares it anew, from its own
+    /// seed, or takes what it learned from `--plan`.
     #[command(flatten)]
     pub method: MethodArgs,
 }
@@ -54,27 +56,8 @@ pub fn half_seeds(seed: u64) -> [u64; 2] {
 /// Two independent halves, averaged; their relMSE against each other is about four times
 /// the average's own relMSE (each half has twice its variance, and both count).
 pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
-    let is_exr = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    if !is_exr {
-        bail!(
-            "{}: a reference must be an EXR (float) image",
-            args.output.display()
-        );
-    }
-    check_output(&args.output)?;
     let method = args.method.method_or(genpath::integrators::Method::Pt);
-    if let (Some(plan), false) = (&args.plan, method.learns()) {
-        bail!(
-            "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
-            plan.display(),
-            method.name()
-        );
-    }
-    args.shard
-        .check_method(method, args.plan.is_some(), "reference")?;
+    check_args(&args, method)?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
@@ -155,6 +138,32 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
         plan_json,
     };
     finish(&args, &session, method, &continuation, done)
+}
+
+/// Refuses, before anything loads, an output that is not an EXR or cannot be written, a
+/// plan for a method that learns nothing, and a shard, resume or checkpoint of a method that
+/// learns without a plan.
+fn check_args(args: &ReferenceArgs, method: genpath::integrators::Method) -> Result<()> {
+    let is_exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        bail!(
+            "{}: a reference must be an EXR (float) image",
+            args.output.display()
+        );
+    }
+    check_output(&args.output)?;
+    if let (Some(plan), false) = (&args.plan, method.learns()) {
+        bail!(
+            "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
+            plan.display(),
+            method.name()
+        );
+    }
+    args.shard
+        .check_method(method, args.plan.is_some(), "reference")
 }
 
 /// What a reference's two halves start from and take: their learned states from a plan

@@ -1,4 +1,5 @@
-//! The plan file (`genpath learn … -o plan.bin`, read by `render --plan plan.bin`): the
+//! The plan file (`genpath learn … -o plan.bin`, read by `render --plan plan.bin`, and of
+//! `learn --for-reference`, by `reference --plan`): the
 //! learned state of a method that learns ([`Learned`]: the GA plan, the spatial guide with
 //! its training's per-pixel sums and decisions), trained once and shared by every shard of
 //! a render. Little-endian throughout:

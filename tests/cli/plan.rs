@@ -1,7 +1,9 @@
 //! `genpath learn` and `render --plan`: a render with a saved plan is the render that learns
 //! in-process, bit for bit (ga, pg, ga-pt); shards of it merged with the learn job's
 //! training shard are that render too, and a merge without the training shard is partial;
-//! plans of other renders, of other methods, and damaged plan files are refused.
+//! plans of other renders, of other methods, and damaged plan files are refused. The same
+//! for a reference (`learn --for-reference`, `reference --plan`): its shards with the
+//! training shard merge to the in-process reference and its noise estimate, bit for bit.
 
 use super::*;
 use std::process::Output;
