@@ -256,11 +256,26 @@ pub struct ShardArgs {
 
 impl ShardArgs {
     /// Refuses a shard, a resume or a checkpoint of a method that learns, unless its learned
-    /// state comes from a plan file (`plan`), before anything loads.
-    pub fn check_method(&self, method: Method, plan: bool) -> Result<()> {
+    /// state comes from a plan file (`plan`), before anything loads; `command`: `render` or
+    /// `reference`, which learn their plans differently.
+    pub fn check_method(&self, method: Method, plan: bool, command: &str) -> Result<()> {
         let learns = method.learns() && !plan;
+        let learn = match command {
+            "reference" => "genpath learn --for-reference",
+            _ => "genpath learn",
+        };
         if self.shard.is_some() && learns {
-            return Err(genpath::integrators::PrepareError::ShardLearns(method).into());
+            if command != "reference" {
+                return Err(genpath::integrators::PrepareError::ShardLearns(method).into());
+            }
+            bail!(
+                "--shard: --method {} learns in every reference (each half its GA plan or \
+                 spatial guide), so shards of it would not be parts of one reference: the \
+                 learned states must be trained once and shared with every shard: `{learn} … \
+                 -o plan.bin`, then `reference --plan plan.bin --shard K/N` (docs/shards.md); \
+                 or shard pt, srt or mixture",
+                method.name()
+            );
         }
         for (flag, given) in [
             ("--resume", self.resume.is_some()),
@@ -268,9 +283,9 @@ impl ShardArgs {
         ] {
             if given && learns {
                 bail!(
-                    "{flag}: --method {} learns in every render (its GA plan or spatial \
-                     guide), which a resumed render would learn anew: learn once with \
-                     `genpath learn … -o plan.bin` and render with --plan plan.bin, or resume \
+                    "{flag}: --method {} learns in every {command} (its GA plan or spatial \
+                     guide), which a resumed {command} would learn anew: learn once with \
+                     `{learn} … -o plan.bin` and run {command} with --plan plan.bin, or resume \
                      pt, srt or mixture",
                     method.name()
                 );

@@ -1,7 +1,10 @@
 //! `genpath learn`: prepares a method that learns (`ga`, `ga-pt`, `pg`) exactly as `render`
 //! does and saves what it learned in a plan file ([`genpath::shard::plan_file`]), with the
 //! training's samples (pg, ga-pt) in a training shard beside it; and `render --plan`'s side
-//! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md).
+//! of it, [`read_plan`]: "learn once, render everywhere" (docs/shards.md). With
+//! `--for-reference` it learns the two halves of `genpath reference` instead, each as the
+//! reference does (its own derived seed, half the samples), into one plan file and one
+//! training shard with a layer per half, for `reference --plan`.
 //!
 //! Learning keeps what it finished in a folder ([`LearnDir`]): a GA plan's waves of GA
 //! pixels as they finish, the spatial guide's training after each pass. Learning stopped by
@@ -16,7 +19,9 @@ use super::session::{beside, shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
 use genpath::genetic::plan::{LearnStore, PlanError, WaveEntry};
-use genpath::integrators::{prepare, LayerSums, Learned, Method, PrepareError, Shard, Stop};
+use genpath::integrators::{
+    prepare, LayerSums, Learned, Method, PrepareError, RenderSettings, Shard, Stop,
+};
 use genpath::path::SceneView;
 use genpath::shard::plan_file::{self, PlanHeader, TrainingHeader, WaveHeader};
 use genpath::shard::{Identity, Part, PlanRef};
@@ -34,9 +39,16 @@ pub struct LearnArgs {
     #[arg(short, long = "output", value_name = "FILE")]
     pub output: PathBuf,
     /// Samples per pixel of the render the plan is for (pass the same to `render --plan`)
-    /// [default: a Mitsuba scene's `sample_count`, else 64].
+    /// [default: a Mitsuba scene's `sample_count`, else 64; with --for-reference,
+    /// reference's 4096].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1 << 24))]
     pub spp: Option<u32>,
+    /// Learn for `genpath reference` (same flags; --spp is the reference's, split into two
+    /// halves) instead of `render`: each half as the reference learns it, from its own seed
+    /// at half the samples, both in the plan file and their training samples in one
+    /// training shard, for `reference --plan FILE` (docs/shards.md).
+    #[arg(long)]
+    pub for_reference: bool,
     /// Split the GA (ga, ga-pt) over N jobs: this one evolves the GA pixels j of the first
     /// wave not yet complete with j mod N = K, keeps them in the learning folder, and stops.
     /// The GA has four waves (the gate's pilot, the pilot going on, the first wave, the
@@ -61,62 +73,46 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
     let method = args.method.method_or(Method::GaPt);
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     check_learns(method, shard)?;
+    if let (true, Some(spp @ 0..=1)) = (args.for_reference, args.spp) {
+        bail!("--spp {spp}: a reference's two halves need at least 2 samples per pixel");
+    }
     let config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
-    let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
-    let settings = session.settings(&args.scene, method, spp);
-    let identity = session.identity(
-        "render",
-        &args.scene,
-        &settings,
-        vec![settings.seed],
-        &config,
-    )?;
     let stop = super::resume::stop_on_signals()?;
     let dir = (args.learn_dir.clone()).unwrap_or_else(|| beside(&args.output, ".learning"));
-    let store = LearnDir::open(dir.clone(), identity.clone(), shard, stop.clone())?;
-    let settings = genpath::integrators::RenderSettings {
-        control: genpath::integrators::Control {
-            stop: stop.clone(),
-            learning: Some(Arc::new(store)),
-            ..Default::default()
-        },
-        ..settings
-    };
+    let (identity, targets) = targets(&args, &session, method, &config, &dir)?;
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let t_learn = Instant::now();
-    let prepared = match session.pool.install(|| prepare(&view, &config, &settings)) {
-        Ok(prepared) => prepared,
-        Err(e) => return learning_ended(e, shard, &dir, t_learn, args.scene.quiet),
-    };
-    if let Some(signal) = stop.requested() {
-        let detail = "in the spatial guide's training, with its finished passes".to_string();
-        return Err(super::resume::LearnInterrupted::new(signal, dir, detail).into());
+    let mut learned = Vec::new();
+    for target in targets {
+        let quiet = args.scene.quiet;
+        if let Some(one) = learn_one(&session, &view, &config, target, (shard, &stop), quiet)? {
+            learned.push(one);
+        }
     }
     if !shard.is_whole() {
-        // The method learned nothing to split (the gate closed the GA before its waves).
-        if !args.scene.quiet {
-            eprintln!(
-                "genpath: learn --shard {shard}: the GA has no wave left; learn without --shard \
-                 builds the plan"
-            );
-        }
         return Ok(());
     }
     let learn_s = t_learn.elapsed().as_secs_f64();
-    let learned = prepared
-        .learned()
-        .with_context(|| format!("--method {} kept no learned state", method.name()))?;
-    let payload = plan_file::payload(&learned)
+    let payload = match &learned[..] {
+        [one] => plan_file::payload(one),
+        [a, b] => plan_file::payload_halves(a, b),
+        _ => unreachable!("a render learns one state, a reference two"),
+    };
+    let payload = payload
         .map_err(|e| anyhow::anyhow!("{}: cannot encode the plan: {e}", args.output.display()))?;
     let reference = PlanRef {
         hash: genpath::shard::hash_bytes(&payload),
-        training_spp: learned.training_spp(),
+        training_spp: learned.iter().map(Learned::training_spp).max().unwrap_or(0),
+    };
+    let summary = match &learned[..] {
+        [one] => summary(one),
+        halves => serde_json::json!({ "halves": halves.iter().map(summary).collect::<Vec<_>>() }),
     };
     let header = PlanHeader {
         identity: identity.clone(),
         training_spp: reference.training_spp,
-        summary: summary(&learned),
+        summary,
         scene_path: session.scene.path.clone(),
         command_line: std::env::args().collect(),
     };
@@ -140,23 +136,161 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
             .with_context(|| format!("cannot remove {}", dir.display()))?;
     }
     if !args.scene.quiet {
-        let shard = training.map_or_else(String::new, |t| {
-            format!(
-                ", its {} training samples per pixel in {}",
-                reference.training_spp,
-                t.display()
-            )
-        });
-        eprintln!(
-            "genpath: learned {} for {}×{} at {spp} spp in {learn_s:.2} s → {} ({} bytes){shard}",
-            method.name(),
-            session.scene.camera.width,
-            session.scene.camera.height,
-            args.output.display(),
-            payload.len()
+        let plan = (&header, &reference, payload.len());
+        report(
+            &session,
+            &args.output,
+            plan,
+            training.as_deref(),
+            (method, learn_s),
         );
     }
     Ok(())
+}
+
+/// What `learn` tells on stderr of the plan it wrote to `output` (`header`, `reference`,
+/// its payload's bytes) and its training shard.
+fn report(
+    session: &Session,
+    output: &Path,
+    (header, reference, bytes): (&PlanHeader, &PlanRef, usize),
+    training: Option<&Path>,
+    (method, learn_s): (Method, f64),
+) {
+    let id = &header.identity;
+    let (spp, per_half) = match id.command.as_str() {
+        "reference" => (
+            format!(
+                "a reference of {} spp (two halves of {})",
+                2 * id.spp,
+                id.spp
+            ),
+            " per half",
+        ),
+        _ => (format!("{} spp", id.spp), ""),
+    };
+    let shard = training.map_or_else(String::new, |t| {
+        format!(
+            ", its {} training samples per pixel{per_half} in {}",
+            reference.training_spp,
+            t.display()
+        )
+    });
+    eprintln!(
+        "genpath: learned {} for {}×{} at {spp} in {learn_s:.2} s → {} ({bytes} bytes){shard}",
+        method.name(),
+        session.scene.camera.width,
+        session.scene.camera.height,
+        output.display(),
+    );
+}
+
+/// One learned state that `learn` makes: a render's, or one half of a reference's.
+struct Target {
+    /// The render it learns for: its seed and samples per pixel.
+    settings: RenderSettings,
+    /// Where its learning keeps what it finished, and the identity its files carry.
+    dir: PathBuf,
+    identity: Identity,
+    /// How messages name it: empty, or `half 1: `.
+    label: String,
+}
+
+/// The identity of the plan `args` learn (a render's, or with `--for-reference` a
+/// reference's), and what it learns: the render's one state in `dir`, or each half of the
+/// reference as `genpath reference` learns it (its seed derived from `--seed`, half of
+/// `--spp`) in `dir/half-1` and `dir/half-2`.
+fn targets(
+    args: &LearnArgs,
+    session: &Session,
+    method: Method,
+    config: &genpath::integrators::Settings,
+    dir: &Path,
+) -> Result<(Identity, Vec<Target>)> {
+    if !args.for_reference {
+        let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
+        let settings = session.settings(&args.scene, method, spp);
+        let seeds = vec![settings.seed];
+        let identity = session.identity("render", &args.scene, &settings, seeds, config)?;
+        let target = Target {
+            settings,
+            dir: dir.to_path_buf(),
+            identity: identity.clone(),
+            label: String::new(),
+        };
+        return Ok((identity, vec![target]));
+    }
+    let half_spp = args.spp.unwrap_or(super::reference::DEFAULT_SPP) / 2;
+    let settings = session.settings(&args.scene, method, half_spp);
+    let seeds = super::reference::half_seeds(args.scene.seed);
+    let identity = session.identity("reference", &args.scene, &settings, seeds.to_vec(), config)?;
+    let targets = (0..2)
+        .map(|i| Target {
+            settings: RenderSettings {
+                seed: seeds[i],
+                ..settings.clone()
+            },
+            dir: dir.join(format!("half-{}", i + 1)),
+            identity: Identity {
+                half: Some(i as u32 + 1),
+                ..identity.clone()
+            },
+            label: format!("half {}: ", i + 1),
+        })
+        .collect();
+    Ok((identity, targets))
+}
+
+/// Learns `target` (`shard`: this job's share of a split GA; `stop`: the signals): its
+/// learned state, or none where this job of a split GA did its share of a wave.
+fn learn_one(
+    session: &Session,
+    view: &SceneView,
+    config: &genpath::integrators::Settings,
+    target: Target,
+    (shard, stop): (Shard, &Stop),
+    quiet: bool,
+) -> Result<Option<Learned>> {
+    let store = LearnDir::open(target.dir.clone(), target.identity, shard, stop.clone())?;
+    let settings = RenderSettings {
+        control: genpath::integrators::Control {
+            stop: stop.clone(),
+            learning: Some(Arc::new(store)),
+            ..Default::default()
+        },
+        ..target.settings
+    };
+    let t_learn = Instant::now();
+    let prepared = match session.pool.install(|| prepare(view, config, &settings)) {
+        Ok(prepared) => prepared,
+        Err(e) => {
+            let ended = (shard, target.dir.as_path(), t_learn, &target.label[..]);
+            return learning_ended(e, ended, quiet).map(|()| None);
+        }
+    };
+    if let Some(signal) = stop.requested() {
+        let detail = format!(
+            "{}in the spatial guide's training, with its finished passes",
+            target.label
+        );
+        return Err(super::resume::LearnInterrupted::new(signal, target.dir, detail).into());
+    }
+    if !shard.is_whole() {
+        // The method learned nothing to split (the gate closed the GA before its waves).
+        if !quiet {
+            eprintln!(
+                "genpath: learn --shard {shard}: {}the GA has no wave left; learn without \
+                 --shard builds the plan",
+                target.label
+            );
+        }
+        return Ok(None);
+    }
+    let method = settings.method;
+    let learned = prepared
+        .learned()
+        .with_context(|| format!("--method {} kept no learned state", method.name()))?;
+    Ok(Some(learned))
 }
 
 /// Refuses a `method` that learns nothing, and a split (`shard`) of one without a GA.
@@ -182,16 +316,14 @@ fn check_learns(method: Method, shard: Shard) -> Result<()> {
 /// stopped the GA (what it finished is kept in `dir`), else `e`.
 fn learning_ended(
     e: PrepareError,
-    shard: Shard,
-    dir: &Path,
-    t_learn: Instant,
+    (shard, dir, t_learn, label): (Shard, &Path, Instant, &str),
     quiet: bool,
 ) -> Result<()> {
     match e {
         PrepareError::Plan(done @ PlanError::ShareDone { .. }) => {
             if !quiet {
                 eprintln!(
-                    "genpath: learn --shard {shard}: {done} ({:.2} s; kept in {})",
+                    "genpath: learn --shard {shard}: {label}{done} ({:.2} s; kept in {})",
                     t_learn.elapsed().as_secs_f64(),
                     dir.display()
                 );
@@ -204,8 +336,9 @@ fn learning_ended(
             done,
             jobs,
         }) => {
-            let detail =
-                format!("in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved");
+            let detail = format!(
+                "{label}in wave {wave} of the GA, with {done} of its {jobs} GA pixels evolved"
+            );
             Err(super::resume::LearnInterrupted::new(signal, dir.to_path_buf(), detail).into())
         }
         e => Err(e.into()),
@@ -346,31 +479,43 @@ impl LearnStore for LearnDir {
     }
 }
 
-/// Writes the training's samples, if it took any, as the training shard beside `output`:
-/// its path.
+/// Writes the training's samples, if it took any, as the training shard beside `output`
+/// (a layer per state in `learned`: a reference's two halves): its path.
 fn training_shard(
     session: &Session,
     output: &Path,
-    learned: &Learned,
+    learned: &[Learned],
     identity: Identity,
     reference: &PlanRef,
 ) -> Result<Option<PathBuf>> {
-    let Some(spatial) = learned.spatial.as_ref().filter(|s| s.samples.spp > 0) else {
+    if reference.training_spp == 0 {
         return Ok(None);
-    };
-    let samples = &spatial.samples;
-    let layer = LayerSums {
-        counts: vec![samples.spp; samples.sum.len()],
-        sum: samples.sum.clone(),
-        sum_sq: samples.sum_sq.clone(),
-    };
+    }
+    let pixels = (session.scene.camera.width * session.scene.camera.height) as usize;
+    let layers: Vec<LayerSums> = learned.iter().map(|l| training_layer(l, pixels)).collect();
     let identity = Identity {
         plan: Some(reference.clone()),
         ..identity
     };
     let path = shard_path(output);
-    session.write_shard(&path, identity, (Shard::WHOLE, Part::Training), &[layer])?;
+    session.write_shard(&path, identity, (Shard::WHOLE, Part::Training), &layers)?;
     Ok(Some(path))
+}
+
+/// The per-pixel sums of the samples `learned`'s training took (an image of `pixels` pixels;
+/// zero where it took none): what the image of a render that learned starts from.
+pub fn training_layer(learned: &Learned, pixels: usize) -> LayerSums {
+    match learned.spatial.as_ref().filter(|s| s.samples.spp > 0) {
+        Some(spatial) => {
+            let samples = &spatial.samples;
+            LayerSums {
+                counts: vec![samples.spp; samples.sum.len()],
+                sum: samples.sum.clone(),
+                sum_sq: samples.sum_sq.clone(),
+            }
+        }
+        None => LayerSums::zero(pixels),
+    }
 }
 
 /// What a plan file's header and a render's JSON say of what was learned.
@@ -394,14 +539,16 @@ fn summary(learned: &Learned) -> serde_json::Value {
     serde_json::json!({ "plan": plan, "spatial": spatial })
 }
 
-/// A plan file read for a render (`render --plan FILE`).
+/// A plan file read for a render (`render --plan FILE`) or a reference (`reference --plan
+/// FILE`).
 pub struct SavedPlan {
     pub path: PathBuf,
     pub hash: String,
     pub training_spp: u32,
     pub summary: serde_json::Value,
-    /// Taken when the render prepares its method.
-    pub learned: Option<Learned>,
+    /// A render's learned state, or a reference's two halves' in order; taken when the
+    /// render prepares its method.
+    pub learned: Vec<Learned>,
 }
 
 impl SavedPlan {
@@ -425,26 +572,32 @@ impl SavedPlan {
     }
 }
 
-/// Reads the plan file at `path` for a render with `identity` (without a plan), shard
-/// `shard`: refuses a file that is damaged, or learned for another render (naming the first
-/// field that differs), or a split into more shards than there are samples after the
-/// training's.
+/// Reads the plan file at `path` for a render (or reference) with `identity` (without a
+/// plan), shard `shard`: refuses a file that is damaged, or learned for another render
+/// (naming the first field that differs: a reference's plan for a render, another seed…),
+/// or a split into more shards than there are samples (per half) after the training's.
 pub fn read_plan(path: &Path, identity: &Identity, shard: Shard) -> Result<SavedPlan> {
     let file = plan_file::read(path).with_context(|| format!("--plan {}", path.display()))?;
     if let Some((what, theirs, ours)) = file.header.identity.difference(identity) {
+        let learn = match identity.command.as_str() {
+            "reference" => "learn --for-reference",
+            _ => "learn",
+        };
         bail!(
             "--plan {}: it was learned for another render: {what} is {theirs} there and {ours} \
-             here (learn with the same build, scene, size, seed, --spp and settings)",
+             here ({learn} with the same build, scene, size, seed, --spp and settings)",
             path.display()
         );
     }
     let training_spp = file.header.training_spp;
-    if training_spp != file.learned.training_spp() {
+    let learned_spp = file.learned.iter().map(Learned::training_spp).max();
+    if file.learned.len() != identity.layer_seeds.len() || Some(training_spp) != learned_spp {
         bail!(
             "--plan {}: inconsistent: its header says {training_spp} training samples per \
-             pixel, its learned state {}",
+             pixel of {} layers, its learned states {learned_spp:?} of {}",
             path.display(),
-            file.learned.training_spp()
+            identity.layer_seeds.len(),
+            file.learned.len()
         );
     }
     let after = identity.spp.saturating_sub(training_spp);
@@ -460,6 +613,6 @@ pub fn read_plan(path: &Path, identity: &Identity, shard: Shard) -> Result<Saved
         hash: file.hash,
         training_spp,
         summary: file.header.summary,
-        learned: Some(file.learned),
+        learned: file.learned,
     })
 }

@@ -74,7 +74,8 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
             method.name()
         );
     }
-    args.shard.check_method(method, args.plan.is_some())?;
+    args.shard
+        .check_method(method, args.plan.is_some(), "render")?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
@@ -117,7 +118,7 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         ..settings
     };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
-    let learned = saved.as_mut().and_then(|s| s.learned.take());
+    let learned = saved.as_mut().and_then(|s| s.learned.pop());
     let prepared = session.pool.install(|| match learned {
         Some(learned) => prepare_learned(&view, &config, &settings, learned),
         None => prepare(&view, &config, &settings),

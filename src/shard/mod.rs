@@ -47,7 +47,12 @@ pub struct Identity {
     pub layer_seeds: Vec<u64>,
     /// Every method setting, as `--config` writes them.
     pub settings: serde_json::Value,
-    /// The plan file (`render --plan`) whose learned state the render used, if any.
+    /// The half of a reference (1 or 2) that a file of `genpath learn --for-reference`'s
+    /// learning folder was learned for (its waves, its training): none elsewhere.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half: Option<u32>,
+    /// The plan file (`render --plan`, `reference --plan`) whose learned state the render
+    /// used, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plan: Option<PlanRef>,
 }
@@ -60,7 +65,7 @@ pub struct PlanRef {
     /// Hash of the plan file's learned state ([`hash_bytes`] of its payload).
     pub hash: String,
     /// Samples per pixel its training took, which are in the learn job's training shard
-    /// (0: none, as for `ga`).
+    /// (0: none, as for `ga`); of a reference's plan, the most either half's took.
     pub training_spp: u32,
 }
 
@@ -99,6 +104,7 @@ impl Identity {
                 path: PathBuf::new(),
                 message: e.to_string(),
             })?,
+            half: None,
             plan: None,
         })
     }
@@ -112,7 +118,7 @@ impl Identity {
             .find_map(|((name, u), (_, v))| first_difference(u, v, name.to_string()))
     }
 
-    fn fields(&self) -> [(&'static str, serde_json::Value); 15] {
+    fn fields(&self) -> [(&'static str, serde_json::Value); 16] {
         use serde_json::json;
         [
             ("command", json!(self.command)),
@@ -129,6 +135,7 @@ impl Identity {
             ("seed", json!(self.seed)),
             ("layer_seeds", json!(self.layer_seeds)),
             ("settings", self.settings.clone()),
+            ("half", json!(self.half)),
             ("plan", json!(self.plan)),
         ]
     }

@@ -1,4 +1,5 @@
-//! The plan file (`genpath learn … -o plan.bin`, read by `render --plan plan.bin`): the
+//! The plan file (`genpath learn … -o plan.bin`, read by `render --plan plan.bin`, and of
+//! `learn --for-reference`, by `reference --plan`): the
 //! learned state of a method that learns ([`Learned`]: the GA plan, the spatial guide with
 //! its training's per-pixel sums and decisions), trained once and shared by every shard of
 //! a render. Little-endian throughout:
@@ -10,7 +11,7 @@
 //! | 4 | header length `H`, `u32` (at most [`MAX_HEADER`]) |
 //! | H | the [`PlanHeader`] as JSON (UTF-8): the render's identity, the training's samples per pixel, a summary |
 //! | 8 | payload length `L`, `u64` |
-//! | L | the payload: [`Learned`] in `bincode` 1 (fixed-width integers, `f32`/`f64` as their bits) |
+//! | L | the payload: [`Learned`] in `bincode` 1 (fixed-width integers, `f32`/`f64` as their bits); for a reference (`learn --for-reference`), its two halves' one after the other |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
 //!
 //! The payload round-trips exactly (every float as its bits); caches (a plan's lookup
@@ -33,8 +34,8 @@ pub const MAX_HEADER: u32 = 1 << 24;
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlanHeader {
-    /// The identity of the render it was learned for (command `render`, no plan): a render
-    /// with `--plan` must have this identity.
+    /// The identity of the render it was learned for (command `render` or `reference`, no
+    /// plan): a render or reference with `--plan` must have this identity.
     pub identity: Identity,
     /// Samples per pixel the training took (pg's and ga-pt's spatial training passes),
     /// which the learn job wrote to its training shard.
@@ -87,6 +88,14 @@ fn codec() -> impl Options {
 /// The payload's bytes: what a render's identity hashes ([`super::hash_bytes`]).
 pub fn payload(learned: &Learned) -> Result<Vec<u8>, String> {
     codec().serialize(learned).map_err(|e| e.to_string())
+}
+
+/// The payload's bytes of a reference's plan: its two halves' learned states, one after
+/// the other.
+pub fn payload_halves(first: &Learned, second: &Learned) -> Result<Vec<u8>, String> {
+    codec()
+        .serialize(&(first, second))
+        .map_err(|e| e.to_string())
 }
 
 /// The file's bytes, from its header and payload.
@@ -162,23 +171,39 @@ fn write_framed(
     crate::image::write_bytes_atomic(path, &bytes).map_err(|e| io(e.to_string()))
 }
 
-/// A plan file read and checked: its header, its learned state, and the hash of its
-/// payload.
+/// A plan file read and checked: its header, its learned states (a render's one, a
+/// reference's two halves in order), and the hash of its payload.
 pub struct PlanFile {
     pub header: PlanHeader,
-    pub learned: Learned,
+    pub learned: Vec<Learned>,
     pub hash: String,
 }
 
 /// Reads and checks the plan file at `path`: its mark, version, length and checksum, then
-/// its header and payload.
+/// its header and payload (a reference's two halves where the header's identity is a
+/// reference's).
 pub fn read(path: &Path) -> Result<PlanFile, PlanFileError> {
-    let (header, learned, hash) = read_framed(&PLAN, path)?;
+    let (header, payload): (PlanHeader, _) = read_bytes(&PLAN, path)?;
+    let decoded = if header.identity.command == "reference" {
+        decode::<(Learned, Learned)>(path, &payload).map(|(a, b)| vec![a, b])
+    } else {
+        decode::<Learned>(path, &payload).map(|l| vec![l])
+    };
     Ok(PlanFile {
         header,
-        learned,
-        hash,
+        learned: decoded?,
+        hash: super::hash_bytes(&payload),
     })
+}
+
+/// Decodes the payload `bytes` of the file at `path`.
+fn decode<P: serde::de::DeserializeOwned>(path: &Path, bytes: &[u8]) -> Result<P, PlanFileError> {
+    codec()
+        .deserialize(bytes)
+        .map_err(|e| PlanFileError::Payload {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
 }
 
 /// Reads and checks a file of `kind` at `path`: its header, its payload, and the payload's
@@ -187,6 +212,16 @@ fn read_framed<H: serde::de::DeserializeOwned, P: serde::de::DeserializeOwned>(
     kind: &Kind,
     path: &Path,
 ) -> Result<(H, P, String), PlanFileError> {
+    let (header, payload) = read_bytes(kind, path)?;
+    let contents = decode(path, &payload)?;
+    Ok((header, contents, super::hash_bytes(&payload)))
+}
+
+/// Reads and checks a file of `kind` at `path`: its header and its payload's bytes.
+fn read_bytes<H: serde::de::DeserializeOwned>(
+    kind: &Kind,
+    path: &Path,
+) -> Result<(H, Vec<u8>), PlanFileError> {
     let bytes = std::fs::read(path).map_err(|source| PlanFileError::Io {
         path: path.to_path_buf(),
         source,
@@ -247,14 +282,7 @@ fn read_framed<H: serde::de::DeserializeOwned, P: serde::de::DeserializeOwned>(
         });
     }
     let header: H = serde_json::from_slice(&body[16..at]).map_err(|e| bad_header(e.to_string()))?;
-    let payload = &body[at + 8..];
-    let contents: P = codec()
-        .deserialize(payload)
-        .map_err(|e| PlanFileError::Payload {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-    Ok((header, contents, super::hash_bytes(payload)))
+    Ok((header, body[at + 8..].to_vec()))
 }
 
 /// The mark every wave file starts with.

@@ -3,7 +3,8 @@
 //! that renders the in-process plan's image bit for bit (ga without the gate, whose first
 //! and warm-started waves it splits; ga-pt with the gate, whose pilot waves it splits too);
 //! a learn stopped by SIGTERM in the GA, or by SIGINT in the spatial guide's training, goes
-//! on to the uninterrupted plan; kept files of another render, or damaged, are refused.
+//! on to the uninterrupted plan; kept files of another render, or damaged, are refused. A
+//! reference's GA (`learn --for-reference`) splits the same way.
 
 use super::*;
 use std::process::Stdio;
@@ -106,6 +107,63 @@ fn a_split_ga_builds_the_in_process_plan() {
         );
         assert!(waves.is_dir(), "--learn-dir DIR given: the folder stays");
     }
+}
+
+/// A reference's GA split too: `learn --for-reference --shard K/2`, four steps, evolves each
+/// step's share of both halves' wave (each half in its own folder), and the plan built from
+/// them renders the in-process reference bit for bit (ga-pt with the gate). The
+/// must-reject twin: the build with another seed refuses the kept waves, naming the seed.
+#[test]
+fn a_split_ga_builds_the_in_process_reference_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, flags) = methods().swap_remove(1);
+    let inline = d.join("inline.exr");
+    ok("reference", &inline, &flags);
+    let waves = d.join("ref.learning");
+    let plan = d.join("ref.plan");
+    let learn = ["--for-reference", "--learn-dir", waves.to_str().unwrap()];
+    let with_waves = [&flags[..], &learn].concat();
+    for _step in 0..4 {
+        for k in 0..2 {
+            let shard = format!("{k}/2");
+            ok(
+                "learn",
+                &plan,
+                &[&with_waves[..], &["--shard", &shard]].concat(),
+            );
+            assert!(!plan.exists(), "a split job wrote the plan");
+        }
+    }
+    // Both jobs evolved GA pixels of each half (at least of the gate's pilot, which may
+    // close the GA).
+    for half in ["half-1", "half-2"] {
+        let files = wave_files(&waves.join(half));
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        for job in [".0-of-2.bin", ".1-of-2.bin"] {
+            assert!(names.iter().any(|n| n.ends_with(job)), "{half}: {names:?}");
+        }
+    }
+    let other_seed = run(
+        "learn",
+        &plan,
+        &[&with_waves[..], &["--seed", "2"]].concat(),
+    );
+    let err = String::from_utf8_lossy(&other_seed.stderr);
+    assert!(
+        !other_seed.status.success() && err.contains("seed"),
+        "{err}"
+    );
+    assert!(!plan.exists());
+    ok("learn", &plan, &with_waves);
+    let saved = d.join("saved.exr");
+    let with_plan = [&flags[..], &["--plan", plan.to_str().unwrap()]].concat();
+    ok("reference", &saved, &with_plan);
+    assert_eq!(
+        pixel_bits(&saved),
+        pixel_bits(&inline),
+        "the reference plan built from split waves renders another reference"
+    );
 }
 
 /// Starts `learn` of fig5 with `flags` into `plan`, waits until its learning folder holds a

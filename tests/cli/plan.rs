@@ -1,7 +1,9 @@
 //! `genpath learn` and `render --plan`: a render with a saved plan is the render that learns
 //! in-process, bit for bit (ga, pg, ga-pt); shards of it merged with the learn job's
 //! training shard are that render too, and a merge without the training shard is partial;
-//! plans of other renders, of other methods, and damaged plan files are refused.
+//! plans of other renders, of other methods, and damaged plan files are refused. The same
+//! for a reference (`learn --for-reference`, `reference --plan`): its shards with the
+//! training shard merge to the in-process reference and its noise estimate, bit for bit.
 
 use super::*;
 use std::process::Output;
@@ -304,4 +306,157 @@ fn damaged_plan_files_are_refused() {
             &[path.file_name().unwrap().to_str().unwrap(), needle],
         );
     }
+}
+
+/// pg, and ga-pt with its GA, for a reference of 16 spp (two halves of 8, each with 3
+/// training samples per pixel).
+fn reference_methods() -> Vec<(&'static str, Vec<&'static str>)> {
+    methods()
+        .into_iter()
+        .filter(|(method, _)| *method != "ga")
+        .map(|(method, flags)| (method, [&flags[..], &["--spp", "16"]].concat()))
+        .collect()
+}
+
+/// For pg and ga-pt: `learn --for-reference` learns each half of a reference as the
+/// reference does; `reference --plan` is the in-process reference bit for bit, and so are
+/// its shards 0/2 and 1/2 merged with the learn job's training shard (two layers, one per
+/// half), the JSON's noise estimate included. The twins: the shards merged without the
+/// training shard, and one shard with it, are other images.
+#[test]
+fn reference_plans_shard_and_merge_to_the_in_process_reference_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (method, flags) in reference_methods() {
+        let inline = ok_in("reference", d, &format!("{method}-inline.exr"), &flags);
+        let learn = [&flags[..], &["--for-reference"]].concat();
+        let plan = ok_in("learn", d, &format!("{method}-ref.plan"), &learn);
+        let training = beside(&plan, ".shard");
+        let (header, layers) = genpath::shard::file::read(&training).unwrap();
+        assert_eq!(header.identity.command, "reference");
+        assert_eq!(layers.len(), 2, "{method}: a training layer per half");
+        assert!(layers.iter().all(|l| l.fewest() == 3), "{method}");
+        let with = [&flags[..], &["--plan", plan.to_str().unwrap()]].concat();
+        let saved = ok_in("reference", d, &format!("{method}-saved.exr"), &with);
+        assert_eq!(
+            pixel_bits(&saved),
+            pixel_bits(&inline),
+            "{method}: saved plan"
+        );
+        let noise = json_of(&inline)["reference"].clone();
+        assert!(noise["relmse_estimate"].as_f64().unwrap() > 0.0, "{noise}");
+        assert_eq!(json_of(&saved)["reference"], noise, "{method}");
+        assert_eq!(
+            json_of(&saved)["plan_file"]["hash"],
+            json_of(&plan)["plan_file"]["hash"]
+        );
+
+        let shards: Vec<PathBuf> = (0..2)
+            .map(|k| {
+                let spec = format!("{k}/2");
+                let shard = [&with[..], &["--shard", &spec]].concat();
+                beside(
+                    &ok_in("reference", d, &format!("{method}-s{k}.exr"), &shard),
+                    ".shard",
+                )
+            })
+            .collect();
+        let merged = d.join(format!("{method}-merged.exr"));
+        let all = [&shards[..], std::slice::from_ref(&training)].concat();
+        let output = merge(&all, &merged, &["--complete"]);
+        assert!(output.status.success(), "{method}: {}", stderr(&output));
+        assert_eq!(pixel_bits(&merged), pixel_bits(&inline), "{method}: merged");
+        assert_eq!(
+            json_of(&merged)["reference"],
+            noise,
+            "{method}: noise estimate"
+        );
+
+        // The twins: without the training shard, or without a shard, another image.
+        let partial = d.join(format!("{method}-partial.exr"));
+        let output = merge(&shards, &partial, &["--complete"]);
+        assert!(!output.status.success() && stderr(&output).contains("training shard"));
+        assert!(merge(&shards, &partial, &[]).status.success());
+        assert_ne!(pixel_bits(&partial), pixel_bits(&inline), "{method}");
+        let one = [shards[0].clone(), training.clone()];
+        assert!(merge(&one, &partial, &[]).status.success());
+        assert_ne!(pixel_bits(&partial), pixel_bits(&inline), "{method}");
+    }
+}
+
+/// A reference refuses a plan learned for another reference (another seed, another --spp)
+/// or for a render, and a render refuses a reference's plan, each naming what differs;
+/// `reference --shard` of a method that learns needs a plan. A learning folder's file of
+/// one half is refused by the other (its identity names the half).
+#[test]
+fn reference_plans_of_other_renders_and_halves_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (_, pg) = reference_methods().swap_remove(0);
+    let folder = d.join("learning");
+    let keep = ["--for-reference", "--learn-dir", folder.to_str().unwrap()];
+    let plan = ok_in("learn", d, "ref.plan", &[&pg[..], &keep].concat());
+    let render_plan = ok_in("learn", d, "render.plan", &pg);
+    // pg's flags but for --spp 32 where `extra` names --spp.
+    let with = |plan: &Path, extra: &[&'static str]| -> Vec<String> {
+        let plan = ["--plan", plan.to_str().unwrap()];
+        let flags = pg
+            .iter()
+            .filter(|&&a| !extra.contains(&"--spp") || a != "--spp" && a != "16");
+        let flags: Vec<&str> = flags.copied().collect();
+        [&flags[..], &plan, extra]
+            .concat()
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    };
+    let refused = |command: &str, args: Vec<String>, needles: &[&str]| {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        fails_in(command, d, &args, needles);
+    };
+    refused(
+        "reference",
+        with(&plan, &["--seed", "2"]),
+        &["ref.plan", "another render", "seed is 1 there and 2 here"],
+    );
+    refused(
+        "reference",
+        with(&plan, &["--spp", "32"]),
+        &["spp is 8 there and 16 here"],
+    );
+    refused(
+        "reference",
+        with(&render_plan, &[]),
+        &[
+            "command is \"render\" there and \"reference\" here",
+            "--for-reference",
+        ],
+    );
+    refused(
+        "render",
+        with(&plan, &[]),
+        &["command is \"reference\" there and \"render\" here"],
+    );
+    // And the check can pass: the same plan with the same flags renders.
+    let args = with(&plan, &["--shard", "1/2"]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    ok_in("reference", d, "accepted.exr", &args);
+    fails_in(
+        "reference",
+        d,
+        &[&pg[..], &["--shard", "0/2"]].concat(),
+        &[
+            "--method pg learns in every reference",
+            "learn --for-reference",
+        ],
+    );
+    // Half 1's kept training where half 2's belongs.
+    let training = |half: u32| folder.join(format!("half-{half}/training.bin"));
+    assert!(training(1).exists() && training(2).exists());
+    std::fs::copy(training(1), training(2)).unwrap();
+    let (out, output) = run_in("learn", d, "swapped.plan", &[&pg[..], &keep].concat());
+    let err = stderr(&output);
+    assert!(!output.status.success(), "{err}");
+    assert!(err.contains("half is 1 there and 2 here"), "{err}");
+    assert!(!out.exists());
 }

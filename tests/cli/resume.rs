@@ -261,3 +261,50 @@ fn a_stopped_render_with_a_plan_resumes_to_the_uninterrupted_image() {
     assert_ok(&run(&merge));
     assert_eq!(pixel_bits(&merged), pixel_bits(&whole));
 }
+
+/// A reference of a method that learns resumes with a saved plan too (`learn
+/// --for-reference`, then `reference --plan`): pg, stopped by SIGTERM after a checkpoint,
+/// keeps both halves' training samples in its shard file (the half not yet rendered
+/// starts from them) and, resumed, ends with the in-process reference's bits; the twin:
+/// another seed's resume is refused.
+#[test]
+fn a_stopped_reference_with_a_plan_resumes_to_the_in_process_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let pg = ["--method", "pg", "--spatial-passes", "3"];
+    let whole = dir.path().join("whole.exr");
+    assert_ok(&run(&args("reference", &whole, &pg)));
+    let plan = dir.path().join("pg.plan");
+    let learn = [&pg[..], &["--for-reference"]].concat();
+    assert_ok(&run(&args("learn", &plan, &learn)));
+    let with: Vec<&str> = [&pg[..], &["--plan", plan.to_str().unwrap()]].concat();
+
+    let out = dir.path().join("stopped.exr");
+    let every_tile = [&with[..], &["--checkpoint", "0"]].concat();
+    let stopped = stop_mid_render(&args("reference", &out, &every_tile), &out, "TERM");
+    let err = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(143), "{err}");
+    assert!(!out.exists());
+    let (_, layers) = genpath::shard::file::read(&shard_file(&out)).unwrap();
+    // Every pixel of both halves holds its 7 training samples, and not all 512.
+    for layer in &layers {
+        assert!(layer.fewest() >= 7, "a half lost its training samples");
+    }
+    let (fewest, most) = counts(&out);
+    assert!(fewest < 512 && most > 7, "{fewest}..{most}");
+    let file = shard_file(&out);
+    let other_seed = [
+        &with[..],
+        &["--seed", "2", "--resume", file.to_str().unwrap()],
+    ]
+    .concat();
+    let refused = run(&args("reference", &out, &other_seed));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && err.contains("seed") && !out.exists(),
+        "{err}"
+    );
+    let resume = [&with[..], &["--resume", file.to_str().unwrap()]].concat();
+    assert_ok(&run(&args("reference", &out, &resume)));
+    assert_eq!(pixel_bits(&out), pixel_bits(&whole));
+    assert_eq!(counts(&out), (512, 512));
+}
