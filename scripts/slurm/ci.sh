@@ -6,7 +6,9 @@
 # bit for bit, and that a truncated shard is refused by the merge; then a method that learns
 # (pg) through its learn job, an array of shards rendering with the plan and the merge, which
 # must equal pg's render on one machine bit for bit; and ga-pt with its GA split over two
-# learn jobs per wave, whose merged image must equal its render on one machine bit for bit.
+# learn jobs per wave, whose merged image must equal its render on one machine bit for bit;
+# and a pg reference (both halves learned once), whose merge must equal the reference on one
+# machine, its noise estimate included.
 # Stops the daemons it started, whatever happens.
 #
 #   bash scripts/slurm/ci.sh [GENPATH]   # GENPATH: a built binary [target/release/genpath]
@@ -111,4 +113,17 @@ wait_for "$merge"
 ls "$work/out-ga-pt/plan.bin.learning"
 ls "$work/out-ga-pt/plan.bin.learning" | grep -q "wave-0.1-of-2.bin" || fail "no pilot wave of shard 1/2"
 "$genpath" compare --bits "$work/out-ga-pt/merged.exr" "$work/single-ga-pt.exr" || fail "ga-pt: merged ≠ single"
+echo "== a reference of a method that learns: learn both halves → array of 2 shards → merge (pg)"
+"$genpath" reference "$scene" "${pg[@]}" --quiet -o "$work/single-ref.exr"
+submitted=$(bash "$repo/scripts/slurm/submit.sh" --reference --shards 2 --genpath "$genpath" \
+    "$scene" "$work/out-ref" -- "${pg[@]}")
+echo "$submitted"
+grep -q "^learn: job" <<<"$submitted" || fail "no learn job for the pg reference: $submitted"
+merge=$(sed -n 's/.*merge: job \([0-9]*\) .*/\1/p' <<<"$submitted")
+wait_for "$merge"
+"$genpath" compare --bits "$work/out-ref/merged.exr" "$work/single-ref.exr" || fail "reference: merged ≠ single"
+# The noise estimate of the two halves, as the reference on one machine wrote it.
+estimate() { python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["reference"])' "$1"; }
+[[ "$(estimate "$work/out-ref/merged.exr.json")" == "$(estimate "$work/single-ref.exr.json")" ]] ||
+    fail "reference: the merged noise estimate differs: $(estimate "$work/out-ref/merged.exr.json")"
 echo "Slurm pipeline: ok"

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Submits one genpath render to Slurm as a job array of shards and a merge job:
+# Submits one genpath render (or, with --reference, one reference) to Slurm as a job array
+# of shards and a merge job:
 #
 #   bash scripts/slurm/submit.sh [OPTIONS] SCENE OUTDIR -- RENDER_FLAGS...
 #
@@ -38,9 +39,14 @@
 #                     partial shard files they resume from, with a new merge job
 #   --genpath PATH    the genpath binary [target/release/genpath of this checkout]
 #   --sbatch FLAG     an extra sbatch flag for both jobs (repeatable: --partition=…, --account=…)
+#   --reference       shard `genpath reference` instead of `render` (its two halves in every
+#                     shard; its default --method is pt); a method that learns learns both
+#                     halves once (`learn --for-reference`), and OUTDIR/merged.exr is the
+#                     reference with its noise estimate in merged.exr.json
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 shards=4 cpus=1 mem=2G time=01:00:00 checkpoint=60 tasks="" learn_time="" learn_shards=1 extra=()
+command=render
 genpath=$(cd "$here/../.." && pwd)/target/release/genpath
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d; s/^# \{0,1\}//' >&2; exit 2; }
 while (($#)); do
@@ -55,6 +61,7 @@ while (($#)); do
     --tasks) tasks=$2; shift 2 ;;
     --genpath) genpath=$2; shift 2 ;;
     --sbatch) extra+=("$2"); shift 2 ;;
+    --reference) command=reference; shift ;;
     -h | --help) usage ;;
     --) break ;;
     -*) echo "submit.sh: unknown option $1" >&2; usage ;;
@@ -77,8 +84,9 @@ resubmit=${tasks:+yes}
 tasks=${tasks:-0-$((shards - 1))}
 
 # Whether the method learns: then learn once, and every task renders with the plan.
-# render's default --method (the GA's best method) where the flags name none.
+# render's default --method (the GA's best method) where the flags name none; reference's pt.
 method=ga-pt
+[[ $command == reference ]] && method=pt
 for ((i = 1; i <= $#; i++)); do
     arg=${!i}
     case $arg in
@@ -103,7 +111,7 @@ pg | ga | ga-pt)
             shift
             # SIGTERM 60 s before the time limit: learning keeps what it finished and requeues.
             id=$(GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_PLAN="$plan" \
-                GENPATH_LEARN_SHARDS="$learn_shards" \
+                GENPATH_LEARN_SHARDS="$learn_shards" GENPATH_COMMAND="$command" \
                 sbatch --parsable "${extra[@]}" "${after[@]}" "${array[@]}" \
                 --job-name=genpath-learn --requeue --signal=B:TERM@60 \
                 --cpus-per-task="$cpus" --mem="$mem" --time="${learn_time:-$time}" \
@@ -126,7 +134,7 @@ pg | ga | ga-pt)
 esac
 
 export GENPATH="$genpath" GENPATH_SCENE="$scene" GENPATH_OUT="$out" GENPATH_SHARDS="$shards" \
-    GENPATH_CHECKPOINT="$checkpoint" GENPATH_PLAN="$plan"
+    GENPATH_CHECKPOINT="$checkpoint" GENPATH_PLAN="$plan" GENPATH_COMMAND="$command"
 # SIGTERM to the batch shell 60 s before the time limit: the render stops, saves and requeues.
 array=$(sbatch --parsable "${extra[@]}" "${after[@]}" --job-name=genpath-shard --array="$tasks" \
     --requeue --signal=B:TERM@60 --cpus-per-task="$cpus" --mem="$mem" --time="$time" \
