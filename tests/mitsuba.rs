@@ -1212,7 +1212,7 @@ fn every_method_renders_roughglass_as_pt_does_and_a_wrong_density_is_seen() {
 /// The microfacet BSDFs' refusals, each naming the file and line: a roughness that is not
 /// positive and finite, an unknown distribution, `alpha` beside `alpha_u`, `alpha_u`
 /// without `alpha_v`, an anisotropic `roughplastic` (as Mitsuba refuses it), a smooth
-/// `plastic` of equal indices, and anisotropic roughness where genpath cannot follow Mitsuba's tangent (an
+/// `plastic` of equal indices or of an index beyond Mitsuba's fit (η 4: `F_dr` ≥ 1), and anisotropic roughness where genpath cannot follow Mitsuba's tangent (an
 /// analytic sphere, a mesh without texture coordinates under `flip_normals`);
 /// and inside `twosided` too.
 #[test]
@@ -1248,6 +1248,11 @@ fn microfacet_refusals_name_file_and_line() {
             r#"<bsdf type="plastic"><float name="int_ior" value="1.3"/><float name="ext_ior" value="1.3"/></bsdf>"#.to_string(),
             CUBE.to_string(),
             "indices of refraction must differ",
+        ),
+        (
+            r#"<bsdf type="plastic"><float name="int_ior" value="4"/></bsdf>"#.to_string(),
+            CUBE.to_string(),
+            "internal diffuse reflectance gives 1.0",
         ),
         (
             r#"<bsdf type="roughdielectric"><float name="alpha" value="0"/></bsdf>"#.to_string(),

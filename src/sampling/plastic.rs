@@ -90,6 +90,12 @@ impl SmoothPlastic {
         }
     }
 
+    /// `F_dr,int`, the coating's diffuse reflectance from inside (Mitsuba's fit of `1/η`,
+    /// which reaches 1 near `η` = 3.85 and grows beyond: the diffuse lobe would be negative).
+    pub fn internal_reflectance(&self) -> f64 {
+        self.fdr_int
+    }
+
     /// The coating's Fresnel reflectance at `cos θ` (above the surface).
     pub fn fresnel(&self, cos_theta: f64) -> f64 {
         fresnel_dielectric(cos_theta, f64::from(self.eta)).0
