@@ -8,9 +8,10 @@
 //! [`MaterialAt`]: the material by reference plus, for a textured material only, the small
 //! `Copy` value of its textured parameters evaluated at the hit's texture coordinates
 //! ([`Resolved`]: the Lambertian albedo, the delta BSDF's reflectance, the glossy lobe's
-//! specular and diffuse reflectances, a dielectric's transmittance). A smooth plastic's
-//! look-up also takes its choice of lobe there ([`Material::scattering_at`]). The BSDF code ([`crate::sampling::brdf`],
-//! [`crate::sampling::specular`]) reads those parameters through [`MaterialAt`]'s accessors,
+//! specular and diffuse reflectances, a dielectric's transmittance; a smooth plastic's
+//! look-up also takes its choice of lobe there, [`Material::scattering_at`]). The BSDF code
+//! ([`crate::sampling::brdf`], [`crate::sampling::specular`]) reads those parameters
+//! through [`MaterialAt`]'s accessors,
 //! which return the material's own field where nothing is textured. So an untextured
 //! scene allocates nothing, clones no name and computes exactly what it computed before
 //! (bit-identical renders), and a textured one costs a texture lookup per material look-up
