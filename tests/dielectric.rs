@@ -6,7 +6,9 @@
 //! side); and energy: with reflectance = transmittance = 1 every sample scatters, with the
 //! weight 1 for reflection and `η_ti²` for refraction (radiance's compression), so that the
 //! weights with that compression undone sum to the number of samples, which a
-//! transmittance of 0.97 must fail. Run with `cargo test --release --test dielectric`.
+//! transmittance of 0.97 must fail. And the smooth plastic's choice of its delta reflection
+//! where a ray meets it, by the same binomial test (an index 3 % off rejected), with its
+//! weights. Run with `cargo test --release --test dielectric`.
 
 use genpath::sampling::specular;
 use genpath::scene::{Dielectric, Material};
@@ -232,4 +234,103 @@ fn lossless_glass_scatters_everything_and_a_lossy_one_does_not() {
     let wo = wo_at(0.7, true);
     let s = specular::sample(&matched, NG, wo, 0.0).unwrap();
     assert!((s.wi + wo).length() < 1e-6 && s.weight == Vec3::ONE);
+}
+
+/// A smooth plastic plane (`plastic`, `ext_ior` 1, coloured base) at `z = 0` facing `+z`,
+/// of interior index `eta`, under a light, as a Mitsuba XML scene in `dir`.
+fn plastic_plane(dir: &std::path::Path, eta: f64) -> genpath::scene::Scene {
+    let text = format!(
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><film type="hdrfilm"><rfilter type="box"/></film></sensor>
+<shape type="rectangle"><transform name="to_world"><translate z="5"/></transform>
+<emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type="rectangle"><transform name="to_world"><scale value="100"/></transform>
+<bsdf type="plastic"><float name="int_ior" value="{eta}"/><float name="ext_ior" value="1"/>
+<rgb name="diffuse_reflectance" value="0.6, 0.3, 0.2"/></bsdf></shape>
+</scene>
+"#
+    );
+    let path = dir.join(format!("plastic-{eta}.xml"));
+    std::fs::write(&path, text).unwrap();
+    genpath::scene::Scene::load(&path).unwrap()
+}
+
+/// Mitsuba's probability of a smooth plastic's delta reflection seen at `theta_o` (base
+/// reflectance of mean `d_mean`, specular reflectance 1), from [`fresnel_by_angles`].
+fn plastic_specular_probability(eta: f64, theta_o: f64, d_mean: f64) -> f64 {
+    let f = fresnel_by_angles(theta_o, 1.0, eta);
+    let w = 1.0 / (1.0 + d_mean);
+    f * w / (f * w + (1.0 - f) * (1.0 - w))
+}
+
+/// A smooth plastic chooses its lobe where a ray meets it (`SceneView::trace_through`, then
+/// `scattering_material`): the delta reflection with Mitsuba's probability (the Fresnel
+/// reflectance weighed by the reflectances' means) by a binomial z-test at several angles,
+/// which an index 3 % off must fail; the delta's weight `F / P_s` and the diffuse choice's
+/// value `f_d / (1 − P_s)` from independent formulas.
+#[test]
+fn plastic_chooses_its_delta_reflection_with_mitsubas_probability_and_a_3_percent_index_error_is_seen(
+) {
+    use genpath::accel::{self, AccelKind};
+    use genpath::path::{RayCounts, SceneView};
+    use genpath::sampling::brdf::{self, Frame};
+    let dir = tempfile::tempdir().unwrap();
+    let eta = 1.5;
+    let scene = plastic_plane(dir.path(), eta);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let degrees = [5.0, 30.0, 55.0, 75.0, 85.0];
+    let alpha = 1.0 - 0.999f64.powf(1.0 / degrees.len() as f64);
+    let critical = Normal::new(0.0, 1.0)
+        .unwrap()
+        .inverse_cdf(1.0 - alpha / 2.0);
+    let d_mean = (0.6 + 0.3 + 0.2) / 3.0;
+    let mut wrong_max = 0.0f64;
+    let mut counts = RayCounts::default();
+    for (i, deg) in degrees.into_iter().enumerate() {
+        let theta = f64::to_radians(deg);
+        let wo = wo_at(theta, true);
+        let ray = genpath::accel::Ray::new(wo * 2.0, -wo, 0.0, f32::INFINITY);
+        let mut rng = genpath::sampling::sample_rng(17, i as u64, 0);
+        let p = plastic_specular_probability(eta, theta, d_mean);
+        let mut chosen = 0;
+        for _ in 0..SAMPLES {
+            let x = view.trace_through(&ray, &mut rng, &mut counts).unwrap();
+            let m = view.scattering_material(&x, wo);
+            if m.mirror {
+                chosen += 1;
+                let s = specular::sample(m, x.ns, wo, 0.0).unwrap();
+                let f = fresnel_by_angles(theta, 1.0, eta);
+                assert!(
+                    (f64::from(s.weight.y) / (f / p) - 1.0).abs() < 1e-4,
+                    "{s:?}"
+                );
+            } else {
+                // The diffuse choice at one `wi`, 40° off the normal.
+                let wi = wo_at(f64::to_radians(40.0), true) * Vec3::new(-1.0, 1.0, 1.0);
+                let value = brdf::eval(m, Frame::facing(&x, wo), wo, wi).x;
+                let fdr = genpath::sampling::plastic::fresnel_diffuse_reflectance(1.0 / eta);
+                let t = |th: f64| 1.0 - fresnel_by_angles(th, 1.0, eta);
+                let expected = 0.6 / (1.0 - fdr) * t(theta) * t(f64::to_radians(40.0))
+                    / (std::f64::consts::PI * eta * eta)
+                    / (1.0 - p);
+                assert!(
+                    (f64::from(value) / expected - 1.0).abs() < 1e-4,
+                    "{value} {expected}"
+                );
+            }
+        }
+        let right = z(chosen, p);
+        let wrong = z(
+            chosen,
+            plastic_specular_probability(1.03 * eta, theta, d_mean),
+        );
+        eprintln!("plastic at {deg}°: {chosen} delta choices (p {p:.4}), z {right:.2} (index 3 % off: {wrong:.2})");
+        assert!(right < critical, "{deg}°: z {right:.2} ≥ {critical:.2}");
+        wrong_max = wrong_max.max(wrong);
+    }
+    assert!(
+        wrong_max > critical,
+        "an index 3 % off passes (max z {wrong_max:.2} < {critical:.2}): the test cannot see it"
+    );
 }

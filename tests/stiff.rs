@@ -31,7 +31,7 @@ use genpath::scene::Scene;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
-const SCENES: [&str; 16] = [
+const SCENES: [&str; 17] = [
     "tiny_light",
     "grazing_light",
     "phong_1e4",
@@ -48,6 +48,7 @@ const SCENES: [&str; 16] = [
     "rough_glass_ior_1",
     "sun_env",
     "textures",
+    "plastic",
 ];
 
 /// The scene file of stiff scene `name`: its `scene.xml` (the microfacet cases, rough glass

@@ -20,7 +20,10 @@
 //! with its meshes' texture coordinates dropped is rejected. On `maps.xml` (normal and bump
 //! maps) every method agrees with `pt`, and `srt` on the scene with its maps dropped is
 //! rejected. On `mask.xml` (opacity masks) every method agrees with `pt`, and an `srt`
-//! whose shadow rays stop at every mask is rejected.
+//! whose shadow rays stop at every mask is rejected. On `plastic.xml` (smooth plastics, whose
+//! vertices choose between a delta reflection and a diffuse lobe, and textured rough glass)
+//! every method agrees with `pt`, and an `srt` whose densities count the plastics' diffuse
+//! choices is rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -84,6 +87,10 @@ enum Which {
     /// `srt` (next-event estimation at every vertex) whose densities evaluate every
     /// direction that went through rough glass at its mirror image above the surface.
     SrtTransmissionFolded,
+    /// `srt` (next-event estimation at every vertex) whose densities count the probability
+    /// of every smooth plastic's diffuse choice on the path (which the path's value already
+    /// divides by).
+    SrtPlasticChoiceCounted,
     Anchors {
         pdf_error: Option<f64>,
     },
@@ -317,6 +324,18 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             )
             .with_nee(Nee::Every)
             .with_transmission_folded_density(),
+        ),
+        Which::SrtPlasticChoiceCounted => Some(
+            Mixture::new(
+                vec![PathGenerator::srt(
+                    max_bounces,
+                    Nee::Every.default_srt_absorption(),
+                    mixture_file::uniform_light(&scene),
+                )],
+                vec![1.0],
+            )
+            .with_nee(Nee::Every)
+            .with_plastic_choice_in_density(),
         ),
         Which::SrtGeometricDensity => Some(
             Mixture::new(
@@ -787,6 +806,31 @@ fn mask_methods_agree_and_opaque_shadow_rays_do_not() {
     let wrong = render_with(name, Which::SrtMasksBlockShadows, bounces, spp, 23);
     assert_rejected(
         &format!("{name}: srt with masks opaque to shadow rays"),
+        &wrong,
+        &pt,
+    );
+}
+
+/// Smooth plastics (`plastic.xml`: a plastic floor over a checkerboard, a plastic sphere
+/// with a textured coating, and a pane of rough glass with textured transmittance and
+/// reflectance), whose vertices choose between a delta reflection and a diffuse lobe where a
+/// ray meets them: `srt` and `ga` with either estimator, `ga-pt` (with and without the
+/// spatial guide) and `pg` estimate what `pt` does, each taking the same choice at a vertex
+/// (a delta vertex, or a diffuse one with its light sample, step or guide); an `srt` whose
+/// densities count the diffuse choices' probabilities (already in the paths' values) does
+/// not.
+#[test]
+fn plastic_methods_agree_and_a_counted_choice_does_not() {
+    let name = "plastic.xml";
+    let (bounces, spp) = (3, SPP / 4);
+    let pt = render_with(name, Which::Pt, bounces, spp, 11);
+    for (label, which) in every_method() {
+        let film = render_with(name, which, bounces, spp, 23);
+        assert_agrees(&format!("{name}: {label}"), &film, &pt);
+    }
+    let wrong = render_with(name, Which::SrtPlasticChoiceCounted, bounces, spp, 23);
+    assert_rejected(
+        &format!("{name}: srt with the plastics' choices in its densities"),
         &wrong,
         &pt,
     );

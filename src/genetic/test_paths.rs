@@ -176,8 +176,8 @@ impl Packet {
             *ray = camera_ray(&view.scene.camera, pixel, &mut lane.rng);
         }
         let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
-        if view.has_masks() {
-            // Each lane passes masks with its own random numbers.
+        if view.draws_at_hits() {
+            // Each lane passes masks and chooses plastics' lobes with its own random numbers.
             for ((lane, ray), point) in lanes.iter_mut().zip(rays).zip(points.iter_mut()) {
                 *point = view.trace_through(ray, &mut lane.rng, counts);
             }
@@ -220,8 +220,8 @@ impl Packet {
     fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
         let count = self.gather(false);
         let (rays, points) = (&self.rays[..count], &mut self.points[..count]);
-        if view.has_masks() {
-            // Each lane passes masks with its own random numbers.
+        if view.draws_at_hits() {
+            // Each lane passes masks and chooses plastics' lobes with its own random numbers.
             for ((ray, point), &i) in rays.iter().zip(points.iter_mut()).zip(&self.owner) {
                 *point = view.trace_through(ray, &mut self.lanes[i].rng, counts);
             }

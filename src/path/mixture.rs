@@ -4,6 +4,7 @@
 use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices, Prefix};
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{uniform, Rng};
+use crate::scene::Glossy;
 use glam::{DVec3, Vec3};
 
 /// A weighted set of path generators, `pdf(X) = Σ w_g p_g(X)`, `Σ w_g = 1`. Component 0 is
@@ -39,6 +40,11 @@ pub struct Mixture {
     /// mirror image in the surface, as a density that forgot transmission would.
     #[serde(skip)]
     transmission_folded: bool,
+    /// Fault injection for statistical tests: [`Mixture::pdf_path`] multiplies the density
+    /// by the probability of every diffuse choice a smooth plastic made on the path (which
+    /// the choice's weight in the path's value already accounts for: it is counted twice).
+    #[serde(skip)]
+    plastic_choice_counted: bool,
 }
 
 /// `path` with each vertex's shading normal replaced by its geometric one, and its normal or
@@ -66,6 +72,23 @@ fn transmission_folded(path: &PathVertices) -> PathVertices {
     folded
 }
 
+/// The product of the probabilities of the diffuse choices smooth plastics made at the
+/// scattering vertices of contribution `c` (the fault of
+/// [`Mixture::with_plastic_choice_in_density`]).
+fn plastic_choices(view: &SceneView, path: &PathVertices, c: &Contribution) -> f64 {
+    let vertices = &path.vertices[..c.len.min(path.vertices.len())];
+    vertices
+        .iter()
+        .filter(|v| !v.delta)
+        .map(|v| match &view.material(v.point.prim).glossy {
+            Glossy::Plastic(p) => {
+                1.0 - p.specular_probability(f64::from(v.point.ns.dot(v.wo).abs()))
+            }
+            _ => 1.0,
+        })
+        .product()
+}
+
 /// Reusable buffers of one worker, so that sampling allocates nothing per path.
 #[derive(Default)]
 pub struct MixtureScratch {
@@ -89,6 +112,7 @@ impl Mixture {
             geometric_frame: false,
             delta_pick_dropped: false,
             transmission_folded: false,
+            plastic_choice_counted: false,
         }
     }
 
@@ -142,6 +166,15 @@ impl Mixture {
         self
     }
 
+    /// This mixture with the probability of every smooth plastic's diffuse choice on a path
+    /// in the path's density: a wrong input that unbiasedness tests on scenes with smooth
+    /// plastics must reject.
+    #[cfg(any(test, feature = "testing"))]
+    pub fn with_plastic_choice_in_density(mut self) -> Self {
+        self.plastic_choice_counted = true;
+        self
+    }
+
     /// One normalised mixture from several, each scaled by its weight (for pixels between
     /// GA pixels): the union of their components. Still one mixture, so still unbiased.
     pub fn combine(parts: &[(f64, &Mixture)]) -> Self {
@@ -177,6 +210,7 @@ impl Mixture {
             geometric_frame: parts.iter().any(|(_, m)| m.geometric_frame),
             delta_pick_dropped: parts.iter().any(|(_, m)| m.delta_pick_dropped),
             transmission_folded: parts.iter().any(|(_, m)| m.transmission_folded),
+            plastic_choice_counted: parts.iter().any(|(_, m)| m.plastic_choice_counted),
         }
     }
 
@@ -248,6 +282,9 @@ impl Mixture {
         }
         if self.delta_pick_dropped && c.end(path) == Some(LightEnd::Delta) {
             pdf /= view.scene.light_pmf();
+        }
+        if self.plastic_choice_counted {
+            pdf *= plastic_choices(view, path, c);
         }
         match &view.scene.environment {
             Some(env) if c.escaped => pdf * env.escape_pdf_scale(),

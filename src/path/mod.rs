@@ -37,6 +37,10 @@ pub struct SurfacePoint {
     pub np: Vec3,
     /// Whether a `twosided` wraps that map (see [`crate::scene::normals::resolve`]).
     pub np_twosided_outside: bool,
+    /// On a smooth plastic, the uniform number that chooses its lobe at this hit
+    /// ([`crate::sampling::plastic`]; drawn by [`SceneView::trace_through`], 0 where
+    /// [`SceneView::trace`] made the point); 0 elsewhere.
+    pub lobe_u: f32,
     pub prim: u32,
 }
 
@@ -51,6 +55,7 @@ impl SurfacePoint {
             uv: Vec2::ZERO,
             np: Vec3::ZERO,
             np_twosided_outside: false,
+            lobe_u: 0.0,
             prim,
         }
     }
@@ -66,6 +71,9 @@ pub struct SceneView<'a> {
     /// surfaces at random ([`SceneView::trace_through`], [`SceneView::unblocked_through`]);
     /// without, those are [`SceneView::trace`] and [`SceneView::unblocked`].
     masks: bool,
+    /// Whether some material chooses its lobe where a ray meets it (a smooth plastic):
+    /// [`SceneView::trace_through`] then draws the choice's uniform number at such a hit.
+    choices: bool,
     /// Fault injection (feature `testing`): shadow rays stop at every masked surface, as
     /// if it were opaque, while the directions that find light pass through it.
     #[cfg(feature = "testing")]
@@ -114,6 +122,7 @@ impl<'a> SceneView<'a> {
             accel,
             epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE),
             masks: scene.materials.iter().any(|m| m.opacity().is_some()),
+            choices: scene.materials.iter().any(Material::chooses_lobe),
             #[cfg(feature = "testing")]
             fault_masks_block_shadows: false,
         }
@@ -122,6 +131,12 @@ impl<'a> SceneView<'a> {
     /// Whether some surface of the scene has a `mask`.
     pub fn has_masks(&self) -> bool {
         self.masks
+    }
+
+    /// Whether a ray's hit may draw random numbers ([`SceneView::trace_through`]: masks
+    /// passed, smooth plastics' lobes chosen), so that it needs its path's random stream.
+    pub fn draws_at_hits(&self) -> bool {
+        self.masks || self.choices
     }
 
     pub fn material(&self, prim: u32) -> &'a Material {
@@ -146,7 +161,10 @@ impl<'a> SceneView<'a> {
             n.dot(wo) > 0.0
         };
         if front {
-            m.at(x.uv)
+            match self.choices {
+                true => m.scattering_at(x.uv, x.ns.dot(wo).abs(), x.lobe_u),
+                false => m.at(x.uv),
+            }
         } else {
             MaterialAt::from(&crate::scene::BLACK)
         }
@@ -180,6 +198,7 @@ impl<'a> SceneView<'a> {
             uv,
             np,
             np_twosided_outside,
+            lobe_u: 0.0,
             prim: hit.prim,
         }
     }
@@ -199,16 +218,34 @@ impl<'a> SceneView<'a> {
     /// no path vertex, the same for every method and every generator's density (as glass's
     /// choice between reflection and refraction is): it is no bounce, and the surface that
     /// stops the ray scatters with the nested BSDF (weight `opacity / opacity`). One closest-
-    /// hit query per surface met.
+    /// hit query per surface met. Where the ray stops on a smooth plastic, one more uniform
+    /// number chooses the plastic's lobe there ([`SurfacePoint::lobe_u`]).
     pub fn trace_through(
         &self,
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> Option<SurfacePoint> {
-        if !self.masks {
-            return self.trace(ray, counts);
+        let mut x = match self.masks {
+            true => self.trace_masked(ray, rng, counts),
+            false => self.trace(ray, counts),
+        };
+        if let Some(x) = x
+            .as_mut()
+            .filter(|x| self.choices && self.material(x.prim).chooses_lobe())
+        {
+            x.lobe_u = uniform(rng);
         }
+        x
+    }
+
+    /// [`SceneView::trace_through`]'s passes through masks.
+    fn trace_masked(
+        &self,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+    ) -> Option<SurfacePoint> {
         let mut ray = *ray;
         for _ in 0..MAX_PASSES {
             counts.closest += 1;

@@ -1,6 +1,7 @@
 //! The BSDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
 //! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor, rough
-//! plastic or rough dielectric, [`super::microfacet`]), the Lambertian one chosen by albedo;
+//! plastic or rough dielectric, [`super::microfacet`], or a smooth plastic's diffuse choice,
+//! [`super::plastic`]), the Lambertian one chosen by albedo;
 //! or a delta BSDF (an ideal mirror or conductor here; smooth dielectrics, which tell their
 //! sides apart, in [`super::specular`]). This is the one BSDF interface of every method:
 //! `pt`, `pg`, `srt`, `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta
@@ -149,7 +150,7 @@ fn diffuse_probability(m: &MaterialAt) -> f64 {
     let s = match &m.glossy {
         Glossy::None => 0.0,
         Glossy::Phong { .. } | Glossy::RoughConductor(_) => channel_sum(specular),
-        Glossy::RoughPlastic(_) => channel_sum(specular + diffuse),
+        Glossy::RoughPlastic(_) | Glossy::Plastic(_) => channel_sum(specular + diffuse),
         Glossy::RoughDielectric(d) => {
             channel_sum(d.specular_reflectance + d.specular_transmittance)
         }
@@ -219,7 +220,8 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     if let Glossy::RoughDielectric(d) = &m.glossy {
         let b = frame.basis();
         let local = |w| Frame::to_local(&b, w);
-        return d.eval(local(wo), local(wi), frame.back);
+        let reflectances = (m.glossy_reflectances().0, m.transmittance());
+        return d.eval_with(reflectances, local(wo), local(wi), frame.back);
     }
     if n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
@@ -252,6 +254,11 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
             let b = frame.basis();
             let (wo, wi) = (Frame::to_local(&b, wo), Frame::to_local(&b, wi));
             f + p.eval_with((ks, diffuse), wo, wi)
+        }
+        // A smooth plastic's diffuse choice (see `crate::sampling::plastic`).
+        Glossy::Plastic(p) => {
+            let (cos_o, cos_i) = (f64::from(n.dot(wo)), f64::from(n.dot(wi)));
+            f + p.eval_chosen(diffuse, cos_o, cos_i)
         }
         Glossy::RoughDielectric(_) => unreachable!("evaluated above"),
     }
@@ -309,6 +316,8 @@ pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -
             let b = frame.basis();
             p_glossy * p.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
         }
+        // A smooth plastic's diffuse choice: its cosine (the choice itself is no density).
+        Glossy::Plastic(_) => p_glossy * f64::from(cos) * FRAC_1_PI,
     };
     diffuse + glossy
 }
@@ -378,6 +387,7 @@ pub fn sample_direction<'a>(
             let pick = ((u[0] - p_diffuse) / (1.0 - p_diffuse)).clamp(0.0, 1.0);
             Frame::to_world(&b, p.sample(Frame::to_local(&b, wo), [pick, u[1], u[2]]))
         }
+        Glossy::Plastic(_) => cosine_weighted(n, u[1] as f32, u[2] as f32),
         // `u[0]` rescaled picks reflection or refraction by the Fresnel reflectance.
         Glossy::RoughDielectric(d) => {
             let b = frame.basis();

@@ -381,6 +381,19 @@ impl RoughDielectric {
     /// `f(wo, wi)` without the cosine, for `wo` above the surface; `wi` anywhere on the
     /// sphere (see the type's documentation).
     pub fn eval(&self, wo: DVec3, wi: DVec3, back: bool) -> Vec3 {
+        let reflectances = (self.specular_reflectance, self.specular_transmittance);
+        self.eval_with(reflectances, wo, wi, back)
+    }
+
+    /// [`Self::eval`] with `specular_reflectance` and `specular_transmittance` in place of
+    /// the lobe's own (textures' values at a hit).
+    pub fn eval_with(
+        &self,
+        (specular_reflectance, specular_transmittance): (Vec3, Vec3),
+        wo: DVec3,
+        wi: DVec3,
+        back: bool,
+    ) -> Vec3 {
         let eta = self.eta_seen(back);
         let Some((h, reflect)) = Self::half(wo, wi, eta) else {
             return Vec3::ZERO;
@@ -394,12 +407,12 @@ impl RoughDielectric {
         let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
         let fresnel = fresnel_dielectric(cos_o, eta).0;
         if reflect {
-            self.specular_reflectance * (fresnel * d * g / (4.0 * wo.z * wi.z)) as f32
+            specular_reflectance * (fresnel * d * g / (4.0 * wo.z * wi.z)) as f32
         } else {
             let denom = cos_o + eta * cos_i;
             let value = (1.0 - fresnel) * d * g * (cos_o * cos_i).abs()
                 / (wo.z * wi.z.abs() * denom * denom);
-            self.specular_transmittance * value as f32
+            specular_transmittance * value as f32
         }
     }
 

@@ -9,6 +9,7 @@ pub mod brdf;
 pub mod light_point;
 pub mod microfacet;
 pub mod patch;
+pub mod plastic;
 pub mod specular;
 
 use crate::accel::Ray;

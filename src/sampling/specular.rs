@@ -115,7 +115,7 @@ pub fn sample<'a>(m: impl Into<MaterialAt<'a>>, ns: Vec3, wo: Vec3, u: f64) -> O
         (reflect(wo, n).normalize(), m.ks())
     } else {
         let (wi, scale) = transmitted(d, ns64, wo64);
-        (wi.as_vec3(), d.transmittance * scale as f32)
+        (wi.as_vec3(), m.transmittance() * scale as f32)
     };
     (weight.max_element() > 0.0).then_some(BrdfSample {
         wi,

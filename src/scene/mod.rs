@@ -21,6 +21,7 @@ pub use texture::{MaterialAt, MaterialTextures, Opacity, Texture};
 
 use crate::accel::TriangleMesh;
 use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
+use crate::sampling::plastic::SmoothPlastic;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -105,6 +106,11 @@ pub enum Glossy {
     /// Mitsuba's `roughdielectric` (the material's `kd` is zero): the one non-delta lobe
     /// that transmits, into the whole sphere ([`Material::transmits`]).
     RoughDielectric(RoughDielectric),
+    /// Mitsuba's smooth `plastic` (the material's `kd` is zero): a vertex that chooses
+    /// between a delta reflection and a diffuse lobe where a ray meets it
+    /// ([`Material::scattering_at`]); as a glossy lobe, the diffuse choice's BSDF
+    /// ([`crate::sampling::plastic`]).
+    Plastic(Box<SmoothPlastic>),
 }
 
 impl Glossy {
@@ -115,6 +121,10 @@ impl Glossy {
             Glossy::Phong { ks, .. } => ks.max_element() > 0.0,
             Glossy::RoughConductor(c) => c.specular_reflectance.max_element() > 0.0,
             Glossy::RoughPlastic(p) => {
+                p.specular_reflectance.max_element() > 0.0
+                    || p.diffuse_reflectance.max_element() > 0.0
+            }
+            Glossy::Plastic(p) => {
                 p.specular_reflectance.max_element() > 0.0
                     || p.diffuse_reflectance.max_element() > 0.0
             }
@@ -133,6 +143,7 @@ impl Glossy {
             Glossy::Phong { ks, .. } => (*ks, Vec3::ZERO),
             Glossy::RoughConductor(c) => (c.specular_reflectance, Vec3::ZERO),
             Glossy::RoughPlastic(p) => (p.specular_reflectance, p.diffuse_reflectance),
+            Glossy::Plastic(p) => (p.specular_reflectance, p.diffuse_reflectance),
             Glossy::RoughDielectric(d) => (d.specular_reflectance, Vec3::ZERO),
         }
     }
@@ -179,9 +190,17 @@ impl Material {
         self.ke.max_element() > 0.0
     }
 
-    /// Whether a glossy lobe is present (and the surface is not a mirror).
+    /// Whether a glossy lobe is present (and the surface is not a mirror). A smooth
+    /// plastic's diffuse choice is no glossy lobe: what it scatters is nearly Lambertian.
     pub fn is_glossy(&self) -> bool {
-        !self.mirror && self.glossy.reflects()
+        !self.mirror && self.glossy.reflects() && !self.chooses_lobe()
+    }
+
+    /// Whether the material chooses between a delta and a non-delta lobe where a ray
+    /// meets it (a smooth plastic: [`Material::scattering_at`]).
+    #[inline]
+    pub fn chooses_lobe(&self) -> bool {
+        matches!(self.glossy, Glossy::Plastic(_))
     }
 
     /// Whether the non-delta BSDF scatters into the whole sphere (a rough dielectric), not

@@ -8,8 +8,10 @@
 //! [`MaterialAt`]: the material by reference plus, for a textured material only, the small
 //! `Copy` value of its textured parameters evaluated at the hit's texture coordinates
 //! ([`Resolved`]: the Lambertian albedo, the delta BSDF's reflectance, the glossy lobe's
-//! specular and diffuse reflectances). The BSDF code ([`crate::sampling::brdf`],
-//! [`crate::sampling::specular`]) reads those parameters through [`MaterialAt`]'s accessors,
+//! specular and diffuse reflectances, a dielectric's transmittance; a smooth plastic's
+//! look-up also takes its choice of lobe there, [`Material::scattering_at`]). The BSDF code
+//! ([`crate::sampling::brdf`], [`crate::sampling::specular`]) reads those parameters
+//! through [`MaterialAt`]'s accessors,
 //! which return the material's own field where nothing is textured. So an untextured
 //! scene allocates nothing, clones no name and computes exactly what it computed before
 //! (bit-identical renders), and a textured one costs a texture lookup per material look-up
@@ -22,7 +24,7 @@
 //! the textures' means, as Mitsuba computes it; roughness (`alpha`) is a constant (a
 //! textured one is refused when the scene is loaded).
 
-use super::Material;
+use super::{Glossy, Material};
 use crate::image::srgb;
 use glam::{Affine2, Vec2, Vec3};
 use std::path::Path;
@@ -318,6 +320,9 @@ pub struct MaterialTextures {
     pub specular: Option<Texture>,
     /// The rough plastic's `diffuse_reflectance`.
     pub diffuse: Option<Texture>,
+    /// The dielectrics' `specular_transmittance` (`dielectric`, `thindielectric`,
+    /// `roughdielectric`).
+    pub transmittance: Option<Texture>,
     /// The shading normals of a `normalmap` or `bumpmap` around the BSDF (see
     /// [`super::normals`]).
     pub perturbation: Option<super::normals::Perturbation>,
@@ -362,6 +367,7 @@ pub struct Resolved {
     pub ks: Vec3,
     pub specular: Vec3,
     pub diffuse: Vec3,
+    pub transmittance: Vec3,
 }
 
 /// A material as it scatters at one hit: the material, and its textured parameters there
@@ -409,7 +415,49 @@ impl Material {
                 ks: pick(&t.ks, self.ks),
                 specular: pick(&t.specular, specular),
                 diffuse: pick(&t.diffuse, diffuse),
+                transmittance: pick(&t.transmittance, self.transmittance()),
             }),
+        }
+    }
+
+    /// The material that scatters at a hit with texture coordinates `uv`, seen from `wo` at
+    /// `cos_theta_o` (against the shading normal, positive), where the hit drew the uniform
+    /// number `lobe_u`: [`Material::at`], except for a smooth plastic, which chooses its lobe
+    /// there ([`crate::sampling::plastic`]): with probability `P_s` (`lobe_u < P_s`) its delta
+    /// reflection, a mirror of reflectance `specular_reflectance · F / P_s`, and otherwise
+    /// itself, whose BSDF is then its diffuse lobe over `1 − P_s`.
+    #[inline]
+    pub fn scattering_at(&self, uv: Vec2, cos_theta_o: f32, lobe_u: f32) -> MaterialAt<'_> {
+        let Glossy::Plastic(p) = &self.glossy else {
+            return self.at(uv);
+        };
+        let cos = f64::from(cos_theta_o);
+        if f64::from(lobe_u) >= p.specular_probability(cos) {
+            return self.at(uv);
+        }
+        let specular = match self.textures.as_ref().and_then(|t| t.specular.as_ref()) {
+            Some(t) => t.eval(uv),
+            None => p.specular_reflectance,
+        };
+        MaterialAt {
+            material: &p.specular,
+            resolved: Some(Resolved {
+                kd: Vec3::ZERO,
+                ks: p.specular_weight(specular, cos),
+                specular: Vec3::ZERO,
+                diffuse: Vec3::ZERO,
+                transmittance: Vec3::ZERO,
+            }),
+        }
+    }
+
+    /// What a dielectric transmits (`specular_transmittance`: a smooth or thin
+    /// dielectric's, a rough one's), as a constant; zero for other materials.
+    pub fn transmittance(&self) -> Vec3 {
+        match (&self.dielectric, &self.glossy) {
+            (Some(d), _) => d.transmittance,
+            (None, Glossy::RoughDielectric(d)) => d.specular_transmittance,
+            _ => Vec3::ZERO,
         }
     }
 
@@ -454,14 +502,24 @@ impl MaterialAt<'_> {
         }
     }
 
+    /// What a dielectric transmits here ([`Material::transmittance`]).
+    #[inline]
+    pub fn transmittance(&self) -> Vec3 {
+        self.resolved
+            .map_or_else(|| self.material.transmittance(), |r| r.transmittance)
+    }
+
     /// Whether the glossy lobe is present and reflects anything here.
     pub fn glossy_reflects(&self) -> bool {
         match self.resolved {
             None => self.material.glossy.reflects(),
             Some(r) => match self.material.glossy {
                 super::Glossy::None => false,
-                super::Glossy::RoughPlastic(_) => {
+                super::Glossy::RoughPlastic(_) | super::Glossy::Plastic(_) => {
                     r.specular.max_element() > 0.0 || r.diffuse.max_element() > 0.0
+                }
+                super::Glossy::RoughDielectric(_) => {
+                    r.specular.max_element() > 0.0 || r.transmittance.max_element() > 0.0
                 }
                 _ => r.specular.max_element() > 0.0,
             },
@@ -470,7 +528,7 @@ impl MaterialAt<'_> {
 
     /// [`Material::is_glossy`] here.
     pub fn is_glossy(&self) -> bool {
-        !self.mirror && self.glossy_reflects()
+        !self.mirror && self.glossy_reflects() && !self.chooses_lobe()
     }
 
     /// [`Material::scatters`] here.
@@ -480,9 +538,7 @@ impl MaterialAt<'_> {
         }
         if self.mirror {
             self.ks().max_element() > 0.0
-                || self
-                    .dielectric
-                    .is_some_and(|d| d.transmittance.max_element() > 0.0)
+                || (self.dielectric.is_some() && self.transmittance().max_element() > 0.0)
         } else {
             self.kd().max_element() > 0.0 || self.glossy_reflects()
         }

@@ -2,8 +2,8 @@
 //! §5, §10) and of the renderer's guided BSDF (`genpath::guiding::GuidedBsdf`): χ² of sample
 //! histograms against the densities the renderer evaluates, each paired with deliberately
 //! wrong densities that the same histogram must reject; and `∫ pdf` by quadrature that does
-//! not use the samplers. Run with
-//! `cargo test --release --test brdf_sampler` (`-- --nocapture` prints every statistic).
+//! not use the samplers; Mitsuba's smooth `plastic` against Mitsuba's values (`plastic`).
+//! Run with `cargo test --release --test brdf_sampler` (`-- --nocapture` prints every statistic).
 //!
 //! The outcome of a draw: `brdf::pdf` is the density, over the full sphere, of the direction
 //! the sampler *generates*; the Phong lobe about the mirror direction can put some of it below
@@ -24,6 +24,7 @@ mod chi2;
 mod guided;
 mod microfacet;
 mod mixture;
+mod plastic;
 mod quadrature;
 mod roughdielectric;
 mod vertex;
@@ -46,8 +47,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::sync::Arc;
 
 /// The χ² tests in this binary that must accept (11 here and in its modules, 10 in
-/// `microfacet`, 5 in `roughdielectric`).
-const FAMILY: Family = Family { tests: 26 };
+/// `microfacet`, 5 in `roughdielectric`, 2 in `plastic`).
+const FAMILY: Family = Family { tests: 28 };
 const SAMPLES: u64 = 4_000_000;
 
 use vertex::*;

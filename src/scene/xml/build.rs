@@ -334,15 +334,13 @@ pub(super) fn bsdf(
         "conductor" => conductor(p, name, tex, warnings)?,
         "roughconductor" => super::rough::rough_conductor(p, name, tex, warnings)?,
         "roughplastic" => super::rough::rough_plastic(p, name, tex, warnings)?,
-        "roughdielectric" => super::rough::rough_dielectric(p, name, warnings)?,
-        // A delta lobe beside a diffuse one, where genpath's vertices are either delta or
-        // not (see docs/scenes.md).
-        "plastic" => return Err(p.error("genpath does not implement the smooth `plastic` BSDF (a delta reflection beside a diffuse lobe at one vertex; use `roughplastic` with a small `alpha`)")),
+        "roughdielectric" => super::rough::rough_dielectric(p, name, tex, warnings)?,
+        "plastic" => super::rough::smooth_plastic(p, name, tex, warnings)?,
         "dielectric" => dielectric(p, name, false, tex, warnings)?,
         "thindielectric" => dielectric(p, name, true, tex, warnings)?,
         "normalmap" | "bumpmap" => super::maps::adapter(p, name, tex, warnings, false)?,
         "mask" => super::mask::mask(p, name, tex, warnings)?,
-        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap, mask)"))),
+        other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap, mask)"))),
     };
     p.finish()?;
     Ok(m)
@@ -408,8 +406,8 @@ pub(super) fn complex_ior(
 
 /// Mitsuba's smooth `dielectric` (or, `thin`, its `thindielectric`): a two-sided delta BSDF
 /// of η = `int_ior` / `ext_ior` (numbers or Mitsuba's names; bk7 in air by default) that
-/// reflects with `specular_reflectance` (1 by default, or a texture) and transmits with
-/// `specular_transmittance` (1 by default; a constant).
+/// reflects with `specular_reflectance` and transmits with `specular_transmittance` (each 1
+/// by default, or a texture).
 fn dielectric(
     p: &Props,
     name: String,
@@ -419,18 +417,7 @@ fn dielectric(
 ) -> Result<Material, SceneError> {
     let int_ior = super::ior::read(p, "int_ior", "bk7")?;
     let ext_ior = super::ior::read(p, "ext_ior", "air")?;
-    let mut colour = |what: &str| -> Result<DVec3, SceneError> {
-        let c = p
-            .color(what, ColorUse::Reflectance, warnings)?
-            .unwrap_or(DVec3::ONE);
-        if c.max_element() > 1.0 || c.min_element() < 0.0 {
-            return Err(p.error(format!(
-                "`{what}` {c} is outside [0, 1] (it would create energy)"
-            )));
-        }
-        Ok(c)
-    };
-    let transmittance = colour("specular_transmittance")?;
+    let transmittance = tex.reflectance(p, "specular_transmittance", 1.0, warnings)?;
     let reflectance = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
     Ok(Material {
         name,
@@ -444,11 +431,12 @@ fn dielectric(
         dielectric: Some(Dielectric {
             // In single precision, as Mitsuba computes it.
             eta: int_ior / ext_ior,
-            transmittance: transmittance.as_vec3(),
+            transmittance: transmittance.constant.as_vec3(),
             thin,
         }),
         textures: material_textures(MaterialTextures {
             ks: reflectance.texture,
+            transmittance: transmittance.texture,
             ..Default::default()
         }),
     })

@@ -41,7 +41,7 @@ pub(super) fn adapter(
         _ => {}
     }
     let mut m = bsdf(&q, tex, warnings)?;
-    if m.mirror || m.transmits() {
+    if m.mirror || m.transmits() || m.chooses_lobe() {
         return Err(q.error(format!(
             "genpath's `{plugin}` perturbs non-delta BSDFs that do not transmit only (diffuse, roughplastic, roughconductor; not `{inner}`)"
         )));

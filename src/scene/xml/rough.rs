@@ -1,17 +1,17 @@
-//! Mitsuba's microfacet BSDFs (`roughconductor`, `roughplastic`, `roughdielectric`) as
-//! genpath materials: the
+//! Mitsuba's microfacet BSDFs (`roughconductor`, `roughplastic`, `roughdielectric`), and the
+//! smooth `plastic` beside the rough one, as genpath materials: the
 //! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
 //! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
 
 use super::build::complex_ior;
 use super::props::Props;
-use super::spectrum::ColorUse;
 use super::textures::{material_textures, Textures};
 use crate::sampling::microfacet::{
     Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
 };
+use crate::sampling::plastic::SmoothPlastic;
 use crate::scene::{Glossy, Material, MaterialTextures, SceneError};
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
 /// The microfacet distribution of `p`: `distribution` (`beckmann`, Mitsuba's default, or
 /// `ggx`, in any case), `alpha` or both `alpha_u` and `alpha_v` (0.1 by default), and
@@ -143,15 +143,56 @@ pub(super) fn rough_plastic(
     Ok(m)
 }
 
+/// Mitsuba's smooth `plastic`: `int_ior` (polypropylene) over `ext_ior` (air),
+/// `diffuse_reflectance` (0.5) and `specular_reflectance` (1), each a constant or a texture
+/// (whose mean weighs the choice of lobe, as in Mitsuba), and `nonlinear`
+/// ([`crate::sampling::plastic`]).
+pub(super) fn smooth_plastic(
+    p: &Props,
+    name: String,
+    tex: &mut Textures,
+    warnings: &mut Vec<String>,
+) -> Result<Material, SceneError> {
+    let int_ior = super::ior::read(p, "int_ior", "polypropylene")?;
+    let ext_ior = super::ior::read(p, "ext_ior", "air")?;
+    if int_ior == ext_ior {
+        return Err(p.error("the interior and exterior indices of refraction must differ"));
+    }
+    let diffuse = tex.reflectance(p, "diffuse_reflectance", 0.5, warnings)?;
+    let specular = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
+    let lobe = SmoothPlastic::new(
+        // In single precision, as Mitsuba computes it.
+        int_ior / ext_ior,
+        diffuse.constant.as_vec3(),
+        specular.constant.as_vec3(),
+        p.bool("nonlinear", false)?,
+    );
+    let fdr = lobe.internal_reflectance();
+    if !(fdr < 1.0) {
+        return Err(p.error(format!(
+            "int_ior / ext_ior = {}: Mitsuba's fit of the coating's internal diffuse reflectance gives {fdr:.3}, not below 1 (its plastic would reflect negative light; the fit stays below 1 up to about 3.85)",
+            lobe.eta
+        )));
+    }
+    let mut m = glossy(name, Glossy::Plastic(Box::new(lobe)));
+    m.textures = material_textures(MaterialTextures {
+        specular: specular.texture,
+        diffuse: diffuse.texture,
+        ..Default::default()
+    });
+    Ok(m)
+}
+
 /// Mitsuba's `roughdielectric`: the distribution (anisotropic too, along the shading
 /// frame's `dp/du` as `roughconductor`'s), `int_ior` (bk7) over `ext_ior` (air), numbers or
 /// Mitsuba's names, which must differ (as Mitsuba refuses equal ones), and
 /// `specular_reflectance` and `specular_transmittance` (1 by default, constants within
-/// [0, 1]). Two-sided: light meets the interface from either side, with the index inverted
+/// [0, 1] or textures). Two-sided: light meets the interface from either side, with the index inverted
 /// from behind the normal.
 pub(super) fn rough_dielectric(
     p: &Props,
     name: String,
+    tex: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let microfacet = microfacet(p)?;
@@ -160,26 +201,24 @@ pub(super) fn rough_dielectric(
     if int_ior == ext_ior {
         return Err(p.error("the interior and exterior indices of refraction must differ"));
     }
-    let mut colour = |what: &str| -> Result<DVec3, SceneError> {
-        let c = p
-            .color(what, ColorUse::Reflectance, warnings)?
-            .unwrap_or(DVec3::ONE);
-        if c.max_element() > 1.0 || c.min_element() < 0.0 {
-            return Err(p.error(format!(
-                "`{what}` {c} is outside [0, 1] (it would create energy)"
-            )));
-        }
-        Ok(c)
-    };
+    // A texture's constant is its mean (which nothing here weighs: the lobe's sampling
+    // depends on the Fresnel reflectance alone).
+    let reflectance = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
+    let transmittance = tex.reflectance(p, "specular_transmittance", 1.0, warnings)?;
     let lobe = RoughDielectric {
         microfacet,
         // In single precision, as Mitsuba computes it.
         eta: int_ior / ext_ior,
-        specular_reflectance: colour("specular_reflectance")?.as_vec3(),
-        specular_transmittance: colour("specular_transmittance")?.as_vec3(),
+        specular_reflectance: reflectance.constant.as_vec3(),
+        specular_transmittance: transmittance.constant.as_vec3(),
     };
     Ok(Material {
         two_sided: true,
+        textures: material_textures(MaterialTextures {
+            specular: reflectance.texture,
+            transmittance: transmittance.texture,
+            ..Default::default()
+        }),
         ..glossy(name, Glossy::RoughDielectric(lobe))
     })
 }

@@ -192,6 +192,7 @@ pub fn material_textures(t: MaterialTextures) -> Option<Arc<MaterialTextures>> {
         || t.ks.is_some()
         || t.specular.is_some()
         || t.diffuse.is_some()
+        || t.transmittance.is_some()
         || t.perturbation.is_some()
         || t.opacity.is_some();
     any.then(|| Arc::new(t))
