@@ -10,6 +10,7 @@ pub mod light_point;
 pub mod microfacet;
 pub mod patch;
 pub mod specular;
+pub mod trig;
 
 use crate::accel::Ray;
 use crate::scene::Camera;
