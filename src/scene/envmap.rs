@@ -20,6 +20,9 @@
 //! direction uniformly in solid angle inside it (`u` uniform, `cos θ` uniform), so the density
 //! is `P(cell) / Ω` there. Inside a patch the bilinear radiance is zero at a cell's centre
 //! only where all four corners are, so the density covers every direction the map lights.
+//! Both inversions of the running sums (the row, then the cell in it) start from a guide
+//! table and land in the cells a binary search would; the direction mapping's trigonometry
+//! is [`crate::sampling::trig`]'s, within 2e-15 of libm's.
 
 use crate::sampling::trig;
 use glam::{DMat3, DVec3, Vec3};
