@@ -48,7 +48,7 @@ fn check(to_world: DMat3, seed: u64, name: &str) {
         &bins,
         SAMPLES,
         seed,
-        |u| map.sample([u[0], u[1]]),
+        |u| map.sample([u[0], u[1]]).dir,
         |d| map.pdf(*d),
     );
     FAMILY.accept(name, &hist, &c);

@@ -326,13 +326,8 @@ impl LightCandidate {
         let (wi, le, density, target) = match pick {
             LightPick::Environment => {
                 let env = scene.environment.as_ref()?;
-                let wi = env.sample(u[1], u[2]);
-                (
-                    wi,
-                    env.eval(wi),
-                    Density::Environment(env.pdf(wi)),
-                    Target::Infinity,
-                )
+                let (wi, le, pdf) = env.sample(u[1], u[2]);
+                (wi, le, Density::Environment(pdf), Target::Infinity)
             }
             LightPick::Delta(i) => {
                 let a = scene.delta_lights[i].arrival(x.p)?;
@@ -461,13 +456,14 @@ fn escape_radiance(view: &SceneView, bs: &BrdfSample, light_share: f64) -> Vec3 
     let Some(env) = &view.scene.environment else {
         return Vec3::ZERO;
     };
+    let (radiance, pdf) = env.eval_pdf(bs.wi);
     let weight = if bs.delta {
         1.0
     } else {
-        let pdf_light = (light_share * view.scene.environment_share() * env.pdf(bs.wi)) as f32;
+        let pdf_light = (light_share * view.scene.environment_share() * pdf) as f32;
         power_heuristic(bs.pdf as f32, pdf_light)
     };
-    env.eval(bs.wi) * weight
+    radiance * weight
 }
 
 /// [`radiance`], with directions drawn from `guide`'s BSDF at every vertex and next-event

@@ -469,8 +469,7 @@ impl LightDraw {
         let (end, wi, le, area, shadow) = match pick {
             LightPick::Environment => {
                 let env = scene.environment.as_ref()?;
-                let wi = env.sample(u[1] as f32, u[2] as f32);
-                let le = env.eval(wi);
+                let (wi, le, _) = env.sample(u[1] as f32, u[2] as f32);
                 (LightEnd::Environment, wi, le, (1.0, 1.0), view.spawn(x, wi))
             }
             LightPick::Delta(i) => {

@@ -11,6 +11,7 @@
 //! cosine (Mitsuba's `eval` divided by `|cos θ_i|`).
 
 use super::specular::fresnel_dielectric;
+use super::trig;
 use crate::scene::fresnel_conductor;
 use glam::{DVec2, DVec3, Vec3};
 use statrs::function::erf::{erf, erf_inv};
@@ -142,7 +143,7 @@ impl Microfacet {
     fn sample_all(&self, u: [f64; 2]) -> DVec3 {
         let (au, av) = (self.alpha_u, self.alpha_v);
         let (sin_phi, cos_phi, alpha2) = if self.is_isotropic() {
-            let (s, c) = (2.0 * PI * u[1]).sin_cos();
+            let (s, c) = trig::sin_cos_turns(u[1]);
             (s, c, au * au)
         } else {
             let tmp = av / au * (2.0 * PI * u[1]).tan();
@@ -227,15 +228,14 @@ fn concentric_disk(u: [f64; 2]) -> DVec2 {
     if x == 0.0 && y == 0.0 {
         return DVec2::ZERO;
     }
-    let (r, phi) = if x.abs() > y.abs() {
-        (x, std::f64::consts::FRAC_PI_4 * (y / x))
+    // The angle `φ` in turns: `(π/4)(y/x)` or `π/2 − (π/4)(x/y)`.
+    let (r, turns) = if x.abs() > y.abs() {
+        (x, 0.125 * (y / x))
     } else {
-        (
-            y,
-            std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (x / y),
-        )
+        (y, 0.25 - 0.125 * (x / y))
     };
-    DVec2::new(r * phi.cos(), r * phi.sin())
+    let (sin_phi, cos_phi) = trig::sin_cos_turns(turns);
+    DVec2::new(r * cos_phi, r * sin_phi)
 }
 
 /// `wo` mirrored about `m`.
@@ -591,8 +591,8 @@ impl RoughPlastic {
         if u[0] < self.specular_probability(wo) {
             reflect(wo, self.microfacet.sample(wo, [u[1], u[2]]))
         } else {
-            let (r, phi) = (u[1].sqrt(), 2.0 * PI * u[2]);
-            DVec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u[1]).max(0.0).sqrt())
+            let (r, (sin_phi, cos_phi)) = (u[1].sqrt(), trig::sin_cos_turns(u[2]));
+            DVec3::new(r * cos_phi, r * sin_phi, (1.0 - u[1]).max(0.0).sqrt())
         }
     }
 }

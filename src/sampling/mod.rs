@@ -11,6 +11,7 @@ pub mod microfacet;
 pub mod patch;
 pub mod plastic;
 pub mod specular;
+pub mod trig;
 
 use crate::accel::Ray;
 use crate::scene::Camera;

@@ -47,11 +47,38 @@ impl Environment {
     }
 
     /// A unit direction drawn from two uniform numbers in [0, 1): uniform over the sphere,
-    /// or by the map's distribution.
-    pub fn sample(&self, u1: f32, u2: f32) -> Vec3 {
+    /// or by the map's distribution; with the radiance gathered along it ([`Self::eval`])
+    /// and its density ([`Self::pdf`], the fault injection's factor included).
+    pub fn sample(&self, u1: f32, u2: f32) -> (Vec3, Vec3, f64) {
         match &self.map {
-            None => crate::sampling::uniform_sphere(u1, u2),
-            Some(map) => map.sample([f64::from(u1), f64::from(u2)]).as_vec3(),
+            None => {
+                let wi = crate::sampling::uniform_sphere(u1, u2);
+                (
+                    wi,
+                    self.radiance,
+                    self.pdf_scale / (4.0 * std::f64::consts::PI),
+                )
+            }
+            Some(map) => {
+                let s = map.sample([f64::from(u1), f64::from(u2)]);
+                (
+                    s.dir.as_vec3(),
+                    self.radiance * s.radiance,
+                    self.pdf_scale * s.pdf,
+                )
+            }
+        }
+    }
+
+    /// [`Self::eval`] and [`Self::pdf`] at unit `dir`, the map's direction mapping computed
+    /// once.
+    pub fn eval_pdf(&self, dir: Vec3) -> (Vec3, f64) {
+        match &self.map {
+            None => (self.radiance, self.pdf(dir)),
+            Some(map) => {
+                let (radiance, pdf) = map.eval_pdf(dir.as_dvec3());
+                (self.radiance * radiance, self.pdf_scale * pdf)
+            }
         }
     }
 

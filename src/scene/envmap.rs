@@ -20,7 +20,11 @@
 //! direction uniformly in solid angle inside it (`u` uniform, `cos θ` uniform), so the density
 //! is `P(cell) / Ω` there. Inside a patch the bilinear radiance is zero at a cell's centre
 //! only where all four corners are, so the density covers every direction the map lights.
+//! Both inversions of the running sums (the row, then the cell in it) start from a guide
+//! table and land in the cells a binary search would; the direction mapping's trigonometry
+//! is [`crate::sampling::trig`]'s, within 2e-15 of libm's.
 
+use crate::sampling::trig;
 use glam::{DMat3, DVec3, Vec3};
 use std::f64::consts::PI;
 
@@ -36,12 +40,31 @@ pub struct EnvMap {
     from_world: DMat3,
     /// Cells per texel along each axis ([`subdivision`]).
     sub: usize,
-    /// Per row of cells (`(H − 1)·sub`), the running sum of its cells' weights; and the
-    /// running sum of the rows' totals.
+    /// Cells across (`W·sub`) and down (`(H − 1)·sub`).
+    cols: usize,
+    rows: usize,
+    /// Per row of cells, the running sum of its cells' weights; and the running sum of the
+    /// rows' totals.
     cell_cdf: Vec<f64>,
     row_cdf: Vec<f64>,
+    /// Guide tables of the two inversions ([`Guided`]): per row of cells, one entry per
+    /// cell; for the rows, one per row.
+    cell_guide: Vec<u32>,
+    row_guide: Vec<u32>,
+    /// Per row of cells, `1 / (total weight · Ω)`: a cell's weight times it is its density.
+    row_density: Vec<f64>,
     /// `cos θ` at the edges of the rows of cells.
     cos_rows: Vec<f64>,
+}
+
+/// A direction drawn by [`EnvMap::sample`], with what [`EnvMap::eval`] and [`EnvMap::pdf`]
+/// give there (computed from the cell and the place in it, not from the direction again).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnvSample {
+    /// Unit, in world space.
+    pub dir: DVec3,
+    pub radiance: Vec3,
+    pub pdf: f64,
 }
 
 /// Mitsuba's luminance of linear sRGB.
@@ -62,18 +85,48 @@ pub enum EnvMapError {
     NotRigid,
 }
 
-/// The index of the first running sum above `target` (clamped to the last), and where
-/// `target` falls inside that step, in [0, 1).
-fn invert(cdf: &[f64], target: f64) -> (usize, f64) {
-    let i = cdf.partition_point(|&c| c <= target).min(cdf.len() - 1);
-    let before = if i == 0 { 0.0 } else { cdf[i - 1] };
-    let step = cdf[i] - before;
-    let t = if step > 0.0 {
-        ((target - before) / step).clamp(0.0, 1.0 - f64::EPSILON)
-    } else {
-        0.5
-    };
-    (i, t)
+/// A running sum and its guide table (the cutpoint method, Chen and Asau 1974): entry `b`
+/// of the guide is the first step whose running sum exceeds (a hair below) `b / n` of the
+/// total, for `n` the number of steps, so that inverting the sum starts there and scans a
+/// step or two forward instead of searching the whole sum. The inversion is a binary
+/// search's, step for step.
+struct Guided<'a> {
+    cdf: &'a [f64],
+    guide: &'a [u32],
+}
+
+impl Guided<'_> {
+    /// The guide table of `cdf` (non-decreasing, not empty).
+    fn table(cdf: &[f64]) -> impl Iterator<Item = u32> + '_ {
+        let n = cdf.len();
+        let total = cdf[n - 1];
+        (0..n).map(move |b| {
+            // Below the least target of bucket `b` by far more than its rounding.
+            let lower = b as f64 / n as f64 * total * (1.0 - 1e-9);
+            cdf.partition_point(|&c| c <= lower).min(n - 1) as u32
+        })
+    }
+
+    /// The index of the first running sum above `u` times the total (clamped to the last),
+    /// and where that falls inside its step, in [0, 1); `u` in [0, 1).
+    fn invert(&self, u: f64) -> (usize, f64) {
+        let cdf = self.cdf;
+        let n = cdf.len();
+        let target = u * cdf[n - 1];
+        let b = ((u * n as f64) as usize).min(n - 1);
+        let mut i = self.guide[b] as usize;
+        while i < n - 1 && cdf[i] <= target {
+            i += 1;
+        }
+        let before = if i == 0 { 0.0 } else { cdf[i - 1] };
+        let step = cdf[i] - before;
+        let t = if step > 0.0 {
+            ((target - before) / step).clamp(0.0, 1.0 - f64::EPSILON)
+        } else {
+            0.5
+        };
+        (i, t)
+    }
 }
 
 impl EnvMap {
@@ -130,6 +183,11 @@ impl EnvMap {
         if total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(EnvMapError::Black);
         }
+        let cell_guide = cell_cdf.chunks(cols).flat_map(Guided::table).collect();
+        let row_guide = Guided::table(&row_cdf).collect();
+        let row_density = (0..rows)
+            .map(|i| 1.0 / (total * 2.0 * PI / cols as f64 * (cos_rows[i] - cos_rows[i + 1])))
+            .collect();
         Ok(Self {
             width,
             height,
@@ -137,8 +195,13 @@ impl EnvMap {
             to_world,
             from_world: to_world.transpose(),
             sub,
+            cols,
+            rows,
             cell_cdf,
             row_cdf,
+            cell_guide,
+            row_guide,
+            row_density,
             cos_rows,
         })
     }
@@ -154,63 +217,82 @@ impl EnvMap {
     /// Mitsuba's texture coordinates of unit `dir` (world), in the map's frame.
     fn uv(&self, dir: DVec3) -> (f64, f64) {
         let d = self.from_world * dir;
-        let u = d.x.atan2(-d.z) / (2.0 * PI);
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
-        (u - u.floor(), v)
+        let u = trig::atan2(d.x, -d.z) / (2.0 * PI);
+        let v = trig::acos(d.y) / PI;
+        (if u < 0.0 { u + 1.0 } else { u }, v)
     }
 
     /// The map's radiance (without `scale`) arriving along `−dir`, i.e. gathered by a ray
     /// leaving along unit `dir`: Mitsuba's bilinear lookup.
     pub fn eval(&self, dir: DVec3) -> Vec3 {
-        let (u, v) = self.uv(dir);
+        self.lookup(self.uv(dir))
+    }
+
+    /// The bilinear lookup at texture coordinates `(u, v)`.
+    fn lookup(&self, (u, v): (f64, f64)) -> Vec3 {
         let x = u * self.width as f64 - 0.5;
         let y = v * (self.height - 1) as f64;
         bilinear(&self.texels, self.width, (x, y))
     }
 
-    /// The cell holding `(u, v)`: its column and row.
-    fn cell(&self, u: f64, v: f64) -> (usize, usize) {
-        let (cols, rows) = (self.width * self.sub, self.cos_rows.len() - 1);
-        let j = ((u * self.width as f64 - 0.5) * self.sub as f64).floor() as i64;
-        let i = (v * rows as f64).floor() as i64;
-        (
-            j.rem_euclid(cols as i64) as usize,
-            i.clamp(0, rows as i64 - 1) as usize,
-        )
+    /// [`Self::eval`] and [`Self::pdf`] at once.
+    pub fn eval_pdf(&self, dir: DVec3) -> (Vec3, f64) {
+        let uv = self.uv(dir);
+        (self.lookup(uv), self.density(uv))
     }
 
-    /// The probability of cell `(j, i)` and its solid angle.
-    fn cell_mass(&self, j: usize, i: usize) -> (f64, f64) {
-        let cols = self.width * self.sub;
-        let k = i * cols + j;
-        let before = if j == 0 { 0.0 } else { self.cell_cdf[k - 1] };
-        let total = self.row_cdf[self.row_cdf.len() - 1];
-        let solid_angle = 2.0 * PI / cols as f64 * (self.cos_rows[i] - self.cos_rows[i + 1]);
-        ((self.cell_cdf[k] - before) / total, solid_angle)
+    /// The density at texture coordinates `(u, v)`: that of the cell holding them.
+    fn density(&self, (u, v): (f64, f64)) -> f64 {
+        let (cols, rows) = (self.cols, self.rows);
+        let j = trig::floor((u * self.width as f64 - 0.5) * self.sub as f64);
+        let i = trig::floor(v * rows as f64).clamp(0, rows as i64 - 1) as usize;
+        let k = i * cols + j.rem_euclid(cols as i64) as usize;
+        let before = if k % cols == 0 {
+            0.0
+        } else {
+            self.cell_cdf[k - 1]
+        };
+        (self.cell_cdf[k] - before) * self.row_density[i]
     }
 
     /// A unit direction (world) drawn from two uniform numbers in [0, 1): `u[1]` picks the
     /// cell row, `u[0]` the cell in it, each then rescaled to place the direction uniformly
-    /// in solid angle inside the cell.
-    pub fn sample(&self, u: [f64; 2]) -> DVec3 {
-        let cols = self.width * self.sub;
-        let total = self.row_cdf[self.row_cdf.len() - 1];
-        let (i, t_v) = invert(&self.row_cdf, u[1] * total);
-        let row = &self.cell_cdf[i * cols..(i + 1) * cols];
-        let (j, t_u) = invert(row, u[0] * row[cols - 1]);
-        let phi = 2.0 * PI * ((j as f64 + t_u) / self.sub as f64 + 0.5) / self.width as f64;
+    /// in solid angle inside the cell; with the radiance and the density there.
+    pub fn sample(&self, u: [f64; 2]) -> EnvSample {
+        let cols = self.cols;
+        let rows = Guided {
+            cdf: &self.row_cdf,
+            guide: &self.row_guide,
+        };
+        let (i, t_v) = rows.invert(u[1]);
+        let span = i * cols..(i + 1) * cols;
+        let row = Guided {
+            cdf: &self.cell_cdf[span.clone()],
+            guide: &self.cell_guide[span],
+        };
+        let (j, t_u) = row.invert(u[0]);
+        // `φ / 2π`, and Mitsuba's `u`: `φ` wrapped into one turn.
+        let turns = ((j as f64 + t_u) / self.sub as f64 + 0.5) / self.width as f64;
+        let tex_u = if turns >= 1.0 { turns - 1.0 } else { turns };
+        let (sin_phi, cos_phi) = trig::sin_cos_turns(turns);
         let cos_theta = self.cos_rows[i] + t_v * (self.cos_rows[i + 1] - self.cos_rows[i]);
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let local = DVec3::new(phi.sin() * sin_theta, cos_theta, -phi.cos() * sin_theta);
-        (self.to_world * local).normalize()
+        let local = DVec3::new(sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta);
+        let before = if j == 0 {
+            0.0
+        } else {
+            self.cell_cdf[i * cols + j - 1]
+        };
+        EnvSample {
+            dir: (self.to_world * local).normalize(),
+            radiance: self.lookup((tex_u, trig::atan2(sin_theta, cos_theta) / PI)),
+            pdf: (self.cell_cdf[i * cols + j] - before) * self.row_density[i],
+        }
     }
 
     /// The solid-angle density of [`Self::sample`] at unit `dir` (world).
     pub fn pdf(&self, dir: DVec3) -> f64 {
-        let (u, v) = self.uv(dir);
-        let (j, i) = self.cell(u, v);
-        let (mass, solid_angle) = self.cell_mass(j, i);
-        mass / solid_angle
+        self.density(self.uv(dir))
     }
 }
 
@@ -222,9 +304,9 @@ where
 {
     let height = grid.len() / width;
     let y = y.clamp(0.0, (height - 1) as f64);
-    let (x0, y0) = (x.floor(), y.floor().min((height - 2) as f64));
-    let (fx, fy) = (x - x0, y - y0);
-    let c0 = (x0 as i64).rem_euclid(width as i64) as usize;
+    let (x0, y0) = (trig::floor(x), trig::floor(y).min(height as i64 - 2));
+    let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+    let c0 = x0.rem_euclid(width as i64) as usize;
     let c1 = (c0 + 1) % width;
     let r0 = y0 as usize;
     let at = |c: usize, r: usize| grid[r * width + c].widen();
@@ -303,6 +385,39 @@ mod tests {
             );
             let (uu, vv) = m.uv(d);
             assert!((uu - u).abs() < 1e-12 && (vv - v).abs() < 1e-12);
+        }
+    }
+
+    /// What a sample carries is what the direction evaluates to: the same cell's density,
+    /// and the radiance to rounding; and the guided inversions land in the cells a binary
+    /// search finds.
+    #[test]
+    fn samples_carry_their_radiance_and_density() {
+        let (w, h) = (16, 9);
+        let mut texels: Vec<Vec3> = (0..w * h)
+            .map(|i| Vec3::new(0.1 + (i % 7) as f32, 0.5, 0.2 * (i % 3) as f32))
+            .collect();
+        texels[2 * w + 5] = Vec3::splat(500.0);
+        let to_world = DMat3::from_axis_angle(DVec3::new(0.3, 1.0, -0.2).normalize(), 0.7);
+        let m = EnvMap::new(w, h, texels, to_world).unwrap();
+        let n = 4000;
+        for k in 0..n {
+            let u = [
+                (k as f64 + 0.5) / n as f64,
+                (((k * 7919) % n) as f64 + 0.5) / n as f64,
+            ];
+            let s = m.sample(u);
+            let (radiance, pdf) = m.eval_pdf(s.dir);
+            assert!((pdf - s.pdf).abs() <= 1e-9 * pdf, "{u:?}: {pdf} {}", s.pdf);
+            assert!((radiance - s.radiance).abs().max_element() <= 1e-4 * radiance.max_element());
+            let row = m
+                .row_cdf
+                .partition_point(|&c| c <= u[1] * m.row_cdf[m.rows - 1]);
+            let local = m.from_world * s.dir;
+            assert_eq!(
+                trig::floor(trig::acos(local.y) / PI * m.rows as f64) as usize,
+                row
+            );
         }
     }
 
