@@ -168,7 +168,7 @@ pub(super) fn smooth_plastic(
         p.bool("nonlinear", false)?,
     );
     let fdr = lobe.internal_reflectance();
-    if !(fdr < 1.0) {
+    if fdr.is_nan() || fdr >= 1.0 {
         return Err(p.error(format!(
             "int_ior / ext_ior = {}: Mitsuba's fit of the coating's internal diffuse reflectance gives {fdr:.3}, not below 1 (its plastic would reflect negative light; the fit stays below 1 up to about 3.85)",
             lobe.eta
