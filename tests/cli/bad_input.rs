@@ -251,7 +251,7 @@ fn hostile_xml_scenes_fail_clearly() {
         ("rough glass in twosided", "<shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"roughdielectric\"/></bsdf></shape>", &["s.xml:", "transmission"]),
         ("unknown index of refraction", "<shape type=\"cube\"><bsdf type=\"dielectric\"><string name=\"int_ior\" value=\"unobtainium\"/></bsdf></shape>", &["s.xml:", "unobtainium", "bk7"]),
         ("negative index of refraction", "<shape type=\"cube\"><bsdf type=\"thindielectric\"><float name=\"ext_ior\" value=\"-1\"/></bsdf></shape>", &["s.xml:", "ext_ior"]),
-        ("textured glass", "<shape type=\"cube\"><bsdf type=\"dielectric\"><texture name=\"specular_transmittance\" type=\"checkerboard\"/></bsdf></shape>", &["s.xml:", "specular_transmittance", "texture"]),
+        ("glass with a transmittance texture above 1", "<shape type=\"cube\"><bsdf type=\"dielectric\"><texture name=\"specular_transmittance\" type=\"checkerboard\"><rgb name=\"color0\" value=\"1.5\"/></texture></bsdf></shape>", &["s.xml:", "specular_transmittance", "beyond 1"]),
         ("glass in twosided", "<shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"dielectric\"/></bsdf></shape>", &["s.xml:", "transmission"]),
         ("glass that creates energy", "<shape type=\"cube\"><bsdf type=\"dielectric\"><rgb name=\"specular_reflectance\" value=\"1.5\"/></bsdf></shape>", &["s.xml:", "specular_reflectance"]),
         ("undefined parameter", "<shape type=\"cube\"><boolean name=\"flip_normals\" value=\"$flip\"/></shape>", &["s.xml:", "$flip"]),
