@@ -11,7 +11,7 @@ use genpath::integrators::{Method, Settings, Shard};
 use genpath::path::generator::{Nee, ABSORPTION_MAX, ABSORPTION_MIN};
 use genpath::path::mixture_file;
 use genpath::scene::{Scene, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// What every command that renders needs: the scene, how to trace it, and the seed.
 #[derive(Args)]
@@ -255,11 +255,19 @@ pub struct ShardArgs {
 }
 
 impl ShardArgs {
-    /// Refuses a shard, a resume or a checkpoint of a method that learns, unless its learned
-    /// state comes from a plan file (`plan`), before anything loads; `command`: `render` or
-    /// `reference`, which learn their plans differently.
-    pub fn check_method(&self, method: Method, plan: bool, command: &str) -> Result<()> {
-        let learns = method.learns() && !plan;
+    /// Refuses, before anything loads, a plan file (`plan`) for a method that learns nothing,
+    /// and a shard, a resume or a checkpoint of a method that learns unless its learned state
+    /// comes from a plan file; `command`: `render` or `reference`, which learn their plans
+    /// differently.
+    pub fn check_method(&self, method: Method, plan: Option<&Path>, command: &str) -> Result<()> {
+        if let (Some(plan), false) = (plan, method.learns()) {
+            bail!(
+                "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
+                plan.display(),
+                method.name()
+            );
+        }
+        let learns = method.learns() && plan.is_none();
         let learn = match command {
             "reference" => "genpath learn --for-reference",
             _ => "genpath learn",

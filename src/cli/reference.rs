@@ -155,15 +155,8 @@ fn check_args(args: &ReferenceArgs, method: genpath::integrators::Method) -> Res
         );
     }
     check_output(&args.output)?;
-    if let (Some(plan), false) = (&args.plan, method.learns()) {
-        bail!(
-            "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
-            plan.display(),
-            method.name()
-        );
-    }
     args.shard
-        .check_method(method, args.plan.is_some(), "reference")
+        .check_method(method, args.plan.as_deref(), "reference")
 }
 
 /// What a reference's two halves start from and take: their learned states from a plan

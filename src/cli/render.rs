@@ -67,15 +67,8 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     if let Some(explain) = &args.explain {
         check_explain(explain, method)?;
     }
-    if let (Some(plan), false) = (&args.plan, method.learns()) {
-        bail!(
-            "--plan {}: --method {} learns nothing (plans are for pg, ga and ga-pt)",
-            plan.display(),
-            method.name()
-        );
-    }
     args.shard
-        .check_method(method, args.plan.is_some(), "render")?;
+        .check_method(method, args.plan.as_deref(), "render")?;
     // Settings first, before any loading.
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
