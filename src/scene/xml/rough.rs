@@ -116,31 +116,50 @@ pub(super) fn rough_plastic(
     if !microfacet.is_isotropic() {
         return Err(p.error("roughplastic does not support anisotropic roughness (as Mitsuba's)"));
     }
+    let c = coating(p, tex, warnings)?;
+    let lobe = RoughPlastic::new(microfacet, c.eta, c.diffuse, c.specular, c.nonlinear);
+    let mut m = glossy(name, Glossy::RoughPlastic(Box::new(lobe)));
+    m.textures = material_textures(c.textures);
+    Ok(m)
+}
+
+/// What Mitsuba's two plastics read alike: `int_ior` (polypropylene) over `ext_ior` (air),
+/// which must differ, `diffuse_reflectance` (0.5) and `specular_reflectance` (1), and
+/// `nonlinear`.
+struct Coating {
+    /// `int_ior / ext_ior`, in single precision as Mitsuba computes it.
+    eta: f32,
+    /// The reflectances' constants; a texture's is its mean, which weighs the lobe's share
+    /// of specular sampling, as in Mitsuba.
+    diffuse: Vec3,
+    specular: Vec3,
+    nonlinear: bool,
+    textures: MaterialTextures,
+}
+
+fn coating(
+    p: &Props,
+    tex: &mut Textures,
+    warnings: &mut Vec<String>,
+) -> Result<Coating, SceneError> {
     let int_ior = super::ior::read(p, "int_ior", "polypropylene")?;
     let ext_ior = super::ior::read(p, "ext_ior", "air")?;
     if int_ior == ext_ior {
         return Err(p.error("the interior and exterior indices of refraction must differ"));
     }
-    // A texture's constant is its mean: what the lobe's share of specular sampling is
-    // weighed by, as in Mitsuba.
     let diffuse = tex.reflectance(p, "diffuse_reflectance", 0.5, warnings)?;
     let specular = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
-    let nonlinear = p.bool("nonlinear", false)?;
-    let lobe = RoughPlastic::new(
-        microfacet,
-        // In single precision, as Mitsuba computes it.
-        int_ior / ext_ior,
-        diffuse.constant.as_vec3(),
-        specular.constant.as_vec3(),
-        nonlinear,
-    );
-    let mut m = glossy(name, Glossy::RoughPlastic(Box::new(lobe)));
-    m.textures = material_textures(MaterialTextures {
-        specular: specular.texture,
-        diffuse: diffuse.texture,
-        ..Default::default()
-    });
-    Ok(m)
+    Ok(Coating {
+        eta: int_ior / ext_ior,
+        diffuse: diffuse.constant.as_vec3(),
+        specular: specular.constant.as_vec3(),
+        nonlinear: p.bool("nonlinear", false)?,
+        textures: MaterialTextures {
+            specular: specular.texture,
+            diffuse: diffuse.texture,
+            ..Default::default()
+        },
+    })
 }
 
 /// Mitsuba's smooth `plastic`: `int_ior` (polypropylene) over `ext_ior` (air),
@@ -153,20 +172,8 @@ pub(super) fn smooth_plastic(
     tex: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
-    let int_ior = super::ior::read(p, "int_ior", "polypropylene")?;
-    let ext_ior = super::ior::read(p, "ext_ior", "air")?;
-    if int_ior == ext_ior {
-        return Err(p.error("the interior and exterior indices of refraction must differ"));
-    }
-    let diffuse = tex.reflectance(p, "diffuse_reflectance", 0.5, warnings)?;
-    let specular = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
-    let lobe = SmoothPlastic::new(
-        // In single precision, as Mitsuba computes it.
-        int_ior / ext_ior,
-        diffuse.constant.as_vec3(),
-        specular.constant.as_vec3(),
-        p.bool("nonlinear", false)?,
-    );
+    let c = coating(p, tex, warnings)?;
+    let lobe = SmoothPlastic::new(c.eta, c.diffuse, c.specular, c.nonlinear);
     let fdr = lobe.internal_reflectance();
     if fdr.is_nan() || fdr >= 1.0 {
         return Err(p.error(format!(
@@ -175,11 +182,7 @@ pub(super) fn smooth_plastic(
         )));
     }
     let mut m = glossy(name, Glossy::Plastic(Box::new(lobe)));
-    m.textures = material_textures(MaterialTextures {
-        specular: specular.texture,
-        diffuse: diffuse.texture,
-        ..Default::default()
-    });
+    m.textures = material_textures(c.textures);
     Ok(m)
 }
 
