@@ -153,6 +153,13 @@ pub struct GaArgs {
     /// the paper's cones only).
     #[arg(long, default_value_t = GaConfig::default().patches, value_parser = parse_probability)]
     pub patches: f64,
+    /// Place the data-driven anchors and patches from a second, independent set of test
+    /// paths, so that the set eq. 10 is measured on never placed them (`false`: one set for
+    /// both, which lets the GA fit its samplers to the few paths that dominate eq. 10).
+    /// Default: on for ga, off for ga-pt (whose end-only test paths seldom carry light, so
+    /// that a second set costs as much as the first)
+    #[arg(long, action = clap::ArgAction::Set, value_name = "BOOL")]
+    pub held_out: Option<bool>,
     /// Stop sampling a pixel's test paths once this many carry light.
     #[arg(long, value_name = "L", default_value_t = GaConfig::default().max_light_paths as u32, value_parser = clap::value_parser!(u32).range(1..=100_000_000))]
     pub max_light_paths: u32,
@@ -199,6 +206,11 @@ pub struct PlanArgs {
     /// at most as many as the test paths need); path tracing's own sampling beyond.
     #[arg(long, default_value_t = PlanConfig::default().guide_steps as u32, value_parser = clap::value_parser!(u32).range(1..=64))]
     pub guide_steps: u32,
+    /// A GA pixel's test paths start in the square of this many grid spacings (--ga-grid)
+    /// centred on it: the pixels its mixture renders, not that pixel alone (0: the pixel,
+    /// the paper's).
+    #[arg(long, default_value_t = PlanConfig::default().footprint, value_name = "GRID_SPACINGS")]
+    pub footprint: f64,
 }
 
 /// The gate, table `[gate]`.

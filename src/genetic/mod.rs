@@ -77,6 +77,16 @@ pub struct GaConfig {
     ///
     /// [`PatchSampler`]: crate::sampling::patch::PatchSampler
     pub patches: f64,
+    /// Place the data-driven anchors and patches from a second, independent set of test
+    /// paths, and measure every `V` on the first (beyond the paper). With one set for both,
+    /// a sampler placed at the few paths that dominate eq. 10 shrinks their terms, and the
+    /// GA keeps mixtures whose `V` on the test paths is far below their variance (glossy,
+    /// `ga --no-gate`, 64 spp: `V` 7 × below `srt`'s, the render no better than `srt`).
+    /// `None`: on for `ga` (its test paths do next-event estimation at every vertex, most
+    /// carry light, and the second set costs a few hundred paths), off for `ga-pt` (its
+    /// end-only test paths seldom carry light: on fig5 the second set doubled the plan's
+    /// CPU time for no better image at 64 spp, and a smaller one made it worse).
+    pub held_out: Option<bool>,
     /// Evolve directional samplers only: every generator keeps `srt`'s absorption and light
     /// sampler, so that `V` measures exactly what a guide for path tracing takes from the
     /// mixture (`ga-pt` sets it).
@@ -116,6 +126,7 @@ impl Default for GaConfig {
             max_light_paths: 1_000,
             data_anchors: 0.5,
             patches: 0.5,
+            held_out: None,
             directions_only: false,
         }
     }

@@ -61,20 +61,23 @@ fn ranking(v: &[f64], order: &mut Vec<usize>) {
 
 /// Runs the genetic algorithm on the test paths of one pixel.
 pub fn evolve(config: &GaConfig, paths: &TestPaths, view: &SceneView, rng: &mut Rng) -> Evolution {
-    evolve_from(config, paths, view, rng, &[])
+    evolve_from(config, (paths, paths), view, rng, &[])
 }
 
 /// [`evolve`] with `seeds` (individuals evolved elsewhere, e.g. at neighbouring pixels) in
-/// the first generation, the rest random: a warm start.
+/// the first generation, the rest random: a warm start. The data-driven anchors and patches
+/// are placed from `placement`'s light-carrying paths and every `V` is measured on `paths`:
+/// two independent sets of test paths (see [`super::GaConfig::held_out`]), or the same set
+/// twice.
 pub fn evolve_from(
     config: &GaConfig,
-    paths: &TestPaths,
+    (placement, paths): (&TestPaths, &TestPaths),
     view: &SceneView,
     rng: &mut Rng,
     seeds: &[Individual],
 ) -> Evolution {
     let n = config.population.max(1);
-    let mut pool = GenePool::new(view.scene, paths.max_bounces, config).with_test_paths(paths);
+    let mut pool = GenePool::new(view.scene, paths.max_bounces, config).with_test_paths(placement);
     let mut population: Vec<Individual> = seeds
         .iter()
         .take(n)

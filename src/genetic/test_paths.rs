@@ -32,9 +32,39 @@ use crate::path::generator::{
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
+use crate::scene::Camera;
 use glam::{DVec3, Vec3};
 
 /// Test paths of one pixel.
+/// A camera ray through a point uniform over the square of `side` pixels centred on pixel
+/// `(x, y)`, clipped to the image ([`footprint_point`]); for `side ≤ 1`, through the pixel
+/// itself ([`camera_ray`], the same ray from the same numbers).
+pub fn footprint_ray(camera: &Camera, (x, y): (u32, u32), side: f32, rng: &mut Rng) -> Ray {
+    if side <= 1.0 {
+        return camera_ray(camera, (x, y), rng);
+    }
+    let (px, py) = footprint_point((camera.width, camera.height), (x, y), side, rng);
+    camera.ray(px, py)
+}
+
+/// The image position of [`footprint_ray`] for `side > 1`: uniform over the square of
+/// `side` pixels centred on the centre of pixel `(x, y)`, each coordinate clamped into the
+/// `width × height` image.
+pub fn footprint_point(
+    (width, height): (u32, u32),
+    (x, y): (u32, u32),
+    side: f32,
+    rng: &mut Rng,
+) -> (f32, f32) {
+    // The largest f32 below `extent` (`f32::next_down`, past the MSRV): `extent ≥ 1`.
+    let below = |extent: u32| f32::from_bits((extent as f32).to_bits() - 1);
+    let at = |p: u32, extent: u32, u: f32| {
+        (p as f32 + 0.5 + (u - 0.5) * side).clamp(0.0, below(extent))
+    };
+    let px = at(x, width, uniform(rng));
+    (px, at(y, height, uniform(rng)))
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct TestPaths {
     /// Number of sampled paths, zero-contribution ones included (`M` of eq. 10).
@@ -162,7 +192,7 @@ impl Packet {
         &mut self,
         view: &SceneView,
         q: &Mixture,
-        pixel: (u32, u32),
+        (pixel, side): ((u32, u32), f32),
         seed: u64,
         js: std::ops::Range<usize>,
         max_bounces: u32,
@@ -173,7 +203,7 @@ impl Packet {
         let lanes = &mut self.lanes[..self.n];
         for ((lane, ray), j) in lanes.iter_mut().zip(&mut self.rays).zip(js) {
             lane.rng = sample_rng(seed, index, j as u64);
-            *ray = camera_ray(&view.scene.camera, pixel, &mut lane.rng);
+            *ray = footprint_ray(&view.scene.camera, pixel, side, &mut lane.rng);
         }
         let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
         if view.draws_at_hits() {
@@ -325,6 +355,20 @@ impl TestPaths {
         max_bounces: u32,
         seed: u64,
     ) -> (Self, RayCounts) {
+        Self::sample_around(view, q, ((x, y), 1.0), (m, max_light), max_bounces, seed)
+    }
+
+    /// [`TestPaths::sample_until`] with camera rays through a square of `side` pixels
+    /// centred on pixel `(x, y)` ([`footprint_ray`]) rather than through the pixel: the paths
+    /// of the pixels a GA pixel's mixture will render, not of that pixel alone.
+    pub fn sample_around(
+        view: &SceneView,
+        q: &Mixture,
+        ((x, y), side): ((u32, u32), f32),
+        (m, max_light): (usize, usize),
+        max_bounces: u32,
+        seed: u64,
+    ) -> (Self, RayCounts) {
         let mut paths = Self::new(max_bounces, q.nee);
         let mut counts = RayCounts::default();
         let mut packet = Packet::new();
@@ -333,7 +377,7 @@ impl TestPaths {
             packet.start(
                 view,
                 q,
-                (x, y),
+                ((x, y), side),
                 seed,
                 first..first + n,
                 max_bounces,

@@ -61,6 +61,9 @@ pub enum Stream {
     Baseline,
     /// The test paths a GA pixel evolves on ([`derived_seed`]).
     TestPaths,
+    /// The second set of test paths a GA pixel places its data-driven samplers from
+    /// ([`derived_seed`]).
+    Placement,
     /// The genetic algorithm's own draws at a GA pixel ([`derived_seed`]).
     Ga,
     /// The gate's `pt` samples at a GA pixel ([`derived_seed`]).
@@ -84,6 +87,7 @@ impl Stream {
         match self {
             Self::Baseline => 0x6261_7365_6c69_6e65,  // "baseline"
             Self::TestPaths => 0x7465_7374_7061_7468, // "testpath"
+            Self::Placement => 0x706c_6163_656d_656e, // "placemen"
             Self::Ga => 0x6765_6e65_7469_6373,        // "genetics"
             Self::GatePt => 0x6761_7465_5f70_7400,    // "gate_pt"
             Self::Gate => 0x6761_7465_0000_0000,      // "gate"

@@ -391,3 +391,62 @@ fn config_defaults_are_valid_and_bad_values_rejected() {
         assert!(bad.validate().is_err(), "{bad:?} accepted");
     }
 }
+
+/// With held-out placement (`ga.held_out`), the GA draws its data-driven anchors where the
+/// placement paths went and never where the paths eq. 10 is measured on went: with every
+/// anchor data-driven and none shifted, each anchor of every individual of the last
+/// generation lies at a step target of the placement set, none at one of the fitness set.
+/// The twin, one set for both (the first line of work's GA), puts them at the fitness
+/// set's targets, and the check rejects it.
+#[test]
+fn held_out_placement_draws_anchors_from_the_other_paths() {
+    use genpath::genetic::population::evolve_from;
+    use genpath::path::generator::DirectionSampler;
+    let (scene, accel) = fig5();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let srt = srt_mixture(&scene);
+    let sample = |seed| TestPaths::sample(&view, &srt, FLOOR_PIXEL, 4000, MAX_BOUNCES, seed).0;
+    let (placement, fitness) = (sample(20), sample(21));
+    let config = GaConfig {
+        data_anchors: 1.0,
+        patches: 0.0,
+        anchor_shift: 0.0,
+        generations: 5,
+        ..GaConfig::default()
+    };
+    let targets = |paths: &TestPaths| {
+        let mut t = Vec::new();
+        for i in 0..paths.len() {
+            for k in 0..MAX_BOUNCES as usize {
+                t.extend(paths.step_target(i, k).map(|(p, _)| p));
+            }
+        }
+        t
+    };
+    // Anchors of the last generation at (placement's, fitness's) targets.
+    let count = |sets: (&TestPaths, &TestPaths)| {
+        let evolution = evolve_from(&config, sets, &view, &mut Rng::seed_from_u64(7), &[]);
+        let (at_placement, at_fitness) = (targets(sets.0), targets(&fitness));
+        let mut counts = (0, 0, 0);
+        for gene in &evolution.best.genes {
+            for step in &gene.generator.steps {
+                if let DirectionSampler::Anchor(a) = &step.sampler {
+                    counts.0 += 1;
+                    counts.1 += usize::from(at_placement.contains(&a.anchor));
+                    counts.2 += usize::from(at_fitness.contains(&a.anchor));
+                }
+            }
+        }
+        counts
+    };
+    let (anchors, at_placement, at_fitness) = count((&placement, &fitness));
+    eprintln!("held out: {anchors} anchors, {at_placement} at placement targets, {at_fitness} at fitness targets");
+    assert!(anchors > 0 && at_placement > 0, "no data anchor drawn");
+    assert_eq!(at_fitness, 0, "an anchor at a fitness path's vertex");
+    let (anchors, _, at_fitness) = count((&fitness, &fitness));
+    eprintln!("one set: {anchors} anchors, {at_fitness} at fitness targets");
+    assert!(
+        at_fitness > 0,
+        "the twin must put anchors where the fitness paths went"
+    );
+}

@@ -348,3 +348,61 @@ fn step_targets_lie_along_the_sampled_directions() {
     assert!(held >= 5, "the patch holds {held} first-step targets");
     assert_eq!(held_shrunk, 0, "the shrunk patch holds {held_shrunk}");
 }
+
+/// A GA pixel's test paths start over its footprint (`plan.footprint`): uniform over the
+/// square of `side` pixels centred on the pixel, inside the image. A side of one pixel is
+/// the pixel itself, ray for ray (the paper's test paths) — and fails the coverage check.
+#[test]
+fn footprint_rays_cover_the_square_around_the_pixel() {
+    use genpath::genetic::test_paths::{footprint_point, footprint_ray};
+    use genpath::sampling::camera_ray;
+    let (w, h) = (64, 48);
+    let at = (20, 30);
+    // Whether 4000 positions drawn with `drawn` fill the square of `side` around `at`: all
+    // inside it, some within half a pixel of each edge, and their mean at its centre.
+    let covers = |drawn: f32, side: f32, seed: u64| {
+        let mut rng = sample_rng(seed, 0, 0);
+        let points: Vec<(f32, f32)> = (0..4000)
+            .map(|_| footprint_point((w, h), at, drawn, &mut rng))
+            .collect();
+        let axis = |p: u32, v: &dyn Fn(&(f32, f32)) -> f32| {
+            let (lo, hi) = (p as f32 + 0.5 - side / 2.0, p as f32 + 0.5 + side / 2.0);
+            let (min, max) = points
+                .iter()
+                .map(v)
+                .fold((f32::MAX, f32::MIN), |(a, b), x| (a.min(x), b.max(x)));
+            let mean = points.iter().map(v).sum::<f32>() / points.len() as f32;
+            let centred = (mean - (p as f32 + 0.5)).abs() < 0.05 * side;
+            min >= lo && max <= hi && min < lo + 0.5 && max > hi - 0.5 && centred
+        };
+        axis(at.0, &|p| p.0) && axis(at.1, &|p| p.1)
+    };
+    assert!(covers(16.0, 16.0, 1), "side 16");
+    assert!(covers(5.0, 5.0, 2), "side 5");
+    assert!(
+        !covers(1.0, 16.0, 3),
+        "the pixel alone cannot fill the square of 16"
+    );
+    assert!(!covers(16.0, 5.0, 3), "nor a square of 16 fit in one of 5");
+    // Clipped into the image at its corner.
+    let mut rng = sample_rng(4, 0, 0);
+    for _ in 0..1000 {
+        let (x, y) = footprint_point((w, h), (1, 47), 16.0, &mut rng);
+        assert!(
+            (0.0..w as f32).contains(&x) && (0.0..h as f32).contains(&y),
+            "{x}, {y}"
+        );
+    }
+    // A side of at most one pixel: the pixel's own camera rays, bit for bit.
+    let (scene, _) = fig5();
+    for side in [0.0, 0.5, 1.0] {
+        let (mut a, mut b) = (sample_rng(5, 1, 2), sample_rng(5, 1, 2));
+        for _ in 0..16 {
+            let (r, s) = (
+                footprint_ray(&scene.camera, FLOOR_PIXEL, side, &mut a),
+                camera_ray(&scene.camera, FLOOR_PIXEL, &mut b),
+            );
+            assert_eq!((r.origin, r.dir), (s.origin, s.dir), "side {side}");
+        }
+    }
+}

@@ -41,6 +41,11 @@ pub struct PlanConfig {
     /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
     /// every step the test paths need.
     pub guide_steps: usize,
+    /// A GA pixel's test paths start in the square of `footprint × ga_grid` pixels centred
+    /// on it (at least the pixel itself): the pixels its mixture renders with its
+    /// neighbours', rather than that pixel alone (beyond the paper). 0: the pixel (the
+    /// paper's).
+    pub footprint: f64,
 }
 
 impl Default for PlanConfig {
@@ -55,11 +60,17 @@ impl Default for PlanConfig {
             warm_start: true,
             time_limit: None,
             guide_steps: 1,
+            footprint: 1.0,
         }
     }
 }
 
 impl PlanConfig {
+    /// The side, in pixels, of the square a GA pixel's test paths start in.
+    pub fn footprint_pixels(&self) -> f32 {
+        (self.footprint * f64::from(self.grid)).max(1.0) as f32
+    }
+
     pub fn validate(&self) -> Result<(), GaConfigError> {
         let fail = |m: String| Err(GaConfigError(m));
         if self.grid == 0 {
@@ -83,6 +94,12 @@ impl PlanConfig {
             return fail(format!(
                 "GA time limit {:?} must be finite and ≥ 0 seconds",
                 self.time_limit
+            ));
+        }
+        if !(self.footprint.is_finite() && (0.0..=16.0).contains(&self.footprint)) {
+            return fail(format!(
+                "test-path footprint {} is not in [0, 16] grid spacings",
+                self.footprint
             ));
         }
         if !(1..=64).contains(&self.guide_steps) {

@@ -26,6 +26,13 @@ pub const PRUNE_SHARE: f64 = 0.0;
 /// stops falling).
 pub const CONVEX_ITERATIONS: usize = 200;
 
+/// With `GaConfig::held_out`, the placement paths stop at `max_light_paths /
+/// PLACEMENT_SHARE` light-carrying ones: anchors and patches need where light went, not
+/// eq. 10's precision. With next-event estimation at every vertex most test paths carry
+/// light and this costs a few hundred paths; `ga-pt`'s end-only test paths seldom do (fig5:
+/// 1 %), so that there a held-out set costs as much as the first (see `GaConfig::held_out`).
+pub const PLACEMENT_SHARE: usize = 4;
+
 /// The outcome of the genetic algorithm at one pixel.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GaPixel {
@@ -147,10 +154,10 @@ pub(super) fn run_pixel(
         ..
     } = context;
     let t0 = Instant::now();
-    let (paths, mut counts) = TestPaths::sample_until(
+    let (paths, mut counts) = TestPaths::sample_around(
         view,
         srt,
-        (x, y),
+        ((x, y), context.config.footprint_pixels()),
         (ga.test_paths, ga.max_light_paths),
         max_bounces,
         derived_seed(seed, Stream::TestPaths.tag()),
@@ -176,7 +183,8 @@ pub(super) fn run_pixel(
             best: None,
         }
     } else {
-        let evolution = evolve_from(ga, &paths, view, &mut rng, &run.seeds);
+        let placement = held_out_paths(context, (x, y), &paths, &mut counts);
+        let evolution = evolve_from(ga, (&placement, &paths), view, &mut rng, &run.seeds);
         best_or_srt(view, ga, &paths, evolution, (srt, v_srt))
     };
     let trial = (context.gate && run.trial && !outcome.kept_srt).then(|| {
@@ -205,6 +213,34 @@ pub(super) fn run_pixel(
         ga_seconds: t1.elapsed().as_secs_f64(),
     };
     (pixel, counts)
+}
+
+/// The test paths that place the data-driven anchors and patches: with
+/// `GaConfig::held_out` (and data-driven samplers to place) a second set, sampled as
+/// `paths` was from its own random stream until a quarter as many carry light
+/// ([`PLACEMENT_SHARE`]), else `paths` itself.
+fn held_out_paths<'p>(
+    context: &PixelContext,
+    at: (u32, u32),
+    paths: &'p TestPaths,
+    counts: &mut RayCounts,
+) -> std::borrow::Cow<'p, TestPaths> {
+    let ga = context.ga;
+    let held_out = ga.held_out.unwrap_or(context.plan_for == PlanFor::Mixture);
+    if !held_out || ga.data_anchors == 0.0 {
+        return std::borrow::Cow::Borrowed(paths);
+    }
+    let light = (ga.max_light_paths / PLACEMENT_SHARE).max(1);
+    let (placement, c) = TestPaths::sample_around(
+        context.view,
+        context.srt,
+        (at, context.config.footprint_pixels()),
+        (ga.test_paths, light),
+        context.max_bounces,
+        derived_seed(context.seed, Stream::Placement.tag()),
+    );
+    counts.add(c);
+    std::borrow::Cow::Owned(placement)
 }
 
 /// The GA's settings at a pixel: `generations` of them, and with pruning no generator step
