@@ -407,27 +407,16 @@ impl Walk {
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
+        let (at, bsdf) = (x.p.as_dvec3(), (material, frame, wo));
         let s = match &g.steps[self.k].sampler {
             DirectionSampler::Brdf => brdf::sample_scattered(material, frame, wo, u)?,
             DirectionSampler::Anchor(a) => {
-                let wi = a.sample(x.p.as_dvec3(), u).as_vec3().normalize();
-                scattered(
-                    material,
-                    frame,
-                    wo,
-                    wi,
-                    a.pdf(x.p.as_dvec3(), wi.as_dvec3()),
-                )?
+                let wi = a.sample(at, u).as_vec3().normalize();
+                scattered(bsdf, wi, a.pdf(at, wi.as_dvec3()))?
             }
             DirectionSampler::Patch(p) => {
-                let wi = p.sample(x.p.as_dvec3(), u).as_vec3().normalize();
-                scattered(
-                    material,
-                    frame,
-                    wo,
-                    wi,
-                    p.pdf(x.p.as_dvec3(), wi.as_dvec3()),
-                )?
+                let wi = p.sample(at, u).as_vec3().normalize();
+                scattered(bsdf, wi, p.pdf(at, wi.as_dvec3()))?
             }
         };
         if s.f.max_element() <= 0.0 {
@@ -440,12 +429,11 @@ impl Walk {
 }
 
 /// A direction `wi` that a sampler other than the BSDF's drew with density `pdf`, with the
-/// BSDF's cosine and value there; `None` where the material sends nothing into it (it may
-/// go anywhere above the surface, or anywhere off it through a rough dielectric).
+/// cosine and value there of the BSDF of `material` in `frame` seen from `wo`; `None` where
+/// the material sends nothing into it (it may go anywhere above the surface, or anywhere off
+/// it through a rough dielectric).
 fn scattered(
-    material: MaterialAt,
-    frame: Frame,
-    wo: Vec3,
+    (material, frame, wo): (MaterialAt, Frame, Vec3),
     wi: Vec3,
     pdf: f64,
 ) -> Option<brdf::Scattered> {
