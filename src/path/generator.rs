@@ -246,6 +246,9 @@ pub struct PathVertex {
     pub point: SurfacePoint,
     /// Unit direction towards the previous vertex (the camera for the first).
     pub wo: Vec3,
+    /// The shading frame the vertex scatters in, `Frame::facing(point, wo)`: built once by
+    /// the walk, read by every generator's density.
+    pub frame: brdf::Frame,
     /// Unit direction sampled out of this vertex (zero at the path's end).
     pub wi: Vec3,
     /// A delta vertex (a mirror, glass): its direction was determined by the material (or
@@ -401,7 +404,7 @@ impl PathGenerator {
         match &self.steps[k].sampler {
             DirectionSampler::Brdf => {
                 let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, brdf::Frame::facing(&v.point, v.wo), v.wo, v.wi)
+                brdf::pdf(m, v.frame, v.wo, v.wi)
             }
             DirectionSampler::Anchor(a) => a.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
             DirectionSampler::Patch(s) => s.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
@@ -478,18 +481,21 @@ impl PathGenerator {
         c: &Contribution,
         max_bounces: u32,
     ) -> (f64, f64) {
-        self.pdf_techniques_after(view, path, c, max_bounces, &mut Prefix::default())
+        let mut prefix = Prefix::default();
+        self.pdf_techniques_after(view, (path, false), c, max_bounces, &mut prefix)
     }
 
     /// [`Self::pdf_techniques`], continuing `prefix`, this generator's density of the
     /// path's first vertices from an earlier (shorter) contribution of the same path: the
     /// contributions of a path then cost one direction density per vertex, not one per vertex
-    /// and contribution. The same products in the same order: the same densities, bit for
-    /// bit.
+    /// and contribution. With `own`, this generator sampled `path`: the densities its walk
+    /// drew with (each `pdf_sampled`) are then taken as stored, and only those of what it did
+    /// not draw (the other technique's at `x_len`) are evaluated. The same products in the
+    /// same order of the same factors: the same densities, bit for bit.
     pub fn pdf_techniques_after(
         &self,
         view: &SceneView,
-        path: &PathVertices,
+        (path, own): (&PathVertices, bool),
         c: &Contribution,
         max_bounces: u32,
         prefix: &mut Prefix,
@@ -511,7 +517,10 @@ impl PathGenerator {
                 prefix.absorbed = true;
                 continue;
             }
-            prefix.pdf *= (1.0 - a) * self.direction_pdf(view, prefix.steps, v);
+            prefix.pdf *= match own {
+                true => v.pdf_sampled,
+                false => (1.0 - a) * self.direction_pdf(view, prefix.steps, v),
+            };
             prefix.steps += 1;
         }
         if prefix.absorbed {
@@ -538,12 +547,18 @@ impl PathGenerator {
             wi: end.wi,
             ..path.vertices[c.len - 1]
         };
+        // What this generator drew itself (`own`): the direction that found the emitter
+        // (not `c.nee`) or the light point (`c.nee`), with the density it was drawn with.
         let dir = match end.end {
             LightEnd::Delta => 0.0,
+            _ if own && !c.nee => end.pdf_sampled,
             _ => direction(&last),
         };
-        let light = self.light_pdf(view, &end.end, end.wi) * end.area_to_solid_angle;
-        (prefix * dir, prefix * light)
+        let light = match own && c.nee {
+            true => end.pdf_sampled,
+            false => self.light_pdf(view, &end.end, end.wi),
+        };
+        (prefix * dir, prefix * (light * end.area_to_solid_angle))
     }
 
     /// This generator's density of contribution `c` of `path` for the estimator `nee`: the

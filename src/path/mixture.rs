@@ -3,6 +3,7 @@
 
 use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices, Prefix};
 use super::{RayCounts, SceneView, SurfacePoint};
+use crate::sampling::brdf::Frame;
 use crate::sampling::{uniform, Rng};
 use crate::scene::Glossy;
 use glam::{DVec3, Vec3};
@@ -54,6 +55,7 @@ fn in_geometric_frame(path: &PathVertices) -> PathVertices {
     for v in &mut flat.vertices {
         v.point.ns = v.point.ng;
         v.point.np = Vec3::ZERO;
+        v.frame = Frame::facing(&v.point, v.wo);
     }
     flat
 }
@@ -223,21 +225,25 @@ impl Mixture {
         c: &Contribution,
         max_bounces: u32,
     ) -> f64 {
-        self.pdf_path_after(view, path, c, max_bounces, None)
+        self.pdf_path_after(view, (path, None), c, max_bounces, None)
     }
 
     /// [`Self::pdf_path`], continuing each generator's density of the path's first vertices
     /// from an earlier contribution of the same path (`prefixes`, one per generator, default
     /// for a new path; [`PathGenerator::pdf_techniques_after`]); without them, from the
-    /// path's start.
+    /// path's start. With [`Nee::Every`] the component that sampled `path` (`sampled_by`, if
+    /// known) takes the densities its walk drew with as stored instead of evaluating them
+    /// again: the same values, bit for bit.
     fn pdf_path_after(
         &self,
         view: &SceneView,
-        path: &PathVertices,
+        (path, sampled_by): (&PathVertices, Option<usize>),
         c: &Contribution,
         max_bounces: u32,
         mut prefixes: Option<&mut [Prefix]>,
     ) -> f64 {
+        // The faults that evaluate another path than the one sampled evaluate it all.
+        let sampled_by = sampled_by.filter(|_| !self.geometric_frame && !self.transmission_folded);
         let flat;
         let folded;
         let path = match self.geometric_frame {
@@ -268,8 +274,9 @@ impl Mixture {
                 };
                 let p = match self.nee {
                     Nee::Every => {
+                        let own = sampled_by == Some(i);
                         let (dir, light) =
-                            g.pdf_techniques_after(view, path, c, max_bounces, prefix);
+                            g.pdf_techniques_after(view, (path, own), c, max_bounces, prefix);
                         match self.light_density_dropped {
                             true => dir,
                             false => dir + light,
@@ -342,7 +349,7 @@ impl Mixture {
             counts.densities += components * (c.len as u64 + extra);
             let pdf = self.pdf_path_after(
                 view,
-                &scratch.path,
+                (&scratch.path, Some(g)),
                 c,
                 max_bounces,
                 Some(&mut scratch.prefixes),

@@ -246,6 +246,7 @@ impl Walk {
         let mut vertex = PathVertex {
             point: x,
             wo,
+            frame,
             wi: Vec3::ZERO,
             delta: material.mirror,
             pdf_sampled: 1.0,
@@ -305,6 +306,7 @@ impl Walk {
         path.vertices.push(PathVertex {
             point: x,
             wo,
+            frame,
             wi: Vec3::ZERO,
             delta: material.mirror,
             pdf_sampled: 1.0,
@@ -405,30 +407,42 @@ impl Walk {
             uniform(rng) as f64,
             uniform(rng) as f64,
         ];
-        let (wi, pdf) = match &g.steps[self.k].sampler {
-            DirectionSampler::Brdf => {
-                let s = brdf::sample(material, frame, wo, u)?;
-                (s.wi, s.pdf)
-            }
+        let (at, bsdf) = (x.p.as_dvec3(), (material, frame, wo));
+        let s = match &g.steps[self.k].sampler {
+            DirectionSampler::Brdf => brdf::sample_scattered(material, frame, wo, u)?,
             DirectionSampler::Anchor(a) => {
-                let wi = a.sample(x.p.as_dvec3(), u).as_vec3().normalize();
-                (wi, a.pdf(x.p.as_dvec3(), wi.as_dvec3()))
+                let wi = a.sample(at, u).as_vec3().normalize();
+                scattered(bsdf, wi, a.pdf(at, wi.as_dvec3()))?
             }
-            DirectionSampler::Patch(s) => {
-                let wi = s.sample(x.p.as_dvec3(), u).as_vec3().normalize();
-                (wi, s.pdf(x.p.as_dvec3(), wi.as_dvec3()))
+            DirectionSampler::Patch(p) => {
+                let wi = p.sample(at, u).as_vec3().normalize();
+                scattered(bsdf, wi, p.pdf(at, wi.as_dvec3()))?
             }
         };
-        // Above the surface, or anywhere off it through a rough dielectric.
-        let cos = brdf::cosine(&material, frame, wi)?;
-        let f = brdf::eval(material, frame, wo, wi);
-        if f.max_element() <= 0.0 {
+        if s.f.max_element() <= 0.0 {
             return None;
         }
-        self.throughput *= f.as_dvec3() * cos as f64;
+        self.throughput *= s.f.as_dvec3() * s.cos as f64;
         self.k += 1;
-        Some((wi, (1.0 - absorption) * pdf))
+        Some((s.wi, (1.0 - absorption) * s.pdf))
     }
+}
+
+/// A direction `wi` that a sampler other than the BSDF's drew with density `pdf`, with the
+/// cosine and value there of the BSDF of `material` in `frame` seen from `wo`; `None` where
+/// the material sends nothing into it (it may go anywhere above the surface, or anywhere off
+/// it through a rough dielectric).
+fn scattered(
+    (material, frame, wo): (MaterialAt, Frame, Vec3),
+    wi: Vec3,
+    pdf: f64,
+) -> Option<brdf::Scattered> {
+    Some(brdf::Scattered {
+        wi,
+        pdf,
+        cos: brdf::cosine(&material, frame, wi)?,
+        f: brdf::eval(material, frame, wo, wi),
+    })
 }
 
 /// A generator's light sample at a vertex `x` (see [`Receiver`]), before its shadow ray: the

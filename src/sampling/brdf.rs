@@ -399,6 +399,42 @@ pub fn sample_direction<'a>(
     Some(wi)
 }
 
+/// A direction sampled out of a non-delta BSDF with the parts of its weight: for callers
+/// that weigh it by something else than [`BrdfSample::weight`] (a path generator's throughput
+/// takes `f · cos`, its density goes to the mixture).
+#[derive(Clone, Copy, Debug)]
+pub struct Scattered {
+    pub wi: Vec3,
+    /// Solid-angle density of the sampler that drew it ([`pdf`] for [`sample_scattered`]).
+    pub pdf: f64,
+    /// `|cos θ_i|` ([`cosine`]) and `f(wo, wi)` ([`eval`]).
+    pub cos: f32,
+    pub f: Vec3,
+}
+
+/// [`sample`] for a non-mirror material, the sample's density, cosine and value apart;
+/// `None` where [`sample`] gives none.
+pub fn sample_scattered<'a>(
+    m: impl Into<MaterialAt<'a>>,
+    frame: Frame,
+    wo: Vec3,
+    u: [f64; 3],
+) -> Option<Scattered> {
+    let m = m.into();
+    let wi = sample_direction(m, frame, wo, u)?;
+    let pdf = pdf(m, frame, wo, wi);
+    let cos = cosine(&m, frame, wi)?;
+    if pdf <= 0.0 {
+        return None;
+    }
+    Some(Scattered {
+        wi,
+        pdf,
+        cos,
+        f: eval(m, frame, wo, wi),
+    })
+}
+
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
 /// (where [`cosine`] says the material sends nothing, or a black material), and for a smooth
 /// dielectric, whose sampling needs the stored (not facing) normal's side:
@@ -416,17 +452,11 @@ pub fn sample<'a>(
             None => specular::sample(m, frame.n, wo, u[0]),
         };
     }
-    let wi = sample_direction(m, frame, wo, u)?;
-    let pdf = pdf(m, frame, wo, wi);
-    let cos = cosine(&m, frame, wi)?;
-    if pdf <= 0.0 {
-        return None;
-    }
-    let weight = eval(m, frame, wo, wi) * (cos as f64 / pdf) as f32;
+    let s = sample_scattered(m, frame, wo, u)?;
     Some(BrdfSample {
-        wi,
-        pdf,
-        weight,
+        wi: s.wi,
+        pdf: s.pdf,
+        weight: s.f * (s.cos as f64 / s.pdf) as f32,
         delta: false,
     })
 }
