@@ -36,7 +36,9 @@ pub struct BenchArgs {
     /// Samples per pixel of each scaling render (at the scene's size).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1 << 16))]
     pub spp: u32,
-    /// The method of the scaling renders (prepared once, untimed) and its settings.
+    /// The method of the scaling renders (prepared once, untimed) and its settings; the GA's
+    /// and the estimator's (`--nee`, `--population`, `--test-paths`, …) also set the fitness
+    /// measurement's, but for its 10 generations.
     #[command(flatten)]
     pub method: MethodArgs,
     /// Also write the figures as JSON to FILE.

@@ -356,7 +356,11 @@ mod tests {
             } else {
                 (a, b)
             };
-            let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
             let w = DVec3::new(1.0 - a - b, a, b);
             let finest = cell_of(w, MAX_LEVEL);
             for level in 0..=MAX_LEVEL {
