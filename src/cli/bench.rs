@@ -36,7 +36,9 @@ pub struct BenchArgs {
     /// Samples per pixel of each scaling render (at the scene's size).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=1 << 16))]
     pub spp: u32,
-    /// The method of the scaling renders (prepared once, untimed) and its settings.
+    /// The method of the scaling renders (prepared once, untimed) and its settings; the GA's
+    /// and the estimator's (`--nee`, `--population`, `--test-paths`, …) also set the fitness
+    /// measurement's, but for its 10 generations.
     #[command(flatten)]
     pub method: MethodArgs,
     /// Also write the figures as JSON to FILE.
@@ -55,7 +57,7 @@ pub fn run_bench(args: BenchArgs, matches: &ArgMatches) -> Result<()> {
     let rays = ray_throughput(&scene, args.rays, passes)?;
     let accel = accel::build(AccelKind::default_available(), &scene.mesh)?;
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = ga_throughput(&view, passes);
+    let ga = ga_throughput(&view, &config, passes);
     load_mixture(&mut config, &scene, scene.render.max_bounces)?;
     let scaling = thread_scaling(&view, &args, &config)?;
     if let Some(json) = &args.json {
@@ -140,14 +142,18 @@ fn ray_throughput(scene: &Scene, n: u32, passes: usize) -> Result<Vec<serde_json
 }
 
 /// Test paths (packets and single rays) and fitness evaluations per second at the image's
-/// centre, one thread; printed, and as JSON.
-fn ga_throughput(view: &SceneView, passes: usize) -> serde_json::Value {
+/// centre, one thread, with the GA's and the estimator's settings of `config` (the render's
+/// flags, e.g. `--nee end`) but 10 generations; printed, and as JSON.
+fn ga_throughput(view: &SceneView, config: &Settings, passes: usize) -> serde_json::Value {
     use genpath::genetic::population::evolve;
     use genpath::genetic::test_paths::TestPaths;
     let scene = view.scene;
+    let nee = config.srt.nee;
     let ga = GaConfig {
         generations: 10,
-        ..GaConfig::default()
+        nee,
+        srt_absorption: config.srt.absorption(nee),
+        ..config.ga.clone()
     };
     let max_bounces = scene.render.max_bounces;
     let q = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(ga.nee);

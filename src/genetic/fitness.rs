@@ -212,14 +212,16 @@ pub fn optimise_weights(
     let mut candidate = vec![0.0; n];
     let mut eta = 1.0;
     for _ in 0..iterations {
-        // g_i with the current pdf.
-        for (g, d) in gradient.iter_mut().zip(densities) {
-            let mut sum = 0.0;
-            for ((c, p), di) in f2_over_q.iter().zip(&pdf).zip(d.iter()) {
-                sum += c * di / (p * p);
+        // g_i with the current pdf, every component's sum in one pass over the paths (each
+        // summed in path order, as alone).
+        gradient.iter_mut().for_each(|g| *g = 0.0);
+        for (j, (c, p)) in f2_over_q.iter().zip(&pdf).enumerate() {
+            let p2 = p * p;
+            for (g, d) in gradient.iter_mut().zip(densities) {
+                *g += c * d[j] / p2;
             }
-            *g = sum / sampled as f64;
         }
+        gradient.iter_mut().for_each(|g| *g /= sampled as f64);
         let mut accepted = false;
         while eta > 1e-3 {
             for ((c, w), g) in candidate.iter_mut().zip(&*weights).zip(&gradient) {

@@ -27,10 +27,13 @@ use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
     fixed_light_pdf, Contribution, DirectionSampler, LightEnd, Nee, PathGenerator, PathVertices,
-    Query, Walk,
+    Query, Step, Walk,
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
+use crate::sampling::anchor::AnchorShape;
+use crate::sampling::light_point::finest_cell;
+use crate::sampling::patch::PatchShape;
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
 use glam::{DVec3, Vec3};
@@ -89,6 +92,9 @@ pub struct TestPaths {
     /// `u32::MAX` after a delta one).
     light_point: Vec<DVec3>,
     light_prim: Vec<u32>,
+    /// Per stored path: the light point's cell of the finest subdivision of its triangle
+    /// ([`finest_cell`]), what every generator's light density needs of it.
+    light_cell: Vec<u32>,
     /// Per stored path: whether it ends with a light sample or a connection (with
     /// [`Nee::Every`] after a non-delta last vertex); where it ends at a delta light or the
     /// environment, the light technique's density, the same for every generator
@@ -107,6 +113,12 @@ pub struct TestPaths {
     end_prim: Vec<u32>,
     /// Scattering vertices of path `i` are `offsets[i]..offsets[i + 1]`.
     offsets: Vec<u32>,
+    /// Per stored path: how many of its first vertices whose directions' densities multiply
+    /// (all but the last of a path that ends with two techniques) equal, bit for bit, those
+    /// of the stored path before it. The contributions of one sampled path share their
+    /// vertices up to each one's end, so [`Self::generator_pdfs`] multiplies each vertex's
+    /// density once per sampled path, not once per contribution.
+    shared: Vec<u32>,
     /// Per scattering vertex: position, sampled direction, BRDF density of that direction,
     /// and whether it is a mirror (delta) vertex.
     point: Vec<DVec3>,
@@ -312,6 +324,7 @@ impl TestPaths {
             nee: Vec::new(),
             light_point: Vec::new(),
             light_prim: Vec::new(),
+            light_cell: Vec::new(),
             connected: Vec::new(),
             light_fixed: Vec::new(),
             light_delta: Vec::new(),
@@ -319,6 +332,7 @@ impl TestPaths {
             end_point: Vec::new(),
             end_prim: Vec::new(),
             offsets: vec![0],
+            shared: Vec::new(),
             point: Vec::new(),
             prim: Vec::new(),
             wi: Vec::new(),
@@ -496,6 +510,10 @@ impl TestPaths {
         };
         self.light_point.push(point);
         self.light_prim.push(prim);
+        self.light_cell.push(match prim {
+            u32::MAX => 0,
+            prim => finest_cell(&view.scene.mesh, prim, point),
+        });
         self.connected.push(end.is_some());
         self.light_fixed
             .push(end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi)));
@@ -511,6 +529,35 @@ impl TestPaths {
         self.end_point.push(end.0);
         self.end_prim.push(end.1);
         self.f2_rgb_over_q.push(f2q);
+        let i = self.len() - 1;
+        let shared = match i.checked_sub(1) {
+            Some(before) => {
+                let (a, b) = (self.product_vertices(before), self.product_vertices(i));
+                a.zip(b)
+                    .take_while(|&(a, b)| self.same_vertex(a, b))
+                    .count()
+            }
+            None => 0,
+        };
+        self.shared.push(shared as u32);
+    }
+
+    /// The vertices of stored path `i` whose directions' densities multiply in
+    /// [`Self::generator_pdfs`]: all but the last of a path that ends with two techniques.
+    fn product_vertices(&self, i: usize) -> std::ops::Range<usize> {
+        let (start, end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+        let two_techniques = self.estimator == Nee::Every && self.connected[i];
+        start..end - usize::from(two_techniques)
+    }
+
+    /// Whether vertices `a` and `b` hold the same bits in everything a generator's density
+    /// reads of them.
+    fn same_vertex(&self, a: usize, b: usize) -> bool {
+        let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+        bits(self.point[a]) == bits(self.point[b])
+            && bits(self.wi[a]) == bits(self.wi[b])
+            && self.brdf_pdf[a].to_bits() == self.brdf_pdf[b].to_bits()
+            && self.delta[a] == self.delta[b]
     }
 
     /// Sets the channel weights of `F` and recomputes every `F²/q`.
@@ -612,53 +659,73 @@ impl TestPaths {
 
     /// The density `p_g` of every stored path, into `out` (`out.len() == self.len()`):
     /// the same value as `PathGenerator::pdf_contribution` on the original path.
+    ///
+    /// The product of the direction densities runs along each sampled path once: a stored
+    /// path starts from the running product over the vertices it shares with the one before
+    /// it (`shared`), which is the same product of the same factors in the same order.
     pub fn generator_pdfs(&self, view: &SceneView, g: &PathGenerator, out: &mut [f64]) {
         let scene = view.scene;
         let every = self.estimator == Nee::Every;
-        let direction = |j: usize, k: usize| match &g.steps[k].sampler {
-            DirectionSampler::Brdf => self.brdf_pdf[j],
-            DirectionSampler::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
-            DirectionSampler::Patch(s) => s.pdf(self.point[j], self.wi[j]),
+        let samplers: Vec<StepDensity> = g.steps.iter().map(StepDensity::new).collect();
+        let direction = |j: usize, k: usize| match &samplers[k] {
+            StepDensity::Brdf => self.brdf_pdf[j],
+            StepDensity::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
+            StepDensity::Patch(s) => s.pdf(self.point[j], self.wi[j]),
         };
+        let (area_pmf, light) = (
+            scene.area_light_pmf(),
+            g.light.density(&scene.mesh, &scene.emitters),
+        );
+        let light_pdf = |i: usize| match self.light_fixed[i] {
+            Some(fixed) => fixed,
+            None => {
+                let (prim, cell) = (self.light_prim[i], self.light_cell[i]);
+                area_pmf * light.pdf_area(&scene.emitters, prim, cell)
+            }
+        };
+        // `prefix[t]`: the product over the first `t` vertices of the path last evaluated,
+        // and the number of non-delta ones among them; `absorbed`: its vertex
+        // `prefix.len() − 1` has absorption 1 (its density is 0 from there on).
+        let mut prefix: Vec<(f64, usize)> = vec![(1.0, 0)];
+        let mut absorbed = false;
         for (i, out) in out.iter_mut().enumerate() {
-            let (start, mut end) = (self.offsets[i] as usize, self.offsets[i + 1] as usize);
+            let start = self.offsets[i] as usize;
+            let end = self.product_vertices(i).end;
+            let shared = self.shared[i] as usize;
+            if absorbed && shared >= prefix.len() {
+                *out = 0.0;
+                continue;
+            }
+            prefix.truncate(shared + 1);
+            absorbed = false;
+            let (mut pdf, mut k) = prefix[shared];
+            for j in start + shared..end {
+                if !self.delta[j] {
+                    // With next-event estimation at every vertex a direction follows the
+                    // light point: at `max_bounces` only a path that escaped to the
+                    // environment stores one (`PathGenerator::pdf_techniques`); before it,
+                    // both absorptions agree.
+                    let bounce = j - start + 1;
+                    let a = if every {
+                        g.absorption_after_light(k, bounce, self.max_bounces)
+                    } else {
+                        g.absorption(k, bounce, self.max_bounces)
+                    };
+                    if a >= 1.0 {
+                        absorbed = true;
+                        break;
+                    }
+                    pdf *= (1.0 - a) * direction(j, k);
+                    k += 1;
+                }
+                prefix.push((pdf, k));
+            }
+            if absorbed {
+                *out = 0.0;
+                continue;
+            }
             let len = self.len[i] as usize;
-            // With an emitter point, the last vertex has two techniques (below).
-            let connected = every && self.connected[i];
-            if connected {
-                end -= 1;
-            }
-            let mut pdf = 1.0;
-            let mut k = 0;
-            for j in start..end {
-                if self.delta[j] {
-                    continue;
-                }
-                // With next-event estimation at every vertex a direction follows the light
-                // point: at `max_bounces` only a path that escaped to the environment stores
-                // one (`PathGenerator::pdf_techniques`); before it, both absorptions agree.
-                let bounce = j - start + 1;
-                let a = if every {
-                    g.absorption_after_light(k, bounce, self.max_bounces)
-                } else {
-                    g.absorption(k, bounce, self.max_bounces)
-                };
-                if a >= 1.0 {
-                    pdf = 0.0;
-                    break;
-                }
-                pdf *= (1.0 - a) * direction(j, k);
-                k += 1;
-            }
-            let light_pdf = |g: &PathGenerator| match self.light_fixed[i] {
-                Some(fixed) => fixed,
-                None => {
-                    let (point, prim) = (self.light_point[i], self.light_prim[i]);
-                    scene.area_light_pmf()
-                        * g.light.pdf_area(&scene.mesh, &scene.emitters, point, prim)
-                }
-            };
-            if connected && pdf > 0.0 {
+            if every && self.connected[i] && pdf > 0.0 {
                 // As `PathGenerator::pdf_techniques`: `p_dir + p_light`.
                 let a = g.absorption_after_light(k, len, self.max_bounces);
                 let dir = if a >= 1.0 || self.light_delta[i] {
@@ -666,12 +733,30 @@ impl TestPaths {
                 } else {
                     (1.0 - a) * direction(end, k)
                 };
-                let light = light_pdf(g) * self.area_to_solid_angle[i];
+                let light = light_pdf(i) * self.area_to_solid_angle[i];
                 pdf = pdf * dir + pdf * light;
             } else if self.nee[i] && !every && pdf > 0.0 {
-                pdf *= g.absorption(k, len, self.max_bounces) * light_pdf(g);
+                pdf *= g.absorption(k, len, self.max_bounces) * light_pdf(i);
             }
             *out = pdf;
+        }
+    }
+}
+
+/// A generator step's direction sampler with the constants of its density computed once:
+/// [`TestPaths::generator_pdfs`] evaluates it on every stored path.
+enum StepDensity {
+    Brdf,
+    Anchor(AnchorShape),
+    Patch(PatchShape),
+}
+
+impl StepDensity {
+    fn new(step: &Step) -> Self {
+        match &step.sampler {
+            DirectionSampler::Brdf => Self::Brdf,
+            DirectionSampler::Anchor(s) => Self::Anchor(AnchorShape::new(s)),
+            DirectionSampler::Patch(s) => Self::Patch(PatchShape::new(s)),
         }
     }
 }

@@ -117,13 +117,7 @@ impl AnchorSampler {
 
     /// Solid-angle density of [`sample`](Self::sample) for the unit direction `dir`.
     pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
-        // One sin_cos gives the extents and tan²(θc/2) = h_c / g_c.
-        let (hc, gc) = self.extents();
-        if ConeTest::new(hc / gc).inside(self.anchor - from, dir) {
-            self.alpha / (2.0 * PI * hc)
-        } else {
-            (1.0 - self.alpha) / (2.0 * PI * gc)
-        }
+        AnchorShape::new(self).pdf(from, dir)
     }
 
     /// Whether unit `dir` lies strictly inside the cone: its angle to the axis is below θc,
@@ -139,6 +133,42 @@ impl AnchorSampler {
     pub fn tan2_half(&self) -> f64 {
         let (hc, gc) = self.extents();
         hc / gc
+    }
+}
+
+/// An anchor cone with the constants of its density, for repeated evaluations: the fitness
+/// evaluates each generator's cones on every test path, and [`AnchorSampler::pdf`] would
+/// spend a `sin_cos` on each.
+#[derive(Clone, Copy, Debug)]
+pub struct AnchorShape {
+    anchor: DVec3,
+    test: ConeTest,
+    /// [`AnchorSampler::densities`] `(p1, p2)`.
+    inside: f64,
+    outside: f64,
+}
+
+impl AnchorShape {
+    pub fn new(s: &AnchorSampler) -> Self {
+        // One sin_cos gives the extents, the densities and tan²(θc/2) = h_c / g_c.
+        let extents = s.extents();
+        let (inside, outside) = s.densities_with_extents(extents);
+        Self {
+            anchor: s.anchor,
+            test: ConeTest::new(extents.0 / extents.1),
+            inside,
+            outside,
+        }
+    }
+
+    /// [`AnchorSampler::pdf`].
+    #[inline]
+    pub fn pdf(&self, from: DVec3, dir: DVec3) -> f64 {
+        if self.test.inside(self.anchor - from, dir) {
+            self.inside
+        } else {
+            self.outside
+        }
     }
 }
 

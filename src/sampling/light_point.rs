@@ -97,6 +97,54 @@ impl LightRegion {
             && (mesh.analytic(prim).is_some()
                 || cell_of(barycentric(vertices(mesh, prim), point), self.level) == self.cell)
     }
+
+    /// Whether the point of [`finest_cell`] `finest` on the region's triangle lies in the
+    /// region: the cell of a coarser level is the finest one's leading digits, as
+    /// [`cell_of`] computes them digit by digit, coarsest first.
+    fn holds(&self, finest: u32) -> bool {
+        let coarser = 2 * u32::from(MAX_LEVEL - self.level);
+        (u64::from(finest) >> coarser) as u32 == self.cell
+    }
+}
+
+/// The cell of level [`MAX_LEVEL`] that holds `point` on primitive `prim`, what
+/// [`LightDensity::pdf_area`] needs of a point (0 on an analytic shape, which has none).
+pub fn finest_cell(mesh: &TriangleMesh, prim: u32, point: DVec3) -> u32 {
+    match mesh.analytic(prim) {
+        Some(_) => 0,
+        None => cell_of(barycentric(vertices(mesh, prim), point), MAX_LEVEL),
+    }
+}
+
+/// [`LightPointSampler::pdf_area`] with its constants computed once, for the many points
+/// whose density the fitness evaluates: the region's area and whether it is an analytic
+/// shape, and the two values the density takes.
+#[derive(Clone, Copy, Debug)]
+pub struct LightDensity {
+    region: LightRegion,
+    analytic: bool,
+    /// `(1 − β)/total_area`, and that plus `β/area(region)` (`None` where `β = 0`).
+    everywhere: f64,
+    in_region: Option<f64>,
+}
+
+impl LightDensity {
+    /// [`LightPointSampler::pdf_area`] at a point on primitive `prim` whose [`finest_cell`]
+    /// there is `finest`; the same value.
+    #[inline]
+    pub fn pdf_area(&self, emitters: &Emitters, prim: u32, finest: u32) -> f64 {
+        if !emitters.contains(prim) {
+            return 0.0;
+        }
+        match self.in_region {
+            Some(density)
+                if prim == self.region.prim && (self.analytic || self.region.holds(finest)) =>
+            {
+                density
+            }
+            _ => self.everywhere,
+        }
+    }
 }
 
 /// Mass `beta` uniformly on `region`, `1 − beta` uniformly over all emitter area.
@@ -160,6 +208,17 @@ impl LightPointSampler {
                 None => uniform_in_triangle(vertices(mesh, prim), u[1], u[2]),
             };
             (point, prim)
+        }
+    }
+
+    /// The constants of [`Self::pdf_area`], for evaluating it at many points.
+    pub fn density(&self, mesh: &TriangleMesh, emitters: &Emitters) -> LightDensity {
+        let everywhere = (1.0 - self.beta) / emitters.total_area;
+        LightDensity {
+            region: self.region,
+            analytic: mesh.analytic(self.region.prim).is_some(),
+            everywhere,
+            in_region: (self.beta > 0.0).then(|| everywhere + self.beta / self.region.area(mesh)),
         }
     }
 
@@ -284,6 +343,39 @@ mod tests {
                 }
             }
             assert!((area - 0.75f64.sqrt()).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_finest_cell_names_the_cell_of_every_level() {
+        for i in 0..500 {
+            // Points spread over the triangle, some on the cells' shared edges.
+            let (a, b) = ((i as f64 * 0.618_034) % 1.0, (i as f64 * 0.414_214) % 1.0);
+            let (a, b) = if i % 7 == 0 {
+                (0.25 * (i % 4) as f64, 0.5)
+            } else {
+                (a, b)
+            };
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
+            let w = DVec3::new(1.0 - a - b, a, b);
+            let finest = cell_of(w, MAX_LEVEL);
+            for level in 0..=MAX_LEVEL {
+                let region = |cell| LightRegion {
+                    prim: 0,
+                    level,
+                    cell,
+                };
+                let cell = cell_of(w, level);
+                assert!(region(cell).holds(finest), "{w} at level {level}");
+                // Another cell of the level does not hold it: the check can fail.
+                if level > 0 {
+                    assert!(!region(cell ^ 1).holds(finest), "{w} at level {level}");
+                }
+            }
         }
     }
 
