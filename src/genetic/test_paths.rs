@@ -13,12 +13,13 @@
 //! per-vertex arrays indexed through `offsets`. The BRDF density of each scattering vertex is
 //! the same for every generator that uses a BRDF sampler there, so it is computed once here.
 //!
-//! Paths are traced in packets of 16 ([`TestPaths::sample`]): each path is a
-//! [`crate::path::generator::Walk`] with its own random stream, and the walks of a packet
-//! advance in lockstep, their pending rays traced together (one packet query: Embree's
-//! `rtcIntersect16`/`rtcOccluded16`, or the `8` variants twice on a CPU without AVX-512; a
-//! loop on obvhs) when there are at least [`MIN_INCOHERENT_PACKET`] of them, one by one
-//! otherwise. A path's result does not depend on how its rays are traced, so the store
+//! Paths are traced in waves of up to [`WAVE_SIZE`] ([`TestPaths::sample`]): each path is a
+//! [`crate::path::generator::Walk`] with its own random stream, and the walks of a wave
+//! advance in lockstep, their pending rays regrouped at every step into packets of 16 (one
+//! packet query: Embree's `rtcIntersect16`/`rtcOccluded16`, or the `8` variants twice on a
+//! CPU without AVX-512; a loop on obvhs), a last partial one going as a packet when it holds
+//! at least [`MIN_INCOHERENT_PACKET`] rays, one by one otherwise. A path's result does not
+//! depend on how its rays are traced, so the store
 //! equals the one traced ray by ray ([`TestPaths::sample_single`]), but for a camera ray
 //! through an edge two triangles share at the same `t`, which the coherent camera packets
 //! may answer with the other triangle (a set of measure zero).
@@ -36,7 +37,7 @@ use crate::sampling::light_point::finest_cell;
 use crate::sampling::patch::PatchShape;
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 /// Test paths of one pixel.
 /// A camera ray through a point uniform over the square of `side` pixels centred on pixel
@@ -61,9 +62,8 @@ pub fn footprint_point(
 ) -> (f32, f32) {
     // The largest f32 below `extent` (`f32::next_down`, past the MSRV): `extent ≥ 1`.
     let below = |extent: u32| f32::from_bits((extent as f32).to_bits() - 1);
-    let at = |p: u32, extent: u32, u: f32| {
-        (p as f32 + 0.5 + (u - 0.5) * side).clamp(0.0, below(extent))
-    };
+    let at =
+        |p: u32, extent: u32, u: f32| (p as f32 + 0.5 + (u - 0.5) * side).clamp(0.0, below(extent));
     let px = at(x, width, uniform(rng));
     (px, at(y, height, uniform(rng)))
 }
@@ -159,46 +159,46 @@ impl Default for Lane {
     }
 }
 
-/// After the camera rays, a step's pending rays go as one packet only if there are at least
-/// this many; fewer go as single rays. The paths' rays are incoherent past the camera, where
-/// a packet query costs about as much as a full one however few lanes it holds (cbox, one
-/// thread: 16-ray packets 6.79 Mray/s, single rays 6.42), and absorption thins the packets
-/// step by step. `genpath bench`, test paths in packets against single rays, two runs each,
-/// with Embree's 16-ray calls: with every step in packets 0.72–0.82× (cbox) and 0.74–0.90×
-/// (fig5); with this threshold 0.99–1.10× and 0.98–1.06×; with 4, 0.92–0.94× and
-/// 0.82–0.91×; with 16, 1.02–1.03× and 0.89–1.00×. With the 8-ray calls of an AVX2 CPU
-/// (three runs each, passes interleaved) no threshold stands out: every step in packets
-/// 0.92–0.99× and 0.93×, 4 0.94–1.02× and 0.98×, 8 0.90–0.94× and 0.92–0.96×, 12
-/// 0.94–1.02× and 0.93–0.98×.
+/// After the camera rays, the last, partial packet of a step's pending rays goes as one
+/// packet only if it holds at least this many; fewer go as single rays: past the camera the
+/// rays are incoherent, and a packet query costs about as much as a full one however few
+/// lanes it holds (cbox, one thread: 16-ray packets 6.79 Mray/s, single rays 6.42).
 pub const MIN_INCOHERENT_PACKET: usize = 12;
 
-/// Up to 16 paths traced together: their lanes and the buffers of their packet queries,
-/// reused from packet to packet.
-struct Packet {
-    lanes: [Lane; PACKET_SIZE],
+/// Paths a [`Wave`] advances together at most: the pending rays of this many walks are
+/// regrouped after each step into full packets of 16, so that absorption, which thins a
+/// lone packet of 16 step by step, leaves the packets full.
+pub const WAVE_SIZE: usize = 64;
+
+/// Up to [`WAVE_SIZE`] paths traced together: their lanes and the buffers of their packet
+/// queries, reused from wave to wave.
+struct Wave {
+    lanes: Vec<Lane>,
     /// Count of lanes in use (the first ones).
     n: usize,
-    rays: [Ray; PACKET_SIZE],
-    points: [Option<SurfacePoint>; PACKET_SIZE],
-    free: [bool; PACKET_SIZE],
-    /// The lane of each ray of the packet query.
-    owner: [usize; PACKET_SIZE],
+    /// The pending rays of one kind, and the lane of each.
+    rays: Vec<Ray>,
+    owner: Vec<usize>,
+    points: Vec<Option<SurfacePoint>>,
+    free: Vec<bool>,
 }
 
-impl Packet {
+impl Wave {
     fn new() -> Self {
         Self {
-            lanes: std::array::from_fn(|_| Lane::default()),
+            lanes: std::iter::repeat_with(Lane::default)
+                .take(WAVE_SIZE)
+                .collect(),
             n: 0,
-            rays: [Ray::new(Vec3::ZERO, Vec3::ZERO, 0.0, 0.0); PACKET_SIZE],
-            points: [None; PACKET_SIZE],
-            free: [false; PACKET_SIZE],
-            owner: [0; PACKET_SIZE],
+            rays: Vec::with_capacity(WAVE_SIZE),
+            owner: Vec::with_capacity(WAVE_SIZE),
+            points: vec![None; WAVE_SIZE],
+            free: vec![false; WAVE_SIZE],
         }
     }
 
-    /// Starts paths `js` (at most 16) through `pixel`: their camera rays as one packet, then
-    /// each walk up to its first query.
+    /// Starts paths `js` (at most [`WAVE_SIZE`]) through `pixel`: their camera rays in
+    /// packets of 16, then each walk up to its first query.
     #[allow(clippy::too_many_arguments)]
     fn start(
         &mut self,
@@ -213,11 +213,13 @@ impl Packet {
         self.n = js.len();
         let index = pixel_index(view, pixel);
         let lanes = &mut self.lanes[..self.n];
-        for ((lane, ray), j) in lanes.iter_mut().zip(&mut self.rays).zip(js) {
+        self.rays.clear();
+        for (lane, j) in lanes.iter_mut().zip(js) {
             lane.rng = sample_rng(seed, index, j as u64);
-            *ray = footprint_ray(&view.scene.camera, pixel, side, &mut lane.rng);
+            let ray = footprint_ray(&view.scene.camera, pixel, side, &mut lane.rng);
+            self.rays.push(ray);
         }
-        let (rays, points) = (&self.rays[..self.n], &mut self.points[..self.n]);
+        let (rays, points) = (&self.rays[..], &mut self.points[..self.n]);
         if view.draws_at_hits() {
             // Each lane passes masks and chooses plastics' lobes with its own random numbers.
             for ((lane, ray), point) in lanes.iter_mut().zip(rays).zip(points.iter_mut()) {
@@ -225,7 +227,9 @@ impl Packet {
             }
         } else {
             // One pixel's camera rays: the coherent case packets are made for.
-            view.trace_packet(rays, points, Coherence::Coherent, counts);
+            for (rays, points) in rays.chunks(PACKET_SIZE).zip(points.chunks_mut(PACKET_SIZE)) {
+                view.trace_packet(rays, points, Coherence::Coherent, counts);
+            }
         }
         for ((lane, ray), x1) in lanes.iter_mut().zip(rays).zip(points.iter()) {
             lane.contributions.clear();
@@ -244,37 +248,42 @@ impl Packet {
     /// Collects the pending rays of one kind into `rays`, their lanes into `owner`; returns
     /// how many.
     fn gather(&mut self, shadow: bool) -> usize {
-        let mut count = 0;
+        self.rays.clear();
+        self.owner.clear();
         for (i, lane) in self.lanes[..self.n].iter().enumerate() {
             let ray = match lane.query {
                 Some(Query::Closest(ray)) if !shadow => ray,
                 Some(Query::Shadow(ray)) if shadow => ray,
                 _ => continue,
             };
-            (self.rays[count], self.owner[count]) = (ray, i);
-            count += 1;
+            self.rays.push(ray);
+            self.owner.push(i);
         }
-        count
+        self.rays.len()
     }
 
-    /// Traces the pending closest-hit rays as one packet and hands each walk its hit;
+    /// Traces the pending closest-hit rays in packets of 16 and hands each walk its hit;
     /// returns how many rays.
     fn trace_closest(&mut self, view: &SceneView, q: &Mixture, counts: &mut RayCounts) -> usize {
         let count = self.gather(false);
-        let (rays, points) = (&self.rays[..count], &mut self.points[..count]);
+        let (rays, points) = (&self.rays[..], &mut self.points[..count]);
         if view.draws_at_hits() {
             // Each lane passes masks and chooses plastics' lobes with its own random numbers.
             for ((ray, point), &i) in rays.iter().zip(points.iter_mut()).zip(&self.owner) {
                 *point = view.trace_through(ray, &mut self.lanes[i].rng, counts);
             }
-        } else if count >= MIN_INCOHERENT_PACKET {
-            view.trace_packet(rays, points, Coherence::Incoherent, counts);
         } else {
-            for (ray, point) in rays.iter().zip(points.iter_mut()) {
-                *point = view.trace(ray, counts);
+            for (rays, points) in rays.chunks(PACKET_SIZE).zip(points.chunks_mut(PACKET_SIZE)) {
+                if rays.len() >= MIN_INCOHERENT_PACKET {
+                    view.trace_packet(rays, points, Coherence::Incoherent, counts);
+                } else {
+                    for (ray, point) in rays.iter().zip(points.iter_mut()) {
+                        *point = view.trace(ray, counts);
+                    }
+                }
             }
         }
-        for (&i, y) in self.owner[..count].iter().zip(&self.points) {
+        for (&i, y) in self.owner.iter().zip(&self.points) {
             let lane = &mut self.lanes[i];
             let g = &q.generators[lane.generator];
             let (rng, path) = (&mut lane.rng, &mut lane.path);
@@ -285,28 +294,49 @@ impl Packet {
         count
     }
 
-    /// Traces the pending shadow rays as one packet and hands each walk its answer; returns
-    /// how many.
+    /// Traces the pending shadow rays in packets of 16 and hands each walk its answer;
+    /// returns how many.
     fn trace_shadows(&mut self, view: &SceneView, counts: &mut RayCounts) -> usize {
         let count = self.gather(true);
+        let (rays, free) = (&self.rays[..], &mut self.free[..count]);
         if view.has_masks() {
-            let (rays, free) = (&self.rays[..count], &mut self.free[..count]);
             for ((ray, free), &i) in rays.iter().zip(free.iter_mut()).zip(&self.owner) {
                 *free = view.unblocked_through(ray, &mut self.lanes[i].rng, counts);
             }
-        } else if count >= MIN_INCOHERENT_PACKET {
-            view.unblocked_packet(&self.rays[..count], &mut self.free[..count], counts);
         } else {
-            for (ray, free) in self.rays[..count].iter().zip(&mut self.free) {
-                *free = view.unblocked(ray, counts);
+            for (rays, free) in rays.chunks(PACKET_SIZE).zip(free.chunks_mut(PACKET_SIZE)) {
+                if rays.len() >= MIN_INCOHERENT_PACKET {
+                    view.unblocked_packet(rays, free, counts);
+                } else {
+                    for (ray, free) in rays.iter().zip(free.iter_mut()) {
+                        *free = view.unblocked(ray, counts);
+                    }
+                }
             }
         }
-        for (&i, &free) in self.owner[..count].iter().zip(&self.free) {
+        for (&i, &free) in self.owner.iter().zip(&self.free) {
             let lane = &mut self.lanes[i];
             lane.query = lane.walk.shadow(free, &mut lane.contributions);
         }
         count
     }
+}
+
+/// How many of the `left` paths still to sample the next wave takes: [`WAVE_SIZE`], or
+/// where the light-carrying paths sampled so far say that fewer, in whole packets of 16,
+/// reach `max_light`, that many, so that little is traced past where sampling stops.
+fn wave_size(paths: &TestPaths, left: usize, max_light: usize) -> usize {
+    let stored = paths.len();
+    let wanted = if stored == 0 || max_light == usize::MAX {
+        WAVE_SIZE
+    } else {
+        // Paths needed at the rate seen so far (`stored` per `sampled`), rounded up.
+        let needed = max_light
+            .saturating_sub(stored)
+            .saturating_mul(paths.sampled);
+        needed.div_ceil(stored).next_multiple_of(PACKET_SIZE)
+    };
+    wanted.clamp(PACKET_SIZE, WAVE_SIZE).min(left)
 }
 
 impl TestPaths {
@@ -343,8 +373,8 @@ impl TestPaths {
 
     /// Samples `m` paths from `q` through pixel `(x, y)` (box filter: a uniformly jittered
     /// camera ray), path `j` with the random stream `sample_rng(seed, pixel, j)`, traced in
-    /// packets of 16 paths: their camera rays, then at each step the closest-hit rays of the
-    /// paths still going and the shadow rays of those that absorbed. The result is
+    /// waves of paths: their camera rays, then at each step the closest-hit rays of the
+    /// paths still going and their shadow rays, each kind in packets of 16. The result is
     /// [`TestPaths::sample_single`]'s.
     pub fn sample(
         view: &SceneView,
@@ -357,8 +387,8 @@ impl TestPaths {
         Self::sample_until(view, q, (x, y), (m, usize::MAX), max_bounces, seed)
     }
 
-    /// [`TestPaths::sample`], stopping early, after the packet during which the stored
-    /// light-carrying paths reach `max_light`: where most paths carry light, a few thousand
+    /// [`TestPaths::sample`], stopping early, after the 16 paths (`0..16`, `16..32`, …)
+    /// during which the stored light-carrying paths reach `max_light`: where most paths carry light, a few thousand
     /// of them already pin eq. 10 down, and each costs the genetic algorithm `S + 1`
     /// multiply-adds per individual. `sampled` counts the paths actually sampled.
     pub fn sample_until(
@@ -385,32 +415,31 @@ impl TestPaths {
     ) -> (Self, RayCounts) {
         let mut paths = Self::new(max_bounces, q.nee);
         let mut counts = RayCounts::default();
-        let mut packet = Packet::new();
-        for first in (0..m).step_by(PACKET_SIZE) {
-            let n = PACKET_SIZE.min(m - first);
-            packet.start(
-                view,
-                q,
-                ((x, y), side),
-                seed,
-                first..first + n,
-                max_bounces,
-                &mut counts,
-            );
+        let mut wave = Wave::new();
+        let mut first = 0;
+        'waves: while first < m {
+            let n = wave_size(&paths, m - first, max_light);
+            let js = first..first + n;
+            wave.start(view, q, ((x, y), side), seed, js, max_bounces, &mut counts);
             // Until every walk is done. Shadow rays are gathered after the closest-hit
             // answers, so that those just issued go along.
             loop {
-                let closest = packet.trace_closest(view, q, &mut counts);
-                if closest + packet.trace_shadows(view, &mut counts) == 0 {
+                let closest = wave.trace_closest(view, q, &mut counts);
+                if closest + wave.trace_shadows(view, &mut counts) == 0 {
                     break;
                 }
             }
-            for lane in &packet.lanes[..n] {
-                paths.store(view, q, &lane.path, &lane.contributions);
+            // Stored in order, and checked packet by packet of 16 paths: where sampling
+            // stops does not depend on the size of the waves.
+            for packet in wave.lanes[..n].chunks(PACKET_SIZE) {
+                for lane in packet {
+                    paths.store(view, q, &lane.path, &lane.contributions);
+                }
+                if paths.len() >= max_light {
+                    break 'waves;
+                }
             }
-            if paths.len() >= max_light {
-                break;
-            }
+            first += n;
         }
         paths.weigh(ChannelWeights::relative(paths.value()));
         (paths, counts)

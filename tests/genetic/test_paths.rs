@@ -157,6 +157,42 @@ fn packet_traced_test_paths_equal_single_ray_ones() {
     }
 }
 
+/// [`TestPaths::sample_until`] stops after the first 16 paths (`0..16`, `16..32`, …) during
+/// which the stored light-carrying paths reach the limit, whatever the size of the waves it
+/// traces: its store equals the one of that many paths traced ray by ray, which 16 fewer
+/// paths leave short of the limit.
+#[test]
+fn test_paths_stop_after_the_packet_that_reaches_the_limit() {
+    let (scene, accel) = fig5_on(AccelKind::default_available());
+    let view = SceneView::new(&scene, accel.as_ref());
+    let q = srt_mixture(&scene);
+    for max_light in [1, 37, 100, 333] {
+        let (until, _) = TestPaths::sample_until(
+            &view,
+            &q,
+            FLOOR_PIXEL,
+            (PACKET_M, max_light),
+            MAX_BOUNCES,
+            13,
+        );
+        let m = until.sampled;
+        assert!(
+            until.len() >= max_light,
+            "{max_light}: stopped short at {m}"
+        );
+        assert_eq!(m % PACKET_SIZE, 0, "{max_light}: {m} paths");
+        let (single, _) = TestPaths::sample_single(&view, &q, FLOOR_PIXEL, m, MAX_BOUNCES, 13);
+        assert!(same_paths(&single, &until), "{max_light}: {m} paths");
+        let (fewer, _) =
+            TestPaths::sample_single(&view, &q, FLOOR_PIXEL, m - PACKET_SIZE, MAX_BOUNCES, 13);
+        assert!(
+            fewer.len() < max_light,
+            "{max_light}: went on past {}",
+            fewer.sampled
+        );
+    }
+}
+
 /// A back-end whose closest-hit packet queries turn the ray in lane 3 slightly: a packet
 /// driver that mixes up one lane's ray, which the comparison of stores must catch.
 struct NudgedLane<'a>(&'a dyn Accel);
