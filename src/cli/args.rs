@@ -208,9 +208,9 @@ pub struct PlanArgs {
     pub guide_steps: u32,
     /// A GA pixel's test paths start in the square of this many grid spacings (--ga-grid)
     /// centred on it: the pixels its mixture renders, not that pixel alone (0: the pixel,
-    /// the paper's).
-    #[arg(long, default_value_t = PlanConfig::default().footprint, value_name = "GRID_SPACINGS")]
-    pub footprint: f64,
+    /// the paper's). Default: 1 for ga, 0 for ga-pt
+    #[arg(long, value_name = "GRID_SPACINGS")]
+    pub footprint: Option<f64>,
 }
 
 /// The gate, table `[gate]`.

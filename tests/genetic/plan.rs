@@ -151,14 +151,14 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
 fn training_passes_keep_the_plans_guides_only_where_they_help() {
     let (scene, accel) = fig5_sized(AccelKind::default_available(), 96);
     let view = SceneView::new(&scene, accel.as_ref());
-    // Test paths at the GA pixels themselves (footprint 0): the plan this test was made
-    // with, whose first trial is clear-cut (with the default footprint of one grid cell
-    // the guides win too, ratio 0.34, but at the third pass).
+    // Test paths at the GA pixels themselves (footprint 0, `ga-pt`'s default): the plan
+    // this test was made with, whose first trial is clear-cut (with a footprint of one grid
+    // cell the guides win too, ratio 0.34, but at the third pass).
     let plan = guide_plan(
         &view,
         PlanConfig {
             grid: 12,
-            footprint: 0.0,
+            footprint: Some(0.0),
             ..PlanConfig::default()
         },
     );

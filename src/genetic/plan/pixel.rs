@@ -157,7 +157,12 @@ pub(super) fn run_pixel(
     let (paths, mut counts) = TestPaths::sample_around(
         view,
         srt,
-        ((x, y), context.config.footprint_pixels()),
+        (
+            (x, y),
+            context
+                .config
+                .footprint_pixels(context.plan_for == PlanFor::Mixture),
+        ),
         (ga.test_paths, ga.max_light_paths),
         max_bounces,
         derived_seed(seed, Stream::TestPaths.tag()),
@@ -234,7 +239,12 @@ fn held_out_paths<'p>(
     let (placement, c) = TestPaths::sample_around(
         context.view,
         context.srt,
-        (at, context.config.footprint_pixels()),
+        (
+            at,
+            context
+                .config
+                .footprint_pixels(context.plan_for == PlanFor::Mixture),
+        ),
         (ga.test_paths, light),
         context.max_bounces,
         derived_seed(context.seed, Stream::Placement.tag()),
