@@ -127,9 +127,12 @@ pub struct GenePool<'a> {
     area_cdf: Vec<f64>,
     next_id: u64,
     /// Light-carrying test paths that anchors may be drawn from, with the running sum of
-    /// their `sqrt(F²/q)`, and the share of anchors drawn from them (`GaConfig::data_anchors`).
+    /// their `F²/q` (or its root), and the share of anchors drawn from them (`GaConfig::data_anchors`).
     paths: Option<(&'a TestPaths, Vec<f64>)>,
     data_anchors: f64,
+    /// Paths picked ∝ `sqrt(F²/q)` rather than `F²/q` (with held-out placement,
+    /// `GaConfig::held_out`; see [`Self::pick_path`]).
+    root_picks: bool,
     /// Per step, where the light-carrying test paths' directions arrived; and the share of
     /// data-driven samplers that are patches (`GaConfig::patches`).
     arrivals: Vec<Vec<Arrival>>,
@@ -173,6 +176,7 @@ impl<'a> GenePool<'a> {
             next_id: 1,
             paths: None,
             data_anchors: config.data_anchors,
+            root_picks: config.held_out == Some(true),
             arrivals: Vec::new(),
             patches: config.patches,
             fixed_absorption: config.directions_only.then_some(config.srt_absorption),
@@ -185,8 +189,8 @@ impl<'a> GenePool<'a> {
         let cdf = paths
             .f2_over_q
             .iter()
-            .map(|f| {
-                total += f.sqrt();
+            .map(|&f| {
+                total += if self.root_picks { f.sqrt() } else { f };
                 total
             })
             .collect();
@@ -286,7 +290,7 @@ impl<'a> GenePool<'a> {
     }
 
     /// A data-driven patch for step `k` about the arrival of a light-carrying test path
-    /// picked ∝ its `sqrt(F²/q)` ([`Self::data_patch`]); `None` without test paths.
+    /// picked ∝ its `F²/q` or its root ([`Self::pick_path`]); `None` without test paths.
     fn random_patch(&self, k: usize, rng: &mut crate::sampling::Rng) -> Option<PatchSampler> {
         let (paths, i) = self.pick_path(rng)?;
         let (point, prim) = paths.step_target(i, k)?;
@@ -303,10 +307,12 @@ impl<'a> GenePool<'a> {
         (b - a).cross(c - a).try_normalize()
     }
 
-    /// A light-carrying test path picked with probability ∝ its `sqrt(F²/q)` (`None`
-    /// without). Not ∝ `F²/q`: that sum is heavy-tailed on glossy paths, and a few paths
-    /// then take most of the picks (glossy, 64 spp, `ga --no-gate` with held-out placement,
-    /// seeds 401–403: relMSE 1.64 / 1.98 / 1.92e-2 ∝ `F²/q`, 1.57 / 1.77 / 1.59e-2 ∝ its root).
+    /// A light-carrying test path picked with probability ∝ its `F²/q`, or with held-out
+    /// placement ∝ its root (`None` without paths). `F²/q` is heavy-tailed on glossy paths,
+    /// and a few paths then take most of the picks (glossy, 64 spp, `ga --no-gate` with
+    /// held-out placement, seeds 401–403: relMSE 1.64 / 1.98 / 1.92e-2 ∝ `F²/q`, 1.57 / 1.77 /
+    /// 1.59e-2 ∝ its root); for `ga-pt`'s guides, which place from the paths they are
+    /// measured on, the root let fig5's pilot fail at 64².
     fn pick_path(&self, rng: &mut crate::sampling::Rng) -> Option<(&'a TestPaths, usize)> {
         let (paths, cdf) = self.paths.as_ref()?;
         let total = cdf.last().copied().unwrap_or(0.0);
@@ -320,7 +326,7 @@ impl<'a> GenePool<'a> {
         ))
     }
 
-    /// A generator that follows one light-carrying test path (picked ∝ `sqrt(F²/q)`): each step
+    /// A generator that follows one light-carrying test path (picked as [`Self::pick_path`] does): each step
     /// aims a cone at the point the path's direction reached there (half-angle in
     /// `FOLLOW_THETA_C`, probability in `FOLLOW_ALPHA`), BRDF sampling past the path's end.
     /// `None` without test paths.
@@ -352,7 +358,7 @@ impl<'a> GenePool<'a> {
 
     /// An anchor point for step `k` and its triangle. With probability `data_anchors` (and
     /// test paths), where a light-carrying test path's `k`-th direction arrived, the path
-    /// picked with probability ∝ its `sqrt(F²/q)` (beyond the paper: the light's actual routes);
+    /// picked as [`Self::pick_path`] does (beyond the paper: the light's actual routes);
     /// otherwise, or where that path has no `k`-th step, uniform by area on all surfaces.
     pub fn random_anchor(&self, k: usize, rng: &mut crate::sampling::Rng) -> (DVec3, u32) {
         if self.paths.is_some() && rng.random::<f64>() < self.data_anchors {

@@ -188,7 +188,7 @@ pub(super) fn run_pixel(
             best: None,
         }
     } else {
-        let placement = held_out_paths(context, (x, y), &paths, &mut counts);
+        let placement = held_out_paths(context, ga, (x, y), &paths, &mut counts);
         let evolution = evolve_from(ga, (&placement, &paths), view, &mut rng, &run.seeds);
         best_or_srt(view, ga, &paths, evolution, (srt, v_srt))
     };
@@ -226,13 +226,12 @@ pub(super) fn run_pixel(
 /// ([`PLACEMENT_SHARE`]), else `paths` itself.
 fn held_out_paths<'p>(
     context: &PixelContext,
+    ga: &GaConfig,
     at: (u32, u32),
     paths: &'p TestPaths,
     counts: &mut RayCounts,
 ) -> std::borrow::Cow<'p, TestPaths> {
-    let ga = context.ga;
-    let held_out = ga.held_out.unwrap_or(context.plan_for == PlanFor::Mixture);
-    if !held_out || ga.data_anchors == 0.0 {
+    if ga.held_out != Some(true) || ga.data_anchors == 0.0 {
         return std::borrow::Cow::Borrowed(paths);
     }
     let light = (ga.max_light_paths / PLACEMENT_SHARE).max(1);
@@ -268,6 +267,7 @@ fn pixel_ga_config(context: &PixelContext, paths: &TestPaths, generations: usize
             (PlanFor::Mixture, needed) => needed,
         },
         generations,
+        held_out: Some(ga.held_out.unwrap_or(plan_for == PlanFor::Mixture)),
         ..ga.clone()
     }
 }
