@@ -273,15 +273,10 @@ impl Wave {
                 *point = view.trace_through(ray, &mut self.lanes[i].rng, counts);
             }
         } else {
-            for (rays, points) in rays.chunks(PACKET_SIZE).zip(points.chunks_mut(PACKET_SIZE)) {
-                if rays.len() >= MIN_INCOHERENT_PACKET {
-                    view.trace_packet(rays, points, Coherence::Incoherent, counts);
-                } else {
-                    for (ray, point) in rays.iter().zip(points.iter_mut()) {
-                        *point = view.trace(ray, counts);
-                    }
-                }
-            }
+            let packet = |r: &[Ray], p: &mut [_], c: &mut RayCounts| {
+                view.trace_packet(r, p, Coherence::Incoherent, c);
+            };
+            in_packets(rays, points, counts, packet, |r, c| view.trace(r, c));
         }
         for (&i, y) in self.owner.iter().zip(&self.points) {
             let lane = &mut self.lanes[i];
@@ -304,21 +299,37 @@ impl Wave {
                 *free = view.unblocked_through(ray, &mut self.lanes[i].rng, counts);
             }
         } else {
-            for (rays, free) in rays.chunks(PACKET_SIZE).zip(free.chunks_mut(PACKET_SIZE)) {
-                if rays.len() >= MIN_INCOHERENT_PACKET {
-                    view.unblocked_packet(rays, free, counts);
-                } else {
-                    for (ray, free) in rays.iter().zip(free.iter_mut()) {
-                        *free = view.unblocked(ray, counts);
-                    }
-                }
-            }
+            let packet = |r: &[Ray], f: &mut [bool], c: &mut RayCounts| {
+                view.unblocked_packet(r, f, c);
+            };
+            in_packets(rays, free, counts, packet, |r, c| view.unblocked(r, c));
         }
         for (&i, &free) in self.owner.iter().zip(&self.free) {
             let lane = &mut self.lanes[i];
             lane.query = lane.walk.shadow(free, &mut lane.contributions);
         }
         count
+    }
+}
+
+/// Answers `rays` into `out` in packets of [`PACKET_SIZE`]: one packet query (`packet`) per
+/// packet of at least [`MIN_INCOHERENT_PACKET`] rays (every packet but perhaps the last),
+/// one ray at a time (`single`) below that.
+fn in_packets<T>(
+    rays: &[Ray],
+    out: &mut [T],
+    counts: &mut RayCounts,
+    packet: impl Fn(&[Ray], &mut [T], &mut RayCounts),
+    single: impl Fn(&Ray, &mut RayCounts) -> T,
+) {
+    for (rays, out) in rays.chunks(PACKET_SIZE).zip(out.chunks_mut(PACKET_SIZE)) {
+        if rays.len() >= MIN_INCOHERENT_PACKET {
+            packet(rays, out, counts);
+        } else {
+            for (ray, out) in rays.iter().zip(out.iter_mut()) {
+                *out = single(ray, counts);
+            }
+        }
     }
 }
 

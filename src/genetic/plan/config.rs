@@ -3,6 +3,7 @@
 //! spatial guide's `integrators::settings::SpatialConfig`).
 
 use super::super::GaConfigError;
+use super::PlanFor;
 
 /// Where the genetic algorithm runs and how its results spread over the image.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -68,12 +69,13 @@ impl Default for PlanConfig {
 }
 
 impl PlanConfig {
-    /// The side, in pixels, of the square a GA pixel's test paths start in, for a plan for
+    /// The side, in pixels, of the square a GA pixel's test paths start in, in a plan for
     /// the mixture estimator (`ga`) or for guides (`ga-pt`).
-    pub fn footprint_pixels(&self, for_mixture: bool) -> f32 {
-        let share = self
-            .footprint
-            .unwrap_or(if for_mixture { 1.0 } else { 0.0 });
+    pub fn footprint_pixels(&self, plan_for: PlanFor) -> f32 {
+        let share = self.footprint.unwrap_or(match plan_for {
+            PlanFor::Mixture => 1.0,
+            PlanFor::Guide => 0.0,
+        });
         (share * f64::from(self.grid)).max(1.0) as f32
     }
 

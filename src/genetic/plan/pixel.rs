@@ -154,15 +154,11 @@ pub(super) fn run_pixel(
         ..
     } = context;
     let t0 = Instant::now();
+    let footprint = context.config.footprint_pixels(context.plan_for);
     let (paths, mut counts) = TestPaths::sample_around(
         view,
         srt,
-        (
-            (x, y),
-            context
-                .config
-                .footprint_pixels(context.plan_for == PlanFor::Mixture),
-        ),
+        ((x, y), footprint),
         (ga.test_paths, ga.max_light_paths),
         max_bounces,
         derived_seed(seed, Stream::TestPaths.tag()),
@@ -188,7 +184,8 @@ pub(super) fn run_pixel(
             best: None,
         }
     } else {
-        let placement = held_out_paths(context, ga, (x, y), &paths, &mut counts);
+        let at = ((x, y), footprint);
+        let placement = held_out_paths(context, ga, at, &paths, &mut counts);
         let evolution = evolve_from(ga, (&placement, &paths), view, &mut rng, &run.seeds);
         best_or_srt(view, ga, &paths, evolution, (srt, v_srt))
     };
@@ -222,12 +219,12 @@ pub(super) fn run_pixel(
 
 /// The test paths that place the data-driven anchors and patches: with
 /// `GaConfig::held_out` (and data-driven samplers to place) a second set, sampled as
-/// `paths` was from its own random stream until a quarter as many carry light
+/// `paths` was (over the same footprint, `at`) from its own random stream until a quarter as many carry light
 /// ([`PLACEMENT_SHARE`]), else `paths` itself.
 fn held_out_paths<'p>(
     context: &PixelContext,
     ga: &GaConfig,
-    at: (u32, u32),
+    at: ((u32, u32), f32),
     paths: &'p TestPaths,
     counts: &mut RayCounts,
 ) -> std::borrow::Cow<'p, TestPaths> {
@@ -238,12 +235,7 @@ fn held_out_paths<'p>(
     let (placement, c) = TestPaths::sample_around(
         context.view,
         context.srt,
-        (
-            at,
-            context
-                .config
-                .footprint_pixels(context.plan_for == PlanFor::Mixture),
-        ),
+        at,
         (ga.test_paths, light),
         context.max_bounces,
         derived_seed(context.seed, Stream::Placement.tag()),
