@@ -5,7 +5,9 @@
 //! computed from their sample variances; and the same comparison must reject a mixture whose
 //! one component's density is off by 10 %, an `srt` and a `ga` whose light technique's
 //! densities were left out of the balance heuristic, and a `ga` render whose interpolation
-//! weights were left unnormalised. On `spheres.xml` (an emitting sphere, which `pt` samples
+//! weights were left unnormalised. On cbox, whose quiet grid cells lend `srt` to the
+//! interpolation (fallback points), `ga` agrees with `pt` and its unnormalised weights are
+//! rejected. On `spheres.xml` (an emitting sphere, which `pt` samples
 //! by its visible cone and the mixtures' light points by area, a disk light, glass and
 //! diffuse spheres) the same agreement, and an `srt` without its light technique's density
 //! rejected. On a smooth-shaded scene (`scenes/mitsuba/smooth.xml`), the methods agree with
@@ -512,6 +514,38 @@ fn fig5_rejects_unnormalised_interpolation_weights() {
     };
     let wrong = render_with("fig5", which, 5, SPP / 8, 23);
     assert_rejected("fig5: ga with unnormalised interpolation", &wrong, &pt);
+}
+
+/// On cbox most grid cells are quiet under the baseline's `srt` samples: without the gate
+/// their pixels are fallback points, which lend `srt` to the interpolation beside the GA
+/// pixels' mixtures. `ga` so agrees with `pt`, and the same plan with unnormalised
+/// interpolation weights (the fallback's among them) is rejected.
+#[test]
+fn cbox_ga_with_srt_fallback_points_agrees_and_unnormalised_weights_do_not() {
+    let mut scene = Scene::load(&scene_file("cbox")).unwrap();
+    scene.resize(SIZE, SIZE);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+    let view = SceneView::new(&scene, accel.as_ref());
+    let plan = small_plan(&view, (PlanFor::Mixture, Nee::Every), 5, 23);
+    eprintln!(
+        "cbox: {} GA pixels, {} fallback points",
+        plan.pixels.len(),
+        plan.fallback_points.len()
+    );
+    assert!(
+        !plan.fallback_points.is_empty() && !plan.pixels.is_empty(),
+        "cbox's plan must have both for this test"
+    );
+    let pt = render_with("cbox", Which::Pt, 5, SPP / 4, 11);
+    let ga = |unnormalised| Which::Ga {
+        nee: Nee::Every,
+        unnormalised,
+        light_dropped: false,
+    };
+    let film = render_with("cbox", ga(false), 5, SPP / 4, 23);
+    assert_agrees("cbox: ga with srt fallback points", &film, &pt);
+    let wrong = render_with("cbox", ga(true), 5, SPP / 4, 23);
+    assert_rejected("cbox: ga with unnormalised interpolation", &wrong, &pt);
 }
 
 /// With next-event estimation at every vertex, `srt` and `ga` whose mixtures leave the light

@@ -525,7 +525,7 @@ fn summary(learned: &Learned) -> serde_json::Value {
             "plan_for": p.plan_for,
             "ga_pixels": p.pixels.len(),
             "improved_pixels": p.pixels.iter().filter(|x| !x.kept_srt).count(),
-            "pt_points": p.pt_points.len(),
+            "fallback_points": p.fallback_points.len(),
             "closed_by_gate": p.is_closed(),
             "stats": p.stats,
         })

@@ -26,7 +26,7 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
         "{} GA pixels, {} late, {} pt points, {} low-variance cells",
         plan.pixels.len(),
         stats.time_limited_pixels,
-        plan.pt_points.len(),
+        plan.fallback_points.len(),
         stats.low_variance_cells
     );
     assert_eq!(
@@ -35,7 +35,7 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     );
     assert_eq!(plan.pixels.len(), PILOT_PIXELS, "only the pilot evolves");
     assert!(stats.time_limited_pixels > 0);
-    assert_eq!(plan.pt_points.len(), stats.low_variance_cells);
+    assert_eq!(plan.fallback_points.len(), stats.low_variance_cells);
     let guided = (0..64)
         .flat_map(|y| (0..64).map(move |x| (x, y)))
         .filter(|&(x, y)| plan.local(x, y).is_some())

@@ -8,12 +8,12 @@ use crate::path::mixture::Mixture;
 impl Plan {
     /// The GA pixels nearest to `(x, y)` (up to `neighbours`) and their weights, into `out`:
     /// inverse squared distance, normalised to sum 1; a GA pixel itself takes weight 1.
-    /// Indices from `pixels.len()` on are `pt_points`.
+    /// Indices from `pixels.len()` on are `fallback_points`.
     pub fn interpolation(&self, x: u32, y: u32, out: &mut Vec<(f64, usize)>) {
         let index = self.index.get_or_init(|| {
             let points = self.pixels.iter().map(|p| (p.x, p.y));
             PointGrid::new(
-                points.chain(self.pt_points.iter().copied()).collect(),
+                points.chain(self.fallback_points.iter().copied()).collect(),
                 self.width,
                 self.height,
             )
@@ -36,7 +36,8 @@ impl Plan {
     }
 
     /// Whether interpolation point `i` (see [`Self::interpolation`]) prefers `pt`: a
-    /// `pt_points` entry, or a GA pixel that kept `srt` or whose gate trial predicts no gain.
+    /// `fallback_points` entry, or a GA pixel that kept `srt` or whose gate trial predicts
+    /// no gain.
     fn prefers_pt(&self, i: usize) -> bool {
         self.pixels
             .get(i)
@@ -44,8 +45,8 @@ impl Plan {
     }
 
     /// How pixel `(x, y)` renders: `None` with `pt`, else with this mixture (`ga`) or guided
-    /// by it (`ga-pt`). Without the gate: the union of the nearest GA pixels' mixtures, each
-    /// with its interpolation weight. With it: `pt` where the points preferring `pt` hold at
+    /// by it (`ga-pt`). Without the gate: the union of the nearest points' mixtures, each
+    /// with its interpolation weight, `srt` at a fallback point. With it: `pt` where the points preferring `pt` hold at
     /// least half the interpolation weight, else the union of the other points' mixtures,
     /// their weights renormalised. The choice depends on the plan alone, never on the
     /// render's samples, so every pixel's estimator stays unbiased.
@@ -90,7 +91,11 @@ impl Plan {
         if weights.is_empty() {
             parts.push((1.0, &self.srt));
         }
-        parts.extend(weights.iter().map(|&(w, i)| (w, &self.pixels[i].mixture)));
+        // Without the gate a fallback point lends `srt`; with it none is left here.
+        parts.extend(
+            (weights.iter())
+                .map(|&(w, i)| (w, self.pixels.get(i).map_or(&self.srt, |p| &p.mixture))),
+        );
         true
     }
 }
@@ -145,7 +150,7 @@ mod tests {
             width: 40,
             height: 1,
             pixels: vec![pixel(0, Some(3.0)), pixel(10, Some(0.5)), pixel(20, None)],
-            pt_points: if gate { vec![(30, 0)] } else { Vec::new() },
+            fallback_points: if gate { vec![(30, 0)] } else { Vec::new() },
             gate,
             closed: false,
             plan_for: PlanFor::Guide,
@@ -197,6 +202,29 @@ mod tests {
                 (total - 1.0).abs() < 1e-12,
                 "x = {x}: weights sum to {total}"
             );
+        }
+        // Without the gate a fallback point (a low-variance cell's pixel) lends `srt`
+        // (absorption 0.5 here; the GA pixels' mixtures absorb 0.25): alone at the point,
+        // with its interpolation weight between it and the GA pixel at x = 20.
+        let mut fallback = plan(false);
+        fallback.fallback_points.push((30, 0));
+        let weights = |plan: &Plan, x: u32| {
+            let m = plan.local(x, 0).expect("a mixture everywhere");
+            let at = |a: f64| m.generators.iter().position(|g| g.steps[0].absorption == a);
+            (
+                at(0.5).map(|i| m.weights[i]),
+                at(0.25).map(|i| m.weights[i]),
+            )
+        };
+        assert_eq!(weights(&fallback, 30), (Some(1.0), None));
+        let (srt, evolved) = weights(&fallback, 27);
+        let expected = (1.0 / 9.0) / (1.0 / 9.0 + 1.0 / 49.0);
+        assert!((srt.expect("srt near x = 30") - expected).abs() < 1e-12);
+        assert!((evolved.expect("the GA pixel's") - (1.0 - expected)).abs() < 1e-12);
+        // The same plan without the fallback point: the GA pixels' mixtures alone there.
+        for x in [27, 30] {
+            let (srt, evolved) = weights(&paper, x);
+            assert!(srt.is_none() && (evolved.expect("evolved") - 1.0).abs() < 1e-12);
         }
         // The fault injection still reaches the gated path: unnormalised weights show.
         let mut wrong = plan(true);

@@ -222,9 +222,13 @@ pub struct Plan {
     width: u32,
     height: u32,
     pub pixels: Vec<GaPixel>,
-    /// With the gate: points where the image renders with `pt` (one pixel of each
-    /// low-variance cell, and the GA pixels the pilot left out), interpolated like GA pixels.
-    pub pt_points: Vec<(u32, u32)>,
+    /// Points where the image renders with the plan's fallback, interpolated like GA
+    /// pixels: one pixel of each low-variance cell, and with the gate the GA pixels the
+    /// pilot or the time limit left out. The fallback is `pt` with the gate, the defensive
+    /// `srt` mixture without it (the paper's estimator: a cell whose `srt` samples the
+    /// baseline found quiet gets no GA pixel, and an evolved mixture from another cell
+    /// would cost its densities there for samplers aimed elsewhere).
+    pub fallback_points: Vec<(u32, u32)>,
     gate: bool,
     /// The gate's pilot showed that the mixture does not pay: every pixel renders with `pt`
     /// (or the spatial guide). (A guide's failed pilot without the spatial guide keeps its
@@ -239,7 +243,7 @@ pub struct Plan {
     /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
     unnormalised: bool,
     pub stats: PlanStats,
-    /// `pixels` and then `pt_points`, bucketed for [`Self::interpolation`] on first use.
+    /// `pixels` and then `fallback_points`, bucketed for [`Self::interpolation`] on first use.
     #[serde(skip)]
     index: OnceLock<PointGrid>,
 }
@@ -307,12 +311,12 @@ impl Plan {
         scout_pilot(&mut waves, scout, closes)?;
         let pilot_pays = pilot_pays(&waves);
         let closed = gate && !pilot_pays && closes;
-        let mut pt_points = Vec::new();
+        let mut fallback_points = Vec::new();
         // Seconds of the baseline, which runs between GA waves.
         let baseline_part = if !gate || pilot_pays {
-            waves.past_pilot(&cells, scout, &mut stats, &mut pt_points)?
+            waves.past_pilot(&cells, scout, &mut stats, &mut fallback_points)?
         } else {
-            waves.leave_to_pt(&grid, &mut stats, &mut pt_points);
+            waves.leave_to_pt(&grid, &mut stats, &mut fallback_points);
             0.0
         };
         if inputs.store.is_some_and(|s| s.split()) {
@@ -330,7 +334,7 @@ impl Plan {
             width,
             height,
             pixels,
-            pt_points,
+            fallback_points,
             gate,
             closed,
             plan_for,

@@ -234,22 +234,20 @@ impl<'a> Waves<'a> {
 
     /// Past a pilot that pays, or without the gate: the baseline, which chooses the other GA
     /// pixels (the pilot's stay, whatever their cells' variance), then [`Self::evolve_rest`].
-    /// With the gate, the low-variance cells' pixels go to `pt_points`, and for a mixture
-    /// the late ones too. Returns the baseline's seconds.
+    /// The low-variance cells' pixels go to `fallback_points`, and with the gate, for a
+    /// mixture, the late ones too. Returns the baseline's seconds.
     pub(super) fn past_pilot(
         &mut self,
         cells: &[Option<(u32, u32)>],
         scout: usize,
         stats: &mut PlanStats,
-        pt_points: &mut Vec<(u32, u32)>,
+        fallback_points: &mut Vec<(u32, u32)>,
     ) -> Result<f64, PlanError> {
         let t2 = Instant::now();
         let keep = self.positions();
         let choice = baseline_choice(self.context, cells, &keep, stats);
         let gate = self.context.gate;
-        if gate {
-            pt_points.extend(&choice.low);
-        }
+        fallback_points.extend(&choice.low);
         self.add(&choice.pixels, &keep);
         let baseline_part = t2.elapsed().as_secs_f64();
         let late = self.evolve_rest(scout)?;
@@ -262,22 +260,22 @@ impl<'a> Waves<'a> {
         // without the gate).
         if gate && self.context.plan_for == PlanFor::Mixture {
             let chosen = &self.chosen;
-            pt_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
+            fallback_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
         }
         Ok(baseline_part)
     }
 
     /// Past a pilot that does not pay: no baseline, and every other cell's pixel in `grid`
-    /// goes to `pt_points`.
+    /// goes to `fallback_points`.
     pub(super) fn leave_to_pt(
         &self,
         grid: &[(u32, u32)],
         stats: &mut PlanStats,
-        pt_points: &mut Vec<(u32, u32)>,
+        fallback_points: &mut Vec<(u32, u32)>,
     ) {
         stats.gated_pixels = grid.len() - self.done.iter().flatten().count();
         let pilot_at = self.positions();
-        pt_points.extend((grid.iter()).filter(|at| !pilot_at.contains(at)));
+        fallback_points.extend((grid.iter()).filter(|at| !pilot_at.contains(at)));
     }
 
     /// Once the pilot (scouted for `scout` generations) pays, or without the gate: the pilot
