@@ -179,9 +179,9 @@ pub struct PlanArgs {
     /// srt samples per pixel of the baseline pass that places the extra GA pixels.
     #[arg(long, default_value_t = PlanConfig::default().baseline_spp, value_parser = clap::value_parser!(u32).range(1..=65_536))]
     pub baseline_spp: u32,
-    /// Nearest GA pixels whose mixtures each pixel combines.
-    #[arg(long, default_value_t = PlanConfig::default().neighbours)]
-    pub ga_neighbours: usize,
+    /// Nearest GA pixels whose mixtures each pixel combines. Default: 2 for ga, 4 for ga-pt
+    #[arg(long, value_name = "K")]
+    pub ga_neighbours: Option<usize>,
     /// Grid cells whose pooled baseline relative variance (of one srt sample, Var/(mean² +
     /// 0.01)) is below this get no GA pixel.
     #[arg(long, default_value_t = PlanConfig::default().prune_variance)]

@@ -17,9 +17,15 @@ pub struct PlanConfig {
     pub extra: f64,
     /// `srt` samples per pixel of the baseline pass.
     pub baseline_spp: u32,
-    /// GA pixels whose mixtures each pixel combines.
+    /// GA pixels whose mixtures each pixel combines (and whose best individuals start a
+    /// warm-started GA pixel's population). `None`: 2 for `ga`, 4 for `ga-pt`. The union of
+    /// `k` mixtures costs `ga` every component's densities on every path it samples, while
+    /// `ga-pt` blends only the guides' first steps: at 2 s, six seeds, `ga --no-gate` with 2
+    /// has 0.87 (fig5), 0.83 (fig1), 0.92 (glossy), 0.83 (cbox) × its relMSE with 4, and
+    /// `ga-pt` with 2 has 1.11, 1.10, 1.22 × its relMSE with 4 (fig5, fig1, glossy; see
+    /// docs/methods.md).
     #[serde(rename = "ga_neighbours")]
-    pub neighbours: usize,
+    pub neighbours: Option<usize>,
     /// Leave out what the scene does not need: cells whose baseline relative variance is
     /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
     /// test paths need (`TestPaths::steps_needed`; for `ga-pt` also at most `guide_steps`,
@@ -57,7 +63,7 @@ impl Default for PlanConfig {
             grid: 32,
             extra: 0.25,
             baseline_spp: 4,
-            neighbours: 4,
+            neighbours: None,
             prune: true,
             prune_variance: 0.5,
             warm_start: true,
@@ -77,6 +83,14 @@ impl PlanConfig {
             PlanFor::Guide => 0.0,
         });
         (share * f64::from(self.grid)).max(1.0) as f32
+    }
+
+    /// GA pixels whose mixtures each pixel combines in a plan for `plan_for`.
+    pub fn neighbours(&self, plan_for: PlanFor) -> usize {
+        self.neighbours.unwrap_or(match plan_for {
+            PlanFor::Mixture => 2,
+            PlanFor::Guide => 4,
+        })
     }
 
     pub fn validate(&self) -> Result<(), GaConfigError> {
@@ -118,11 +132,8 @@ impl PlanConfig {
                 self.guide_steps
             ));
         }
-        if !(1..=64).contains(&self.neighbours) {
-            return fail(format!(
-                "GA neighbours per pixel {} is not in [1, 64]",
-                self.neighbours
-            ));
+        if let Some(k) = self.neighbours.filter(|k| !(1..=64).contains(k)) {
+            return fail(format!("GA neighbours per pixel {k} is not in [1, 64]"));
         }
         Ok(())
     }

@@ -339,7 +339,7 @@ impl Plan {
             closed,
             plan_for,
             srt,
-            neighbours: config.neighbours,
+            neighbours: config.neighbours(plan_for),
             analysis: scene.analysis(),
             unnormalised: false,
             stats,

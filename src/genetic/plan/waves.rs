@@ -3,7 +3,6 @@
 
 use super::super::individual::Individual;
 use super::baseline::{baseline_choice, Origin};
-use super::config::PlanConfig;
 use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
 use super::stages::{LearnStore, PlanError, WaveEntry};
 use super::{PlanFor, PlanStats};
@@ -346,7 +345,7 @@ impl<'a> Waves<'a> {
             .map(|&i| match config.warm_start {
                 true => {
                     let run = GaRun {
-                        seeds: neighbour_seeds(&self.done, self.chosen[i], config),
+                        seeds: neighbour_seeds(&self.done, self.chosen[i], self.context),
                         generations: warm,
                         stream: 0,
                         trial,
@@ -366,13 +365,14 @@ impl<'a> Waves<'a> {
     }
 }
 
-/// Best individuals of up to `config.neighbours` evolved GA pixels nearest to `at`, within
-/// two grid spacings: the first generation of a warm-started GA.
+/// Best individuals of up to [`super::config::PlanConfig::neighbours`] evolved GA pixels nearest to `at`,
+/// within two grid spacings: the first generation of a warm-started GA.
 pub(super) fn neighbour_seeds(
     done: &[Option<Evolved>],
     (x, y, _): (u32, u32, Origin),
-    config: &PlanConfig,
+    context: &PixelContext,
 ) -> Vec<Individual> {
+    let config = context.config;
     let reach = 2.0 * config.grid as f64;
     let mut near: Vec<(f64, usize, &Individual)> = done
         .iter()
@@ -386,7 +386,7 @@ pub(super) fn neighbour_seeds(
         .collect();
     near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     near.iter()
-        .take(config.neighbours)
+        .take(config.neighbours(context.plan_for))
         .map(|n| n.2.clone())
         .collect()
 }
