@@ -27,14 +27,12 @@
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
-    fixed_light_pdf, Contribution, DirectionSampler, LightEnd, Nee, PathGenerator, PathVertices,
-    Query, Step, Walk,
+    fixed_light_pdf, Contribution, GeneratorDensity, LightEnd, Nee, PathGenerator, PathVertices,
+    Query, Walk,
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
-use crate::sampling::anchor::AnchorShape;
 use crate::sampling::light_point::finest_cell;
-use crate::sampling::patch::PatchShape;
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
 use glam::DVec3;
@@ -704,24 +702,15 @@ impl TestPaths {
     /// path starts from the running product over the vertices it shares with the one before
     /// it (`shared`), which is the same product of the same factors in the same order.
     pub fn generator_pdfs(&self, view: &SceneView, g: &PathGenerator, out: &mut [f64]) {
-        let scene = view.scene;
         let every = self.estimator == Nee::Every;
-        let samplers: Vec<StepDensity> = g.steps.iter().map(StepDensity::new).collect();
-        let direction = |j: usize, k: usize| match &samplers[k] {
-            StepDensity::Brdf => self.brdf_pdf[j],
-            StepDensity::Anchor(s) => s.pdf(self.point[j], self.wi[j]),
-            StepDensity::Patch(s) => s.pdf(self.point[j], self.wi[j]),
+        let density = GeneratorDensity::new(g, view);
+        let direction = |j: usize, k: usize| {
+            let brdf = || self.brdf_pdf[j];
+            density.direction(k, self.point[j], self.wi[j], brdf)
         };
-        let (area_pmf, light) = (
-            scene.area_light_pmf(),
-            g.light.density(&scene.mesh, &scene.emitters),
-        );
-        let light_pdf = |i: usize| match self.light_fixed[i] {
-            Some(fixed) => fixed,
-            None => {
-                let (prim, cell) = (self.light_prim[i], self.light_cell[i]);
-                area_pmf * light.pdf_area(&scene.emitters, prim, cell)
-            }
+        let light_pdf = |i: usize| {
+            let end = (self.light_fixed[i], self.light_prim[i]);
+            density.light(view, end, || self.light_cell[i])
         };
         // `prefix[t]`: the product over the first `t` vertices of the path last evaluated,
         // and the number of non-delta ones among them; `absorbed`: its vertex
@@ -779,24 +768,6 @@ impl TestPaths {
                 pdf *= g.absorption(k, len, self.max_bounces) * light_pdf(i);
             }
             *out = pdf;
-        }
-    }
-}
-
-/// A generator step's direction sampler with the constants of its density computed once:
-/// [`TestPaths::generator_pdfs`] evaluates it on every stored path.
-enum StepDensity {
-    Brdf,
-    Anchor(AnchorShape),
-    Patch(PatchShape),
-}
-
-impl StepDensity {
-    fn new(step: &Step) -> Self {
-        match &step.sampler {
-            DirectionSampler::Brdf => Self::Brdf,
-            DirectionSampler::Anchor(s) => Self::Anchor(AnchorShape::new(s)),
-            DirectionSampler::Patch(s) => Self::Patch(PatchShape::new(s)),
         }
     }
 }

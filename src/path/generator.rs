@@ -30,10 +30,10 @@
 //! the fitness of the genetic algorithm need.
 
 use super::{RayCounts, SceneView, SurfacePoint};
-use crate::sampling::anchor::AnchorSampler;
+use crate::sampling::anchor::{AnchorSampler, AnchorShape};
 use crate::sampling::brdf;
-use crate::sampling::light_point::LightPointSampler;
-use crate::sampling::patch::PatchSampler;
+use crate::sampling::light_point::{finest_cell, LightDensity, LightPointSampler};
+use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::sampling::Rng;
 use glam::{DVec3, Vec3};
 
@@ -350,12 +350,183 @@ impl Contribution {
     /// technique could have drawn it: its connection, or with [`Nee::End`] the light sample
     /// of `path` (its absorbing vertex's).
     pub fn end(&self, path: &PathVertices) -> Option<LightEnd> {
+        self.light_end(path).map(|(end, _)| end)
+    }
+
+    /// [`Self::end`] and the unit direction towards it from `x_len`.
+    pub fn light_end(&self, path: &PathVertices) -> Option<(LightEnd, Vec3)> {
         match (self.light, self.nee, path.light) {
-            (Some(l), _, _) => Some(l.end),
-            (None, true, Some(l)) => Some(l.end),
+            (Some(l), _, _) => Some((l.end, l.wi)),
+            (None, true, Some(l)) => Some((l.end, l.wi)),
             _ => None,
         }
     }
+}
+
+/// A generator step's direction sampler with the constants of its density computed once (an
+/// anchor cone's densities and test, a patch's inverse Gram matrix), for the many vertices
+/// the mixture's densities and the fitness evaluate it on.
+#[derive(Clone, Copy, Debug)]
+pub enum StepDensity {
+    Brdf,
+    Anchor(AnchorShape),
+    Patch(PatchShape),
+}
+
+impl StepDensity {
+    pub fn new(sampler: &DirectionSampler) -> Self {
+        match sampler {
+            DirectionSampler::Brdf => Self::Brdf,
+            DirectionSampler::Anchor(s) => Self::Anchor(AnchorShape::new(s)),
+            DirectionSampler::Patch(s) => Self::Patch(PatchShape::new(s)),
+        }
+    }
+
+    /// The density of unit `wi` out of `from`; for the BSDF's sampler, `brdf()`: it is the
+    /// same for every generator that samples the BSDF at a vertex, so the caller evaluates
+    /// it once for all.
+    #[inline]
+    pub fn pdf(&self, from: DVec3, wi: DVec3, brdf: impl FnOnce() -> f64) -> f64 {
+        match self {
+            Self::Brdf => brdf(),
+            Self::Anchor(s) => s.pdf(from, wi),
+            Self::Patch(s) => s.pdf(from, wi),
+        }
+    }
+}
+
+/// A generator's densities with their constants computed once for a scene: each step's
+/// ([`StepDensity`]) and its light-point sampler's ([`LightDensity`]), the same values as
+/// the samplers' own `pdf`s. Both the render's mixture densities
+/// ([`PathGenerator::pdf_techniques_after`]) and the fitness
+/// ([`crate::genetic::test_paths::TestPaths::generator_pdfs`]) evaluate through it.
+#[derive(Clone, Debug)]
+pub struct GeneratorDensity {
+    steps: Vec<StepDensity>,
+    light: LightDensity,
+    /// The probability that the light technique picks the area emitters.
+    area_pmf: f64,
+}
+
+impl GeneratorDensity {
+    pub fn new(g: &PathGenerator, view: &SceneView) -> Self {
+        let scene = view.scene;
+        Self {
+            steps: g
+                .steps
+                .iter()
+                .map(|s| StepDensity::new(&s.sampler))
+                .collect(),
+            light: g.light.density(&scene.mesh, &scene.emitters),
+            area_pmf: scene.area_light_pmf(),
+        }
+    }
+
+    /// Step `k`'s density of unit `wi` out of `from` ([`StepDensity::pdf`]).
+    #[inline]
+    pub fn direction(&self, k: usize, from: DVec3, wi: DVec3, brdf: impl FnOnce() -> f64) -> f64 {
+        self.steps[k].pdf(from, wi, brdf)
+    }
+
+    /// Step `k`'s density of the direction sampled out of vertex `j`, `v`, of the path
+    /// `shared` holds the BSDF densities of.
+    #[inline]
+    fn direction_at(
+        &self,
+        view: &SceneView,
+        k: usize,
+        (j, v): (usize, &PathVertex),
+        shared: &mut PathDensities,
+    ) -> f64 {
+        let brdf = || shared.along(view, j, v);
+        self.direction(k, v.point.p.as_dvec3(), v.wi.as_dvec3(), brdf)
+    }
+
+    /// [`PathGenerator::light_pdf`] of an end whose density is `fixed` where it is the same
+    /// for every generator ([`fixed_light_pdf`]), else a point on emitter triangle `prim`
+    /// whose [`finest_cell`] there is `cell()` (asked for only where this generator's light
+    /// region needs it).
+    #[inline]
+    pub fn light(
+        &self,
+        view: &SceneView,
+        (fixed, prim): (Option<f64>, u32),
+        cell: impl FnOnce() -> u32,
+    ) -> f64 {
+        match fixed {
+            Some(fixed) => fixed,
+            None => self.area_pmf * self.light.pdf_area(&view.scene.emitters, prim, cell),
+        }
+    }
+}
+
+/// What the densities of every generator of a mixture share on one path: the BSDF density
+/// of each vertex's direction (the same for every generator whose step samples the BSDF
+/// there, evaluated when the first one needs it, once per path), that of the direction from
+/// `x_len` to the current contribution's end, and that end's light density where it is the
+/// same for every generator, or its emitter point and [`finest_cell`] (found when the first
+/// generator's light region needs it, once per contribution).
+#[derive(Clone, Debug, Default)]
+pub struct PathDensities {
+    along: Vec<Option<f64>>,
+    to_end: Option<f64>,
+    /// The contribution's end: [`fixed_light_pdf`], the emitter point and its triangle.
+    end: Option<(Option<f64>, DVec3, u32)>,
+    cell: Option<u32>,
+}
+
+impl PathDensities {
+    /// Starts on `path`: no density evaluated yet.
+    pub fn start_path(&mut self, path: &PathVertices) {
+        self.along.clear();
+        self.along.resize(path.vertices.len(), None);
+        self.to_end = None;
+        self.end = None;
+    }
+
+    /// Starts on a contribution of the path that ends at `end` (along the unit direction
+    /// from `x_len`; [`Contribution::light_end`]): no density towards it evaluated yet.
+    pub fn start_contribution(&mut self, view: &SceneView, end: Option<(LightEnd, Vec3)>) {
+        self.to_end = None;
+        self.cell = None;
+        self.end = end.map(|(end, wi)| match end {
+            LightEnd::Area { point, prim } => (None, point, prim),
+            _ => (fixed_light_pdf(view, &end, wi), DVec3::ZERO, u32::MAX),
+        });
+    }
+
+    /// Ready for the contribution of `path` that ends at `end`.
+    fn of(view: &SceneView, path: &PathVertices, end: Option<(LightEnd, Vec3)>) -> Self {
+        let mut shared = Self::default();
+        shared.start_path(path);
+        shared.start_contribution(view, end);
+        shared
+    }
+
+    /// The BSDF density of the direction sampled out of vertex `j`, `v`.
+    fn along(&mut self, view: &SceneView, j: usize, v: &PathVertex) -> f64 {
+        *self.along[j].get_or_insert_with(|| brdf_pdf(view, v, v.wi))
+    }
+
+    /// The BSDF density of unit `wi` out of `last`, `x_len`, towards the contribution's end.
+    fn towards_end(&mut self, view: &SceneView, last: &PathVertex, wi: Vec3) -> f64 {
+        *self.to_end.get_or_insert_with(|| brdf_pdf(view, last, wi))
+    }
+
+    /// The light density of the generator of `density` at the contribution's end (`None`
+    /// where it has none).
+    fn light(&mut self, view: &SceneView, density: &GeneratorDensity) -> Option<f64> {
+        let (fixed, point, prim) = self.end?;
+        let cell = &mut self.cell;
+        let cell = || *cell.get_or_insert_with(|| finest_cell(&view.scene.mesh, prim, point));
+        Some(density.light(view, (fixed, prim), cell))
+    }
+}
+
+/// The BSDF density of unit `wi` out of vertex `v`.
+fn brdf_pdf(view: &SceneView, v: &PathVertex, wi: Vec3) -> f64 {
+    let m = view.scattering_material(&v.point, v.wo);
+    brdf::pdf(m, v.frame, v.wo, wi)
 }
 
 impl PathGenerator {
@@ -400,17 +571,6 @@ impl PathGenerator {
         }
     }
 
-    fn direction_pdf(&self, view: &SceneView, k: usize, v: &PathVertex) -> f64 {
-        match &self.steps[k].sampler {
-            DirectionSampler::Brdf => {
-                let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, v.frame, v.wo, v.wi)
-            }
-            DirectionSampler::Anchor(a) => a.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
-            DirectionSampler::Patch(s) => s.pdf(v.point.p.as_dvec3(), v.wi.as_dvec3()),
-        }
-    }
-
     /// The density with which this generator's light technique draws `end` (along unit
     /// `wi`): the probability of the emitter's pick ([`crate::scene::Scene::pick_light`])
     /// times its light-point sampler's density by area for a point on the area emitters, the
@@ -441,6 +601,22 @@ impl PathGenerator {
         nee: bool,
         max_bounces: u32,
     ) -> f64 {
+        let end = path.light.filter(|_| nee).map(|l| (l.end, l.wi));
+        let mut shared = PathDensities::of(view, path, end);
+        let density = GeneratorDensity::new(self, view);
+        self.pdf_path_with(&density, view, path, (len, nee, max_bounces), &mut shared)
+    }
+
+    /// [`Self::pdf_path`] with this generator's `density` and what every generator's
+    /// density shares on `path` (`shared`, started on the contribution).
+    pub fn pdf_path_with(
+        &self,
+        density: &GeneratorDensity,
+        view: &SceneView,
+        path: &PathVertices,
+        (len, nee, max_bounces): (usize, bool, u32),
+        shared: &mut PathDensities,
+    ) -> f64 {
         let mut pdf = 1.0;
         let mut k = 0;
         let scattering = if nee { len - 1 } else { len };
@@ -452,18 +628,17 @@ impl PathGenerator {
             if a >= 1.0 {
                 return 0.0;
             }
-            pdf *= (1.0 - a) * self.direction_pdf(view, k, v);
+            pdf *= (1.0 - a) * density.direction_at(view, k, (j, v), shared);
             k += 1;
         }
         if nee {
-            let (Some(light), Some(last)) = (path.light, path.vertices.get(len - 1)) else {
-                return 0.0;
-            };
-            if last.delta {
+            if path.vertices.get(len - 1).is_none_or(|last| last.delta) {
                 return 0.0;
             }
-            pdf *=
-                self.absorption(k, len, max_bounces) * self.light_pdf(view, &light.end, light.wi);
+            let Some(light) = shared.light(view, density) else {
+                return 0.0;
+            };
+            pdf *= self.absorption(k, len, max_bounces) * light;
         }
         pdf
     }
@@ -482,23 +657,29 @@ impl PathGenerator {
         max_bounces: u32,
     ) -> (f64, f64) {
         let mut prefix = Prefix::default();
-        self.pdf_techniques_after(view, (path, false), c, max_bounces, &mut prefix)
+        let mut shared = PathDensities::of(view, path, c.light_end(path));
+        let density = GeneratorDensity::new(self, view);
+        let state = (&mut prefix, &mut shared);
+        self.pdf_techniques_after(&density, view, (path, false), c, max_bounces, state)
     }
 
-    /// [`Self::pdf_techniques`], continuing `prefix`, this generator's density of the
-    /// path's first vertices from an earlier (shorter) contribution of the same path: the
-    /// contributions of a path then cost one direction density per vertex, not one per vertex
-    /// and contribution. With `own`, this generator sampled `path`: the densities its walk
-    /// drew with (each `pdf_sampled`) are then taken as stored, and only those of what it did
-    /// not draw (the other technique's at `x_len`) are evaluated. The same products in the
-    /// same order of the same factors: the same densities, bit for bit.
+    /// [`Self::pdf_techniques`] with this generator's `density`, continuing `prefix`, this
+    /// generator's density of the path's first vertices from an earlier (shorter)
+    /// contribution of the same path: the contributions of a path then cost one direction
+    /// density per vertex, not one per vertex and contribution; `shared`, what every
+    /// generator's density shares on the path (started on `c`). With `own`, this generator
+    /// sampled `path`: the densities its walk drew with (each `pdf_sampled`) are then taken
+    /// as stored, and only those of what it did not draw (the other technique's at `x_len`)
+    /// are evaluated. The same products in the same order of the same factors: the same
+    /// densities, bit for bit.
     pub fn pdf_techniques_after(
         &self,
+        density: &GeneratorDensity,
         view: &SceneView,
         (path, own): (&PathVertices, bool),
         c: &Contribution,
         max_bounces: u32,
-        prefix: &mut Prefix,
+        (prefix, shared): (&mut Prefix, &mut PathDensities),
     ) -> (f64, f64) {
         if prefix.vertices > c.len - 1 {
             *prefix = Prefix::default();
@@ -519,7 +700,7 @@ impl PathGenerator {
             }
             prefix.pdf *= match own {
                 true => v.pdf_sampled,
-                false => (1.0 - a) * self.direction_pdf(view, prefix.steps, v),
+                false => (1.0 - a) * density.direction_at(view, prefix.steps, (j, v), shared),
             };
             prefix.steps += 1;
         }
@@ -527,36 +708,34 @@ impl PathGenerator {
             return (0.0, 0.0);
         }
         let (prefix, k) = (prefix.pdf, prefix.steps);
-        let direction = |last: &PathVertex| {
-            let a = self.absorption_after_light(k, c.len, max_bounces);
-            if a >= 1.0 {
-                0.0
-            } else {
-                (1.0 - a) * self.direction_pdf(view, k, last)
-            }
-        };
+        let a = self.absorption_after_light(k, c.len, max_bounces);
+        let last = &path.vertices[c.len - 1];
         let Some(end) = c.light else {
-            let last = &path.vertices[c.len - 1];
             // An emitter reached through a delta `x_len`: its direction had no density.
             if last.delta {
                 return (prefix, 0.0);
             }
-            return (prefix * direction(last), 0.0);
-        };
-        let last = PathVertex {
-            wi: end.wi,
-            ..path.vertices[c.len - 1]
+            let dir = match a >= 1.0 {
+                true => 0.0,
+                false => (1.0 - a) * density.direction_at(view, k, (c.len - 1, last), shared),
+            };
+            return (prefix * dir, 0.0);
         };
         // What this generator drew itself (`own`): the direction that found the emitter
         // (not `c.nee`) or the light point (`c.nee`), with the density it was drawn with.
         let dir = match end.end {
             LightEnd::Delta => 0.0,
             _ if own && !c.nee => end.pdf_sampled,
-            _ => direction(&last),
+            _ if a >= 1.0 => 0.0,
+            _ => {
+                let from = last.point.p.as_dvec3();
+                let brdf = || shared.towards_end(view, last, end.wi);
+                (1.0 - a) * density.direction(k, from, end.wi.as_dvec3(), brdf)
+            }
         };
         let light = match own && c.nee {
             true => end.pdf_sampled,
-            false => self.light_pdf(view, &end.end, end.wi),
+            false => shared.light(view, density).unwrap_or(0.0),
         };
         (prefix * dir, prefix * (light * end.area_to_solid_angle))
     }

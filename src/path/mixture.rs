@@ -1,18 +1,25 @@
 //! Weighted sets of path generators (paper eq. 7) and the balance-heuristic estimator
 //! (paper eq. 8), with next-event estimation at the path's end or at every vertex ([`Nee`]).
 
-use super::generator::{Contribution, LightEnd, Nee, PathGenerator, PathVertices, Prefix};
+use super::generator::{
+    Contribution, GeneratorDensity, LightEnd, Nee, PathDensities, PathGenerator, PathVertices,
+    Prefix,
+};
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::brdf::Frame;
 use crate::sampling::{uniform, Rng};
 use crate::scene::Glossy;
 use glam::{DVec3, Vec3};
+use std::borrow::Cow;
+use std::sync::OnceLock;
 
 /// A weighted set of path generators, `pdf(X) = Σ w_g p_g(X)`, `Σ w_g = 1`. Component 0 is
 /// the defensive `srt` generator: with weight ≥ `w_min` it keeps every light-carrying path
 /// reachable, so the estimator stays unbiased whatever the other components do.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mixture {
+    /// The components, which its densities' constants are prepared from on their first
+    /// evaluation: a mixture with other generators is a new one ([`Mixture::new`]).
     pub generators: Vec<PathGenerator>,
     pub weights: Vec<f64>,
     /// Where the estimator does next-event estimation: with [`Nee::Every`] the density of
@@ -46,6 +53,31 @@ pub struct Mixture {
     /// the choice's weight in the path's value already accounts for: it is counted twice).
     #[serde(skip)]
     plastic_choice_counted: bool,
+    /// Each generator's density constants, computed on the first evaluation.
+    #[serde(skip)]
+    densities: Densities,
+}
+
+/// A mixture's [`GeneratorDensity`]s, prepared on its first density evaluation for the scene
+/// evaluated in (whose address they keep): the render evaluates them on every path of every
+/// pixel, the mixture's generators unchanged from construction on. Not part of the mixture's
+/// value: every two compare equal.
+#[derive(Clone, Default)]
+struct Densities(OnceLock<(usize, Vec<GeneratorDensity>)>);
+
+impl PartialEq for Densities {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for Densities {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self.0.get() {
+            Some(_) => "Densities(prepared)",
+            None => "Densities(not yet)",
+        })
+    }
 }
 
 /// `path` with each vertex's shading normal replaced by its geometric one, and its normal or
@@ -98,6 +130,8 @@ pub struct MixtureScratch {
     contributions: Vec<Contribution>,
     /// Each generator's density of the path's first vertices, between its contributions.
     prefixes: Vec<Prefix>,
+    /// What the generators' densities share on the path.
+    shared: PathDensities,
 }
 
 impl Mixture {
@@ -115,6 +149,7 @@ impl Mixture {
             delta_pick_dropped: false,
             transmission_folded: false,
             plastic_choice_counted: false,
+            densities: Densities::default(),
         }
     }
 
@@ -213,6 +248,22 @@ impl Mixture {
             delta_pick_dropped: parts.iter().any(|(_, m)| m.delta_pick_dropped),
             transmission_folded: parts.iter().any(|(_, m)| m.transmission_folded),
             plastic_choice_counted: parts.iter().any(|(_, m)| m.plastic_choice_counted),
+            densities: Densities::default(),
+        }
+    }
+
+    /// Each generator's [`GeneratorDensity`] for `view`'s scene: prepared once, on the first
+    /// call, and for another scene than that one's (which a mixture's light regions do not
+    /// name) computed anew.
+    fn densities(&self, view: &SceneView) -> Cow<'_, [GeneratorDensity]> {
+        let scene = std::ptr::from_ref(view.scene) as usize;
+        let prepare = || {
+            let generators = self.generators.iter();
+            generators.map(|g| GeneratorDensity::new(g, view)).collect()
+        };
+        match self.densities.0.get_or_init(|| (scene, prepare())) {
+            (prepared, densities) if *prepared == scene => Cow::Borrowed(densities),
+            _ => Cow::Owned(prepare()),
         }
     }
 
@@ -225,24 +276,28 @@ impl Mixture {
         c: &Contribution,
         max_bounces: u32,
     ) -> f64 {
-        self.pdf_path_after(view, (path, None), c, max_bounces, None)
+        let mut shared = PathDensities::default();
+        shared.start_path(path);
+        self.pdf_path_after(view, (path, None), c, max_bounces, (None, &mut shared))
     }
 
     /// [`Self::pdf_path`], continuing each generator's density of the path's first vertices
     /// from an earlier contribution of the same path (`prefixes`, one per generator, default
     /// for a new path; [`PathGenerator::pdf_techniques_after`]); without them, from the
-    /// path's start. With [`Nee::Every`] the component that sampled `path` (`sampled_by`, if
-    /// known) takes the densities its walk drew with as stored instead of evaluating them
-    /// again: the same values, bit for bit.
+    /// path's start. `shared` holds what every generator's density shares on the path
+    /// ([`PathDensities`], started on it). With [`Nee::Every`] the component that sampled
+    /// `path` (`sampled_by`, if known) takes the densities its walk drew with as stored
+    /// instead of evaluating them again: the same values, bit for bit.
     fn pdf_path_after(
         &self,
         view: &SceneView,
         (path, sampled_by): (&PathVertices, Option<usize>),
         c: &Contribution,
         max_bounces: u32,
-        mut prefixes: Option<&mut [Prefix]>,
+        (mut prefixes, shared): (Option<&mut [Prefix]>, &mut PathDensities),
     ) -> f64 {
-        // The faults that evaluate another path than the one sampled evaluate it all.
+        // The faults that evaluate another path than the one sampled evaluate it all (each
+        // contribution's the same other path, whose densities `shared` then holds).
         let sampled_by = sampled_by.filter(|_| !self.geometric_frame && !self.transmission_folded);
         let flat;
         let folded;
@@ -260,8 +315,11 @@ impl Mixture {
             }
             false => path,
         };
+        shared.start_contribution(view, c.light_end(path));
+        let densities = self.densities(view);
         let mut pdf = 0.0;
-        for (i, (g, &w)) in self.generators.iter().zip(&self.weights).enumerate() {
+        let components = self.generators.iter().zip(&self.weights).zip(&*densities);
+        for (i, ((g, &w), density)) in components.enumerate() {
             if w > 0.0 {
                 let mut fresh = Prefix::default();
                 let prefix = match prefixes.as_deref_mut() {
@@ -275,14 +333,23 @@ impl Mixture {
                 let p = match self.nee {
                     Nee::Every => {
                         let own = sampled_by == Some(i);
-                        let (dir, light) =
-                            g.pdf_techniques_after(view, (path, own), c, max_bounces, prefix);
+                        let (dir, light) = g.pdf_techniques_after(
+                            density,
+                            view,
+                            (path, own),
+                            c,
+                            max_bounces,
+                            (prefix, shared),
+                        );
                         match self.light_density_dropped {
                             true => dir,
                             false => dir + light,
                         }
                     }
-                    Nee::End => g.pdf_contribution(view, path, c, (max_bounces, Nee::End)),
+                    Nee::End => {
+                        let len = (c.len, c.nee, max_bounces);
+                        g.pdf_path_with(density, view, path, len, shared)
+                    }
                 };
                 pdf += w * scale * p;
             }
@@ -345,6 +412,7 @@ impl Mixture {
         // With a light point at every vertex, each density has one sampler more: the
         // other technique's at the last vertex.
         let extra = u64::from(self.nee == Nee::Every);
+        scratch.shared.start_path(&scratch.path);
         for c in &scratch.contributions {
             counts.densities += components * (c.len as u64 + extra);
             let pdf = self.pdf_path_after(
@@ -352,7 +420,7 @@ impl Mixture {
                 (&scratch.path, Some(g)),
                 c,
                 max_bounces,
-                Some(&mut scratch.prefixes),
+                (Some(&mut scratch.prefixes), &mut scratch.shared),
             );
             if pdf > 0.0 {
                 sum += c.f / pdf;

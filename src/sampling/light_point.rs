@@ -130,15 +130,16 @@ pub struct LightDensity {
 
 impl LightDensity {
     /// [`LightPointSampler::pdf_area`] at a point on primitive `prim` whose [`finest_cell`]
-    /// there is `finest`; the same value.
+    /// there is `finest()` (asked for only where the region is a triangle's cell and `prim`
+    /// that triangle); the same value.
     #[inline]
-    pub fn pdf_area(&self, emitters: &Emitters, prim: u32, finest: u32) -> f64 {
+    pub fn pdf_area(&self, emitters: &Emitters, prim: u32, finest: impl FnOnce() -> u32) -> f64 {
         if !emitters.contains(prim) {
             return 0.0;
         }
         match self.in_region {
             Some(density)
-                if prim == self.region.prim && (self.analytic || self.region.holds(finest)) =>
+                if prim == self.region.prim && (self.analytic || self.region.holds(finest())) =>
             {
                 density
             }
