@@ -227,28 +227,22 @@ impl Analytic {
     /// geometric normal and a surface parameterisation `(u, v)` (Mitsuba's: the sphere's
     /// `(φ/2π, θ/π)` of the local direction (`to_local` applied), the disk's `(r, φ/2π)`).
     pub fn intersect(&self, ray: &Ray, tmax: f64) -> Option<(f64, DVec3, f64, f64)> {
+        let t = self.crossing(ray, tmax)?;
+        let (n, u, v) = self.surface(ray, t);
+        Some((t, n, u, v))
+    }
+
+    /// The `t` of [`Self::intersect`] alone: what shadow rays and the search for the
+    /// closest shape need, without the normal and the `atan2`/`acos` of the
+    /// parameterisation, which [`Self::surface`] computes for the one crossing kept.
+    pub fn crossing(&self, ray: &Ray, tmax: f64) -> Option<f64> {
         let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
         let tmin = f64::from(ray.tmin);
         match self {
-            Analytic::Sphere {
-                center,
-                radius,
-                flip,
-                to_local,
-            } => {
-                let t = sphere_crossing(o - *center, d, *radius, tmin, tmax)?;
-                let local = o - *center + d * t;
-                let n = local / *radius;
-                let n = n.normalize_or_zero();
-                let l = (*to_local * n).normalize_or_zero();
-                let phi = l.y.atan2(l.x);
-                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-                let (u, v) = (phi / (2.0 * PI), l.z.clamp(-1.0, 1.0).acos() / PI);
-                Some((t, if *flip { -n } else { n }, u, v))
+            Analytic::Sphere { center, radius, .. } => {
+                sphere_crossing(o - *center, d, *radius, tmin, tmax)
             }
-            Analytic::Disk {
-                to_local, normal, ..
-            } => {
+            Analytic::Disk { to_local, .. } => {
                 let (lo, ld) = (to_local.transform_point3(o), to_local.transform_vector3(d));
                 if ld.z == 0.0 {
                     return None;
@@ -258,13 +252,42 @@ impl Analytic {
                     return None;
                 }
                 let (x, y) = (lo.x + t * ld.x, lo.y + t * ld.y);
-                let r2 = x * x + y * y;
-                if r2 > 1.0 {
+                if x * x + y * y > 1.0 {
                     return None;
                 }
+                Some(t)
+            }
+        }
+    }
+
+    /// The unit geometric normal and `(u, v)` of [`Self::intersect`] where `ray` crosses
+    /// the shape at `t` (a [`Self::crossing`]).
+    pub fn surface(&self, ray: &Ray, t: f64) -> (DVec3, f64, f64) {
+        let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+        match self {
+            Analytic::Sphere {
+                center,
+                radius,
+                flip,
+                to_local,
+            } => {
+                let local = o - *center + d * t;
+                let n = local / *radius;
+                let n = n.normalize_or_zero();
+                let l = (*to_local * n).normalize_or_zero();
+                let phi = l.y.atan2(l.x);
+                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+                let (u, v) = (phi / (2.0 * PI), l.z.clamp(-1.0, 1.0).acos() / PI);
+                (if *flip { -n } else { n }, u, v)
+            }
+            Analytic::Disk {
+                to_local, normal, ..
+            } => {
+                let (lo, ld) = (to_local.transform_point3(o), to_local.transform_vector3(d));
+                let (x, y) = (lo.x + t * ld.x, lo.y + t * ld.y);
                 let phi = y.atan2(x);
                 let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
-                Some((t, *normal, r2.sqrt(), phi / (2.0 * PI)))
+                (*normal, (x * x + y * y).sqrt(), phi / (2.0 * PI))
             }
         }
     }
@@ -376,32 +399,38 @@ impl AnalyticShapes {
     /// `hit` (the triangles' closest hit, if any) replaced by a strictly closer crossing of
     /// an analytic shape. `ray` must be valid.
     pub fn closest(&self, ray: &Ray, hit: Option<Hit>) -> Option<Hit> {
-        let mut best = hit;
-        let mut tmax = hit.map_or(f64::from(ray.tmax), |h| f64::from(h.t));
+        let mut best_t = hit.map(|h| h.t);
+        let mut tmax = best_t.map_or(f64::from(ray.tmax), f64::from);
+        let mut nearest = None;
         for (i, shape) in self.shapes.iter().enumerate() {
-            if let Some((t, n, u, v)) = shape.intersect(ray, tmax) {
+            if let Some(t) = shape.crossing(ray, tmax) {
                 let t32 = t as f32;
                 // A crossing that rounds to the triangle's t leaves the triangle's hit.
-                if best.is_some_and(|h| t32 >= h.t) {
+                if best_t.is_some_and(|b| t32 >= b) {
                     continue;
                 }
                 tmax = t;
-                best = Some(Hit {
-                    t: t32,
-                    prim: self.first + i as u32,
-                    u: u as f32,
-                    v: v as f32,
-                    ng: n.as_vec3(),
-                });
+                best_t = Some(t32);
+                nearest = Some((i, t));
             }
         }
-        best
+        let Some((i, t)) = nearest else {
+            return hit;
+        };
+        let (n, u, v) = self.shapes[i].surface(ray, t);
+        Some(Hit {
+            t: t as f32,
+            prim: self.first + i as u32,
+            u: u as f32,
+            v: v as f32,
+            ng: n.as_vec3(),
+        })
     }
 
     /// Whether an analytic shape crosses `ray` within its segment. `ray` must be valid.
     pub fn occludes(&self, ray: &Ray) -> bool {
         let tmax = f64::from(ray.tmax);
-        self.shapes.iter().any(|s| s.intersect(ray, tmax).is_some())
+        self.shapes.iter().any(|s| s.crossing(ray, tmax).is_some())
     }
 
     pub fn is_empty(&self) -> bool {

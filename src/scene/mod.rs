@@ -19,10 +19,10 @@ pub use lights::{DeltaArrival, DeltaLight, LightPick};
 pub use shading::Shading;
 pub use texture::{MaterialAt, MaterialTextures, Opacity, Texture};
 
-use crate::accel::TriangleMesh;
+use crate::accel::{Analytic, SphereCone, TriangleMesh};
 use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
 use crate::sampling::plastic::SmoothPlastic;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -323,16 +323,23 @@ impl Emitters {
             };
         };
         let (u1, u2) = (f64::from(u[1]), f64::from(u[2]));
-        let point = match shape.visible_cone(x.as_dvec3()) {
+        let xd = x.as_dvec3();
+        let cone = shape.visible_cone(xd);
+        let point = match &cone {
             Some(cone) => cone.sample(u1, u2),
             None => shape.sample_area(u1, u2),
         }
         .as_vec3();
+        let y = point.as_dvec3();
+        let normal = shape.normal_at(y);
         LightSample {
             point,
-            normal: shape.normal_at(point.as_dvec3()).as_vec3(),
+            normal: normal.as_vec3(),
             prim,
-            pdf_area: self.pdf_area_seen_from(mesh, x, point, prim),
+            pdf_area: match &cone {
+                Some(cone) => self.cone_pdf_area(shape, cone, normal, xd, y),
+                None => self.total_area.recip(),
+            },
         }
     }
 
@@ -340,17 +347,31 @@ impl Emitters {
     /// `prim`. On a sphere sampled by its cone it is `(area/total) · cos_y / (Ω·d²)`, valid
     /// for the points `x` sees (the only ones a ray from `x` reaches first).
     pub fn pdf_area_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
-        let Some(cone) = mesh
+        let x = x.as_dvec3();
+        let Some((shape, cone)) = mesh
             .analytic(prim)
-            .and_then(|s| s.visible_cone(x.as_dvec3()).map(|c| (s, c)))
+            .and_then(|s| s.visible_cone(x).map(|c| (s, c)))
         else {
             return self.total_area.recip();
         };
-        let (shape, cone) = cone;
-        let (x, y) = (x.as_dvec3(), y.as_dvec3());
+        let y = y.as_dvec3();
+        self.cone_pdf_area(shape, &cone, shape.normal_at(y), x, y)
+    }
+
+    /// [`Self::pdf_area_seen_from`] on a sphere `shape` that `x` sees as `cone`, at `y`
+    /// with normal `normal_y`: shared by the sampler, which has the cone and the normal at
+    /// hand.
+    fn cone_pdf_area(
+        &self,
+        shape: &Analytic,
+        cone: &SphereCone,
+        normal_y: DVec3,
+        x: DVec3,
+        y: DVec3,
+    ) -> f64 {
         let d = x - y;
         let dist2 = d.length_squared();
-        let cos_y = shape.normal_at(y).dot(d).abs() / dist2.sqrt();
+        let cos_y = normal_y.dot(d).abs() / dist2.sqrt();
         shape.area() / self.total_area * cone.pdf_solid_angle() * cos_y / dist2
     }
 }
