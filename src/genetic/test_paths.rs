@@ -89,17 +89,12 @@ pub struct TestPaths {
     /// `nee` is false; with [`Nee::Every`] the emitter point after a non-delta last vertex,
     /// `u32::MAX` after a delta one).
     light_point: Vec<DVec3>,
-    light_prim: Vec<u32>,
-    /// Per stored path: the light point's cell of the finest subdivision of its triangle
-    /// ([`finest_cell`]), what every generator's light density needs of it.
-    light_cell: Vec<u32>,
+    /// Per stored path: its end as every generator's light density reads it ([`StoredLight`]).
+    light: Vec<StoredLight>,
     /// Per stored path: whether it ends with a light sample or a connection (with
-    /// [`Nee::Every`] after a non-delta last vertex); where it ends at a delta light or the
-    /// environment, the light technique's density, the same for every generator
-    /// ([`crate::path::generator::fixed_light_pdf`]; `None` for an emitter point), and
-    /// whether it is a delta light's (whose direction technique has density 0).
+    /// [`Nee::Every`] after a non-delta last vertex), and whether at a delta light (whose
+    /// direction technique has density 0).
     connected: Vec<bool>,
-    light_fixed: Vec<Option<f64>>,
     light_delta: Vec<bool>,
     /// Per stored path with [`Nee::Every`]: `d²/cos` at the emitter point, which turns its
     /// area density into solid angle at the last vertex.
@@ -125,6 +120,18 @@ pub struct TestPaths {
     wi: Vec<DVec3>,
     brdf_pdf: Vec<f64>,
     delta: Vec<bool>,
+}
+
+/// A stored path's end as every generator's light density reads it
+/// ([`GeneratorDensity::light`]), in one place: where it ends at a delta light or the
+/// environment, the light technique's density, the same for every generator
+/// ([`fixed_light_pdf`]; `None` for an emitter point), else the light point's triangle
+/// (`u32::MAX`: none) and its cell of the finest subdivision there ([`finest_cell`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct StoredLight {
+    fixed: Option<f64>,
+    prim: u32,
+    cell: u32,
 }
 
 /// Index of pixel `(x, y)` in its random streams `sample_rng(seed, pixel, j)`.
@@ -362,10 +369,8 @@ impl TestPaths {
             len: Vec::new(),
             nee: Vec::new(),
             light_point: Vec::new(),
-            light_prim: Vec::new(),
-            light_cell: Vec::new(),
+            light: Vec::new(),
             connected: Vec::new(),
-            light_fixed: Vec::new(),
             light_delta: Vec::new(),
             area_to_solid_angle: Vec::new(),
             end_point: Vec::new(),
@@ -547,14 +552,15 @@ impl TestPaths {
             _ => (DVec3::ZERO, u32::MAX),
         };
         self.light_point.push(point);
-        self.light_prim.push(prim);
-        self.light_cell.push(match prim {
-            u32::MAX => 0,
-            prim => finest_cell(&view.scene.mesh, prim, point),
+        self.light.push(StoredLight {
+            fixed: end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi)),
+            prim,
+            cell: match prim {
+                u32::MAX => 0,
+                prim => finest_cell(&view.scene.mesh, prim, point),
+            },
         });
         self.connected.push(end.is_some());
-        self.light_fixed
-            .push(end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi)));
         self.light_delta
             .push(matches!(end, Some((LightEnd::Delta, _))));
         self.area_to_solid_angle
@@ -705,12 +711,12 @@ impl TestPaths {
         let every = self.estimator == Nee::Every;
         let density = GeneratorDensity::new(g, view);
         let direction = |j: usize, k: usize| {
-            let brdf = || self.brdf_pdf[j];
-            density.direction(k, self.point[j], self.wi[j], brdf)
+            let at = || (self.point[j], self.wi[j]);
+            density.direction(k, at, || self.brdf_pdf[j])
         };
         let light_pdf = |i: usize| {
-            let end = (self.light_fixed[i], self.light_prim[i]);
-            density.light(view, end, || self.light_cell[i])
+            let end = &self.light[i];
+            density.light(view, (end.fixed, end.prim), || end.cell)
         };
         // `prefix[t]`: the product over the first `t` vertices of the path last evaluated,
         // and the number of non-delta ones among them; `absorbed`: its vertex

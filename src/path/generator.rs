@@ -382,15 +382,21 @@ impl StepDensity {
         }
     }
 
-    /// The density of unit `wi` out of `from`; for the BSDF's sampler, `brdf()`: it is the
-    /// same for every generator that samples the BSDF at a vertex, so the caller evaluates
-    /// it once for all.
+    /// The density of unit direction `wi` out of `from`, `(from, wi) = at()`; for the BSDF's
+    /// sampler, `brdf()`: it is the same for every generator that samples the BSDF at a
+    /// vertex, so the caller evaluates it once for all. Each is read only where needed.
     #[inline]
-    pub fn pdf(&self, from: DVec3, wi: DVec3, brdf: impl FnOnce() -> f64) -> f64 {
+    pub fn pdf(&self, at: impl FnOnce() -> (DVec3, DVec3), brdf: impl FnOnce() -> f64) -> f64 {
         match self {
             Self::Brdf => brdf(),
-            Self::Anchor(s) => s.pdf(from, wi),
-            Self::Patch(s) => s.pdf(from, wi),
+            Self::Anchor(s) => {
+                let (from, wi) = at();
+                s.pdf(from, wi)
+            }
+            Self::Patch(s) => {
+                let (from, wi) = at();
+                s.pdf(from, wi)
+            }
         }
     }
 }
@@ -422,10 +428,15 @@ impl GeneratorDensity {
         }
     }
 
-    /// Step `k`'s density of unit `wi` out of `from` ([`StepDensity::pdf`]).
+    /// Step `k`'s density of the direction `at()` gives ([`StepDensity::pdf`]).
     #[inline]
-    pub fn direction(&self, k: usize, from: DVec3, wi: DVec3, brdf: impl FnOnce() -> f64) -> f64 {
-        self.steps[k].pdf(from, wi, brdf)
+    pub fn direction(
+        &self,
+        k: usize,
+        at: impl FnOnce() -> (DVec3, DVec3),
+        brdf: impl FnOnce() -> f64,
+    ) -> f64 {
+        self.steps[k].pdf(at, brdf)
     }
 
     /// Step `k`'s density of the direction sampled out of vertex `j`, `v`, of the path
@@ -438,8 +449,8 @@ impl GeneratorDensity {
         (j, v): (usize, &PathVertex),
         shared: &mut PathDensities,
     ) -> f64 {
-        let brdf = || shared.along(view, j, v);
-        self.direction(k, v.point.p.as_dvec3(), v.wi.as_dvec3(), brdf)
+        let at = || (v.point.p.as_dvec3(), v.wi.as_dvec3());
+        self.direction(k, at, || shared.along(view, j, v))
     }
 
     /// [`PathGenerator::light_pdf`] of an end whose density is `fixed` where it is the same
@@ -728,9 +739,9 @@ impl PathGenerator {
             _ if own && !c.nee => end.pdf_sampled,
             _ if a >= 1.0 => 0.0,
             _ => {
-                let from = last.point.p.as_dvec3();
+                let at = || (last.point.p.as_dvec3(), end.wi.as_dvec3());
                 let brdf = || shared.towards_end(view, last, end.wi);
-                (1.0 - a) * density.direction(k, from, end.wi.as_dvec3(), brdf)
+                (1.0 - a) * density.direction(k, at, brdf)
             }
         };
         let light = match own && c.nee {
