@@ -85,10 +85,6 @@ pub struct TestPaths {
     len: Vec<u32>,
     /// Per stored path: ends with a light point (next-event estimation).
     nee: Vec<bool>,
-    /// Per stored path: the light point and its triangle (with [`Nee::End`] unused where
-    /// `nee` is false; with [`Nee::Every`] the emitter point after a non-delta last vertex,
-    /// `u32::MAX` after a delta one).
-    light_point: Vec<DVec3>,
     /// Per stored path: its end as every generator's light density reads it ([`StoredLight`]).
     light: Vec<StoredLight>,
     /// Per stored path: whether it ends with a light sample or a connection (with
@@ -368,7 +364,6 @@ impl TestPaths {
             weights: ChannelWeights::EQUAL,
             len: Vec::new(),
             nee: Vec::new(),
-            light_point: Vec::new(),
             light: Vec::new(),
             connected: Vec::new(),
             light_delta: Vec::new(),
@@ -551,7 +546,6 @@ impl TestPaths {
             Some((LightEnd::Area { point, prim }, _)) => (point, prim),
             _ => (DVec3::ZERO, u32::MAX),
         };
-        self.light_point.push(point);
         self.light.push(StoredLight {
             fixed: end.and_then(|(e, wi)| fixed_light_pdf(view, &e, wi)),
             prim,
