@@ -32,7 +32,7 @@ use crate::path::generator::{
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
-use crate::sampling::light_point::finest_cell;
+use crate::sampling::light_point::{finest_cell, PointCells};
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
 use glam::DVec3;
@@ -710,7 +710,9 @@ impl TestPaths {
         };
         let light_pdf = |i: usize| {
             let end = &self.light[i];
-            density.light(view, (end.fixed, end.prim), || end.cell)
+            density.light(view, (end.fixed, end.prim), |level| {
+                PointCells::of_finest(end.cell, level)
+            })
         };
         // `prefix[t]`: the product over the first `t` vertices of the path last evaluated,
         // and the number of non-delta ones among them; `absorbed`: its vertex

@@ -32,7 +32,7 @@
 use super::{RayCounts, SceneView, SurfacePoint};
 use crate::sampling::anchor::{AnchorSampler, AnchorShape};
 use crate::sampling::brdf;
-use crate::sampling::light_point::{finest_cell, LightDensity, LightPointSampler};
+use crate::sampling::light_point::{LightDensity, LightPointSampler, PointCells};
 use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::sampling::Rng;
 use glam::{DVec3, Vec3};
@@ -455,18 +455,18 @@ impl GeneratorDensity {
 
     /// [`PathGenerator::light_pdf`] of an end whose density is `fixed` where it is the same
     /// for every generator ([`fixed_light_pdf`]), else a point on emitter triangle `prim`
-    /// whose [`finest_cell`] there is `cell()` (asked for only where this generator's light
-    /// region needs it).
+    /// whose cell of a level is `cell_at(level)` (asked for only where this generator's light
+    /// region needs it; [`PointCells::at`]).
     #[inline]
     pub fn light(
         &self,
         view: &SceneView,
         (fixed, prim): (Option<f64>, u32),
-        cell: impl FnOnce() -> u32,
+        cell_at: impl FnOnce(u8) -> u32,
     ) -> f64 {
         match fixed {
             Some(fixed) => fixed,
-            None => self.area_pmf * self.light.pdf_area(&view.scene.emitters, prim, cell),
+            None => self.area_pmf * self.light.pdf_area(&view.scene.emitters, prim, cell_at),
         }
     }
 }
@@ -475,15 +475,16 @@ impl GeneratorDensity {
 /// of each vertex's direction (the same for every generator whose step samples the BSDF
 /// there, evaluated when the first one needs it, once per path), that of the direction from
 /// `x_len` to the current contribution's end, and that end's light density where it is the
-/// same for every generator, or its emitter point and [`finest_cell`] (found when the first
-/// generator's light region needs it, once per contribution).
+/// same for every generator, or its emitter point and [`PointCells`] (found as deep as the
+/// generators' light regions need, once per contribution).
 #[derive(Clone, Debug, Default)]
 pub struct PathDensities {
     along: Vec<Option<f64>>,
     to_end: Option<f64>,
     /// The contribution's end: [`fixed_light_pdf`], the emitter point and its triangle.
     end: Option<(Option<f64>, DVec3, u32)>,
-    cell: Option<u32>,
+    /// The end's [`PointCells`], found as deep as the generators' light regions asked.
+    cells: Option<PointCells>,
 }
 
 impl PathDensities {
@@ -499,7 +500,7 @@ impl PathDensities {
     /// from `x_len`; [`Contribution::light_end`]): no density towards it evaluated yet.
     pub fn start_contribution(&mut self, view: &SceneView, end: Option<(LightEnd, Vec3)>) {
         self.to_end = None;
-        self.cell = None;
+        self.cells = None;
         self.end = end.map(|(end, wi)| match end {
             LightEnd::Area { point, prim } => (None, point, prim),
             _ => (fixed_light_pdf(view, &end, wi), DVec3::ZERO, u32::MAX),
@@ -528,9 +529,12 @@ impl PathDensities {
     /// where it has none).
     fn light(&mut self, view: &SceneView, density: &GeneratorDensity) -> Option<f64> {
         let (fixed, point, prim) = self.end?;
-        let cell = &mut self.cell;
-        let cell = || *cell.get_or_insert_with(|| finest_cell(&view.scene.mesh, prim, point));
-        Some(density.light(view, (fixed, prim), cell))
+        let cells = &mut self.cells;
+        let cell_at = |level| {
+            let cells = cells.get_or_insert_with(|| PointCells::new(&view.scene.mesh, prim, point));
+            cells.at(level)
+        };
+        Some(density.light(view, (fixed, prim), cell_at))
     }
 }
 

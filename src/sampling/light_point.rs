@@ -98,21 +98,64 @@ impl LightRegion {
                 || cell_of(barycentric(vertices(mesh, prim), point), self.level) == self.cell)
     }
 
-    /// Whether the point of [`finest_cell`] `finest` on the region's triangle lies in the
-    /// region: the cell of a coarser level is the finest one's leading digits, as
-    /// [`cell_of`] computes them digit by digit, coarsest first.
-    fn holds(&self, finest: u32) -> bool {
-        let coarser = 2 * u32::from(MAX_LEVEL - self.level);
-        (u64::from(finest) >> coarser) as u32 == self.cell
+    /// Whether a point on the region's triangle lies in the region, given `cell_at(level)`,
+    /// the point's cell of a level ([`PointCells::at`]): asked only below level 0, where
+    /// the region is not the whole triangle.
+    fn holds(&self, cell_at: impl FnOnce(u8) -> u32) -> bool {
+        self.level == 0 || cell_at(self.level) == self.cell
     }
 }
 
-/// The cell of level [`MAX_LEVEL`] that holds `point` on primitive `prim`, what
-/// [`LightDensity::pdf_area`] needs of a point (0 on an analytic shape, which has none).
+/// The cell of level [`MAX_LEVEL`] that holds `point` on primitive `prim` (0 on an analytic
+/// shape, which has none): every coarser level's cell is its leading digits
+/// ([`PointCells::of_finest`]).
 pub fn finest_cell(mesh: &TriangleMesh, prim: u32, point: DVec3) -> u32 {
     match mesh.analytic(prim) {
         Some(_) => 0,
         None => cell_of(barycentric(vertices(mesh, prim), point), MAX_LEVEL),
+    }
+}
+
+/// The cells that hold one point on a triangle, found digit by digit, coarsest first, and
+/// only as deep as asked: a light region of level 2 needs two digits of its point, not
+/// [`MAX_LEVEL`]'s sixteen.
+#[derive(Clone, Copy, Debug)]
+pub struct PointCells {
+    /// The point's barycentric coordinates within the cell of `level`.
+    w: DVec3,
+    level: u8,
+    /// The cell of `level`.
+    cell: u32,
+}
+
+impl PointCells {
+    /// The cells of `point` on triangle `prim` (whose analytic shapes have no cells below
+    /// level 0, which [`LightRegion::holds`] never asks of).
+    pub fn new(mesh: &TriangleMesh, prim: u32, point: DVec3) -> Self {
+        let w = match mesh.analytic(prim) {
+            Some(_) => DVec3::ONE / 3.0,
+            None => barycentric(vertices(mesh, prim), point),
+        };
+        Self {
+            w,
+            level: 0,
+            cell: 0,
+        }
+    }
+
+    /// The cell of `level` (at most [`MAX_LEVEL`]), finding the digits not found yet.
+    pub fn at(&mut self, level: u8) -> u32 {
+        while self.level < level {
+            let (digit, w) = child(self.w);
+            (self.w, self.cell, self.level) = (w, self.cell * 4 + digit, self.level + 1);
+        }
+        // A u64 shift: all sixteen levels' digits are 32 bits, which a u32 cannot shift out.
+        (u64::from(self.cell) >> (2 * u32::from(self.level - level))) as u32
+    }
+
+    /// The cell of `level` of the point whose [`finest_cell`] is `finest`: its leading digits.
+    pub fn of_finest(finest: u32, level: u8) -> u32 {
+        (u64::from(finest) >> (2 * u32::from(MAX_LEVEL - level))) as u32
     }
 }
 
@@ -129,17 +172,17 @@ pub struct LightDensity {
 }
 
 impl LightDensity {
-    /// [`LightPointSampler::pdf_area`] at a point on primitive `prim` whose [`finest_cell`]
-    /// there is `finest()` (asked for only where the region is a triangle's cell and `prim`
-    /// that triangle); the same value.
+    /// [`LightPointSampler::pdf_area`] at a point on primitive `prim` whose cell of a level
+    /// is `cell_at(level)` ([`PointCells::at`]; asked for only where the region is a cell
+    /// below level 0 of a triangle and `prim` that triangle); the same value.
     #[inline]
-    pub fn pdf_area(&self, emitters: &Emitters, prim: u32, finest: impl FnOnce() -> u32) -> f64 {
+    pub fn pdf_area(&self, emitters: &Emitters, prim: u32, cell_at: impl FnOnce(u8) -> u32) -> f64 {
         if !emitters.contains(prim) {
             return 0.0;
         }
         match self.in_region {
             Some(density)
-                if prim == self.region.prim && (self.analytic || self.region.holds(finest())) =>
+                if prim == self.region.prim && (self.analytic || self.region.holds(cell_at)) =>
             {
                 density
             }
@@ -289,20 +332,26 @@ pub fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> DVec3 {
 fn cell_of(mut w: DVec3, level: u8) -> u32 {
     let mut cell = 0u32;
     for _ in 0..level {
-        // Doubling and subtracting 1 from a value in [1/2, 1] are exact.
-        let (digit, next) = if w.x > 0.5 {
-            (0, DVec3::new(2.0 * w.x - 1.0, 2.0 * w.y, 2.0 * w.z))
-        } else if w.y > 0.5 {
-            (1, DVec3::new(2.0 * w.x, 2.0 * w.y - 1.0, 2.0 * w.z))
-        } else if w.z > 0.5 {
-            (2, DVec3::new(2.0 * w.x, 2.0 * w.y, 2.0 * w.z - 1.0))
-        } else {
-            (3, DVec3::ONE - 2.0 * w)
-        };
+        let (digit, next) = child(w);
         cell = cell * 4 + digit;
         w = next;
     }
     cell
+}
+
+/// The child cell (module docs) that holds the point of barycentric coordinates `w` in its
+/// parent, and the point's coordinates in it.
+fn child(w: DVec3) -> (u32, DVec3) {
+    // Doubling and subtracting 1 from a value in [1/2, 1] are exact.
+    if w.x > 0.5 {
+        (0, DVec3::new(2.0 * w.x - 1.0, 2.0 * w.y, 2.0 * w.z))
+    } else if w.y > 0.5 {
+        (1, DVec3::new(2.0 * w.x, 2.0 * w.y - 1.0, 2.0 * w.z))
+    } else if w.z > 0.5 {
+        (2, DVec3::new(2.0 * w.x, 2.0 * w.y, 2.0 * w.z - 1.0))
+    } else {
+        (3, DVec3::ONE - 2.0 * w)
+    }
 }
 
 /// Barycentric coordinates of the three vertices of `cell` at `level` (module docs); they are
@@ -364,6 +413,13 @@ mod tests {
             };
             let w = DVec3::new(1.0 - a - b, a, b);
             let finest = cell_of(w, MAX_LEVEL);
+            let fresh = PointCells {
+                w,
+                level: 0,
+                cell: 0,
+            };
+            // One asked coarsest first (a digit more each time), one deepest first.
+            let (mut rising, mut cells) = (fresh, fresh);
             for level in 0..=MAX_LEVEL {
                 let region = |cell| LightRegion {
                     prim: 0,
@@ -371,10 +427,16 @@ mod tests {
                     cell,
                 };
                 let cell = cell_of(w, level);
-                assert!(region(cell).holds(finest), "{w} at level {level}");
+                // The finest cell's leading digits, and the digits found as deep as asked
+                // (deepest first, then coarser from them), name the same cell.
+                let of_finest = |l| PointCells::of_finest(finest, l);
+                assert!(region(cell).holds(of_finest), "{w} at level {level}");
+                assert_eq!(cells.at(MAX_LEVEL - level), cell_of(w, MAX_LEVEL - level));
+                assert_eq!(cells.at(level), cell, "{w} at level {level}");
+                assert_eq!(rising.at(level), cell, "{w} at level {level}");
                 // Another cell of the level does not hold it: the check can fail.
                 if level > 0 {
-                    assert!(!region(cell ^ 1).holds(finest), "{w} at level {level}");
+                    assert!(!region(cell ^ 1).holds(of_finest), "{w} at level {level}");
                 }
             }
         }
