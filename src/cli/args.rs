@@ -187,8 +187,9 @@ pub struct PlanArgs {
     #[arg(long, default_value_t = PlanConfig::default().prune_variance)]
     pub prune_variance: f64,
     /// Leave out of the GA the grid cells of low baseline variance and the generator steps
-    /// past the depth the test paths need; `false` runs it everywhere with every step
-    /// (ga-pt: still at most --guide-steps).
+    /// past the depth the test paths need, and out of `ga`'s evolved mixtures the components
+    /// that lower the variance on the test paths by less than their densities cost; `false`
+    /// runs it everywhere with every step and component (ga-pt: still at most --guide-steps).
     #[arg(long, default_value_t = PlanConfig::default().prune, action = clap::ArgAction::Set, value_name = "BOOL")]
     pub prune: bool,
     /// Alias of `--prune false` (the first line of work's spelling).

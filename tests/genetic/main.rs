@@ -12,7 +12,9 @@ use genpath::accel::{self, Accel, AccelKind, Coherence, Hit, Ray, PACKET_SIZE};
 use genpath::genetic::fitness::{second_moment, Evaluator};
 use genpath::genetic::individual::{GenePool, Individual, PATCH_HALF_RANGE};
 use genpath::genetic::operators::{crossover, mutate};
-use genpath::genetic::plan::{GateConfig, Plan, PlanConfig, PlanFor, PlanInputs, PILOT_PIXELS};
+use genpath::genetic::plan::{
+    GateConfig, Plan, PlanConfig, PlanFor, PlanInputs, COMPONENT_TOLERANCE, PILOT_PIXELS,
+};
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};

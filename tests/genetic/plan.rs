@@ -141,6 +141,62 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     assert!((0..48).all(|y| (0..48).all(|x| ungated.local(x, y).is_some())));
 }
 
+/// `ga`'s evolved mixtures keep only the components that pay for their densities: on fig1
+/// (where every cell's variance is high) with pruning on and off, without warm starts (so
+/// that each pixel's evolution is the same in both), the mixtures without pruning hold every
+/// evolved component, those with it fewer in all, and each pruned mixture's `V` on the test
+/// paths stays within `COMPONENT_TOLERANCE` of the whole one's.
+#[test]
+fn ga_mixtures_keep_only_the_components_that_pay() {
+    let mut scene =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fig1/scene.toml"))
+            .expect("fig1 loads");
+    scene.resize(48, 48);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let view = SceneView::new(&scene, accel.as_ref());
+    let ga = GaConfig {
+        population: 12,
+        generations: 8,
+        test_paths: 3000,
+        ..GaConfig::default()
+    };
+    let plan = |prune| {
+        let config = PlanConfig {
+            grid: 16,
+            prune,
+            warm_start: false,
+            ..PlanConfig::default()
+        };
+        let inputs = PlanInputs {
+            gate: GateConfig { gate: false },
+            ..PlanInputs::new(&ga, &config, PlanFor::Mixture, MAX_BOUNCES)
+        };
+        Plan::build(&view, &inputs, 9, false).expect("plan")
+    };
+    let (whole, pruned) = (plan(false), plan(true));
+    let evolved = |p: &Plan| -> Vec<(u32, u32, usize, f64)> {
+        let pixels = p.pixels.iter().filter(|p| !p.kept_srt);
+        pixels
+            .map(|p| (p.x, p.y, p.mixture.generators.len(), p.v_best))
+            .collect()
+    };
+    let (whole, pruned) = (evolved(&whole), evolved(&pruned));
+    eprintln!("whole {whole:?}\npruned {pruned:?}");
+    assert!(whole.len() >= 4, "too few evolved pixels: {whole:?}");
+    assert!(whole.iter().all(|p| p.2 == ga.generators + 1));
+    let count = |v: &[(u32, u32, usize, f64)]| v.iter().map(|p| p.2).sum::<usize>();
+    assert!(count(&pruned) < count(&whole));
+    for &(x, y, n, v) in &pruned {
+        let Some(&(.., v_whole)) = whole.iter().find(|p| (p.0, p.1) == (x, y)) else {
+            continue;
+        };
+        assert!(
+            v <= v_whole * (1.0 + COMPONENT_TOLERANCE),
+            "({x}, {y}): {n} components, V {v} against {v_whole}"
+        );
+    }
+}
+
 /// `ga-pt`'s training passes try the plan's per-pixel guides against the spatial guide
 /// alone, which one pixel in sixteen keeps, and keep them only if the pixels they guide are
 /// not noisier. On fig5 the evolved guides win the first trial; the same plan with every

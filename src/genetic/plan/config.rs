@@ -29,7 +29,8 @@ pub struct PlanConfig {
     /// Leave out what the scene does not need: cells whose baseline relative variance is
     /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
     /// test paths need (`TestPaths::steps_needed`; for `ga-pt` also at most `guide_steps`,
-    /// pruning or not).
+    /// pruning or not), and `ga`'s evolved mixtures only the components that pay for their
+    /// densities (`pixel::COMPONENT_TOLERANCE`).
     pub prune: bool,
     pub prune_variance: f64,
     /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
