@@ -24,6 +24,25 @@ pub(crate) fn fig5_sized(kind: AccelKind, size: u32) -> (Scene, Box<dyn Accel>) 
     (scene, accel)
 }
 
+/// Shipped scene `name` (`scenes/NAME/scene.toml`) at `size`², on the default back-end.
+pub(crate) fn scene_sized(name: &str, size: u32) -> (Scene, Box<dyn Accel>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}/scene.toml"));
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{name} loads: {e}"));
+    scene.resize(size, size);
+    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    (scene, accel)
+}
+
+/// The GA of the mixture plan tests: 12 individuals, 8 generations, 3000 test paths.
+pub(crate) fn small_mixture_ga() -> GaConfig {
+    GaConfig {
+        population: 12,
+        generations: 8,
+        test_paths: 3000,
+        ..GaConfig::default()
+    }
+}
+
 /// A GA small enough for a test, with which fig5's pilot still pays for a guide.
 pub(crate) fn small_guide_ga() -> GaConfig {
     GaConfig {

@@ -55,18 +55,9 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
 /// failed pilot.
 #[test]
 fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
-    let mut scene =
-        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox/scene.toml"))
-            .expect("cbox loads");
-    scene.resize(48, 48);
-    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let (scene, accel) = scene_sized("cbox", 48);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = GaConfig {
-        population: 12,
-        generations: 8,
-        test_paths: 3000,
-        ..GaConfig::default()
-    };
+    let ga = small_mixture_ga();
     let config = PlanConfig {
         grid: 8,
         ..PlanConfig::default()
@@ -148,18 +139,9 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
 /// paths stays within `COMPONENT_TOLERANCE` of the whole one's.
 #[test]
 fn ga_mixtures_keep_only_the_components_that_pay() {
-    let mut scene =
-        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fig1/scene.toml"))
-            .expect("fig1 loads");
-    scene.resize(48, 48);
-    let accel = accel::build(AccelKind::default_available(), &scene.mesh).expect("accel");
+    let (scene, accel) = scene_sized("fig1", 48);
     let view = SceneView::new(&scene, accel.as_ref());
-    let ga = GaConfig {
-        population: 12,
-        generations: 8,
-        test_paths: 3000,
-        ..GaConfig::default()
-    };
+    let ga = small_mixture_ga();
     let plan = |prune| {
         let config = PlanConfig {
             grid: 16,
