@@ -195,15 +195,7 @@ pub fn optimise_weights(
     let n = weights.len();
     assert_eq!(densities.len(), n, "one density vector per weight");
     let mut pdf = vec![0.0; f2_over_q.len()];
-    let mixture_pdf = |w: &[f64], pdf: &mut [f64]| {
-        pdf.iter_mut().for_each(|p| *p = 0.0);
-        for (d, &wi) in densities.iter().zip(w) {
-            for (p, di) in pdf.iter_mut().zip(d.iter()) {
-                *p += wi * di;
-            }
-        }
-    };
-    mixture_pdf(weights, &mut pdf);
+    mixture_pdf(densities, weights, &mut pdf);
     let mut v = moment_of(f2_over_q, sampled, &pdf);
     if !(v.is_finite() && v > 0.0) {
         return v;
@@ -228,7 +220,7 @@ pub fn optimise_weights(
                 *c = w * (g / v).powf(eta);
             }
             normalise_weights(&mut candidate, defensive);
-            mixture_pdf(&candidate, &mut pdf);
+            mixture_pdf(densities, &candidate, &mut pdf);
             let v_new = moment_of(f2_over_q, sampled, &pdf);
             if v_new < v {
                 accepted = v_new < v * (1.0 - 1e-9);
@@ -245,6 +237,16 @@ pub fn optimise_weights(
     }
     // `v` is the kept weights' V: a step overwrites it only when it keeps the candidate.
     v
+}
+
+/// `pdf = Σ_i weights[i] · densities[i]`, each path's sum in component order.
+fn mixture_pdf(densities: &[&[f64]], weights: &[f64], pdf: &mut [f64]) {
+    pdf.iter_mut().for_each(|p| *p = 0.0);
+    for (d, &wi) in densities.iter().zip(weights) {
+        for (p, di) in pdf.iter_mut().zip(d.iter()) {
+            *p += wi * di;
+        }
+    }
 }
 
 /// The components worth their densities: from the weights `optimise_weights` left
@@ -271,12 +273,9 @@ pub fn prune_components(
             let mut w: Vec<f64> = kept_weights.clone();
             w.remove(drop);
             normalise_weights(&mut w, defensive);
-            pdf.iter_mut().for_each(|p| *p = 0.0);
-            for (&i, &wi) in kept.iter().filter(|&&i| i != kept[drop]).zip(&w) {
-                for (p, di) in pdf.iter_mut().zip(densities[i]) {
-                    *p += wi * di;
-                }
-            }
+            let others = kept.iter().filter(|&&i| i != kept[drop]);
+            let others: Vec<&[f64]> = others.map(|&i| densities[i]).collect();
+            mixture_pdf(&others, &w, &mut pdf);
             let v_without = moment_of(f2_over_q, sampled, &pdf);
             if v_without <= limit && best.as_ref().is_none_or(|b| v_without < b.0) {
                 best = Some((v_without, drop, w));

@@ -112,7 +112,7 @@ impl LightRegion {
 pub fn finest_cell(mesh: &TriangleMesh, prim: u32, point: DVec3) -> u32 {
     match mesh.analytic(prim) {
         Some(_) => 0,
-        None => cell_of(barycentric(vertices(mesh, prim), point), MAX_LEVEL),
+        None => PointCells::new(mesh, prim, point).at(MAX_LEVEL),
     }
 }
 
@@ -132,10 +132,14 @@ impl PointCells {
     /// The cells of `point` on triangle `prim` (whose analytic shapes have no cells below
     /// level 0, which [`LightRegion::holds`] never asks of).
     pub fn new(mesh: &TriangleMesh, prim: u32, point: DVec3) -> Self {
-        let w = match mesh.analytic(prim) {
+        Self::of(match mesh.analytic(prim) {
             Some(_) => DVec3::ONE / 3.0,
             None => barycentric(vertices(mesh, prim), point),
-        };
+        })
+    }
+
+    /// The cells of the point of barycentric coordinates `w`.
+    fn of(w: DVec3) -> Self {
         Self {
             w,
             level: 0,
@@ -329,14 +333,8 @@ pub fn barycentric([a, b, c]: [DVec3; 3], p: DVec3) -> DVec3 {
 }
 
 /// The cell of `level` holding the point of barycentric coordinates `w` (module docs).
-fn cell_of(mut w: DVec3, level: u8) -> u32 {
-    let mut cell = 0u32;
-    for _ in 0..level {
-        let (digit, next) = child(w);
-        cell = cell * 4 + digit;
-        w = next;
-    }
-    cell
+fn cell_of(w: DVec3, level: u8) -> u32 {
+    PointCells::of(w).at(level)
 }
 
 /// The child cell (module docs) that holds the point of barycentric coordinates `w` in its
@@ -413,13 +411,8 @@ mod tests {
             };
             let w = DVec3::new(1.0 - a - b, a, b);
             let finest = cell_of(w, MAX_LEVEL);
-            let fresh = PointCells {
-                w,
-                level: 0,
-                cell: 0,
-            };
             // One asked coarsest first (a digit more each time), one deepest first.
-            let (mut rising, mut cells) = (fresh, fresh);
+            let (mut rising, mut cells) = (PointCells::of(w), PointCells::of(w));
             for level in 0..=MAX_LEVEL {
                 let region = |cell| LightRegion {
                     prim: 0,
