@@ -9,13 +9,19 @@
 //!
 //! Evaluation is cheap because each generator's densities on the test paths are cached, keyed
 //! by gene id (copies share the id): an individual then costs `(S + 1)·M` multiply-adds, and
-//! only generators that are new in a generation are evaluated against the paths.
+//! only generators that are new in a generation are evaluated against the paths; even these
+//! read the densities of the steps and light samplers they share with generators before
+//! them from a cache ([`Evaluator`]), and multiply them along the paths
+//! ([`TestPaths::generator_pdfs_with`]).
 
-use super::individual::{normalise_weights, Individual};
+use super::individual::{normalise_weights, Gene, Individual};
 use super::test_paths::TestPaths;
+use crate::path::generator::DirectionSampler;
 use crate::path::mixture::Mixture;
 use crate::path::SceneView;
+use crate::sampling::light_point::LightPointSampler;
 use std::collections::HashMap;
+use std::hash::Hash;
 
 /// Eq. 10 for any mixture, without the cache.
 pub fn second_moment(view: &SceneView, paths: &TestPaths, mixture: &Mixture) -> f64 {
@@ -68,16 +74,134 @@ pub fn fitness(v: &[f64], out: &mut Vec<f64>) {
     }));
 }
 
-/// Evaluates eq. 10 for whole generations, caching every generator's densities.
+/// Density vectors on the test paths, each under the key of what it is the densities of,
+/// kept while the generation being evaluated uses that; a forgotten key's buffer is reused.
+struct Cache<K> {
+    slot_of: HashMap<K, usize>,
+    buffers: Vec<Vec<f64>>,
+    /// Slots whose key left the population, ready for reuse.
+    free: Vec<usize>,
+    /// Per slot: used by the generation being evaluated.
+    used: Vec<bool>,
+}
+
+impl<K> Default for Cache<K> {
+    fn default() -> Self {
+        Self {
+            slot_of: HashMap::new(),
+            buffers: Vec::new(),
+            free: Vec::new(),
+            used: Vec::new(),
+        }
+    }
+}
+
+impl<K: Hash + Eq> Cache<K> {
+    /// Forgets every key not in `keys` (the generation's), keeping the buffers.
+    fn keep_only<'a>(&mut self, keys: impl Iterator<Item = &'a K>)
+    where
+        K: 'a,
+    {
+        self.used.iter_mut().for_each(|u| *u = false);
+        for key in keys {
+            if let Some(&slot) = self.slot_of.get(key) {
+                self.used[slot] = true;
+            }
+        }
+        let (used, free) = (&self.used, &mut self.free);
+        self.slot_of.retain(|_, slot| {
+            if !used[*slot] {
+                free.push(*slot);
+            }
+            used[*slot]
+        });
+    }
+
+    /// The slot of `key`, its buffer filled by `fill` if it is new.
+    fn slot(&mut self, key: K, fill: impl FnOnce(&mut Vec<f64>)) -> usize {
+        if let Some(&slot) = self.slot_of.get(&key) {
+            return slot;
+        }
+        let slot = self.free.pop().unwrap_or_else(|| {
+            self.buffers.push(Vec::new());
+            self.used.push(true);
+            self.buffers.len() - 1
+        });
+        self.used[slot] = true;
+        fill(&mut self.buffers[slot]);
+        self.slot_of.insert(key, slot);
+        slot
+    }
+
+    /// The buffer of a key of the generation.
+    fn get(&self, key: &K) -> &[f64] {
+        &self.buffers[self.slot_of[key]]
+    }
+}
+
+/// A direction sampler at step `k` of a generator, by the bits of its parameters: every
+/// generator with it there reads the same densities ([`TestPaths::step_pdfs`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct StepKey {
+    k: usize,
+    /// The variant, then its parameters' bits.
+    sampler: [u64; 11],
+}
+
+impl StepKey {
+    fn new(k: usize, sampler: &DirectionSampler) -> Self {
+        let mut bits = [0u64; 11];
+        let mut put = |variant: u64, values: &[f64]| {
+            bits[0] = variant;
+            for (b, v) in bits[1..].iter_mut().zip(values) {
+                *b = v.to_bits();
+            }
+        };
+        match sampler {
+            DirectionSampler::Brdf => put(0, &[]),
+            DirectionSampler::Anchor(a) => {
+                let p = a.anchor;
+                put(1, &[p.x, p.y, p.z, a.theta_c, a.alpha]);
+            }
+            DirectionSampler::Patch(p) => {
+                let (c, u, v) = (p.center, p.half_u, p.half_v);
+                put(2, &[c.x, c.y, c.z, u.x, u.y, u.z, v.x, v.y, v.z, p.alpha]);
+            }
+        }
+        Self { k, sampler: bits }
+    }
+
+    /// The keys of `gene`'s first `steps` steps.
+    fn of(gene: &Gene, steps: usize) -> impl Iterator<Item = Self> + '_ {
+        let steps = gene.generator.steps.iter().take(steps).enumerate();
+        steps.map(|(k, s)| Self::new(k, &s.sampler))
+    }
+}
+
+/// A light-point sampler by the bits of its parameters: every generator with it reads the
+/// same light densities ([`TestPaths::light_pdfs`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct LightKey([u64; 4]);
+
+impl LightKey {
+    fn new(gene: &Gene) -> Self {
+        let LightPointSampler { region, beta } = gene.generator.light;
+        let (prim, level, cell) = (region.prim, region.level, region.cell);
+        Self([prim.into(), level.into(), cell.into(), beta.to_bits()])
+    }
+}
+
+/// Evaluates eq. 10 for whole generations, caching every generator's densities (by gene
+/// id: copies share the id), every step's direction densities and every light sampler's
+/// light densities (by their parameters: a generator changed in its absorption, its light
+/// sampler or one step reads the others' densities from the cache; on cbox, fig1 and
+/// glossy 60 % of the new generators' cones and patches, and 62 % of their light samplers,
+/// are ones the cache holds).
 #[derive(Default)]
 pub struct Evaluator {
-    /// Gene id → slot of `densities`.
-    slot_of: HashMap<u64, usize>,
-    densities: Vec<Vec<f64>>,
-    /// Slots whose gene left the population, ready for reuse.
-    free: Vec<usize>,
-    /// Per slot: referenced by the generation being evaluated.
-    used: Vec<bool>,
+    genes: Cache<u64>,
+    steps: Cache<StepKey>,
+    lights: Cache<LightKey>,
     mixture_pdf: Vec<f64>,
     /// Generators evaluated against the test paths (cache misses), for statistics.
     pub generator_evaluations: u64,
@@ -94,54 +218,42 @@ impl Evaluator {
         population: &[Individual],
         v: &mut Vec<f64>,
     ) {
-        // Forget generators no longer in the population, keeping their buffers.
-        self.used.iter_mut().for_each(|u| *u = false);
-        for ind in population {
-            for gene in &ind.genes {
-                if let Some(&slot) = self.slot_of.get(&gene.id) {
-                    self.used[slot] = true;
-                }
-            }
-        }
-        let used = &self.used;
-        let free = &mut self.free;
-        self.slot_of.retain(|_, slot| {
-            if !used[*slot] {
-                free.push(*slot);
-            }
-            used[*slot]
-        });
+        let genes = || population.iter().flat_map(|ind| &ind.genes);
+        let step_keys = |gene| StepKey::of(gene, paths.step_count());
+        // Forget generators and steps no longer in the population, keeping their buffers.
+        self.genes.keep_only(genes().map(|gene| &gene.id));
+        let keys: Vec<StepKey> = genes().flat_map(step_keys).collect();
+        self.steps.keep_only(keys.iter());
+        let keys: Vec<LightKey> = genes().map(LightKey::new).collect();
+        self.lights.keep_only(keys.iter());
         // Evaluate the new ones.
-        for ind in population {
-            for gene in &ind.genes {
-                if self.slot_of.contains_key(&gene.id) {
-                    continue;
-                }
-                let slot = match self.free.pop() {
-                    Some(slot) => slot,
-                    None => {
-                        self.densities.push(vec![0.0; paths.len()]);
-                        self.used.push(true);
-                        self.densities.len() - 1
-                    }
-                };
-                self.used[slot] = true;
-                paths.generator_pdfs(view, &gene.generator, &mut self.densities[slot]);
-                self.slot_of.insert(gene.id, slot);
-                self.generator_evaluations += 1;
+        for gene in genes() {
+            if self.genes.slot_of.contains_key(&gene.id) {
+                continue;
             }
+            let g = &gene.generator;
+            let mut slots = Vec::with_capacity(g.steps.len());
+            for (k, key) in step_keys(gene).enumerate() {
+                let fill = |out: &mut Vec<f64>| paths.step_pdfs(k, &g.steps[k].sampler, out);
+                slots.push(self.steps.slot(key, fill));
+            }
+            let steps: Vec<&[f64]> = slots.iter().map(|&s| &self.steps.buffers[s][..]).collect();
+            let fill = |out: &mut Vec<f64>| paths.light_pdfs(view, g, out);
+            let lights = self.lights.slot(LightKey::new(gene), fill);
+            let lights = &self.lights.buffers[lights];
+            let fill = |out: &mut Vec<f64>| {
+                out.resize(paths.len(), 0.0);
+                paths.generator_pdfs_with(g, (&steps, lights), out);
+            };
+            self.genes.slot(gene.id, fill);
+            self.generator_evaluations += 1;
         }
         // S + 1 multiply-adds per path and individual.
         self.mixture_pdf.resize(paths.len(), 0.0);
         v.clear();
         for ind in population {
-            self.mixture_pdf.iter_mut().for_each(|p| *p = 0.0);
-            for (gene, &w) in ind.genes.iter().zip(&ind.weights) {
-                let densities = &self.densities[self.slot_of[&gene.id]];
-                for (p, d) in self.mixture_pdf.iter_mut().zip(densities) {
-                    *p += w * d;
-                }
-            }
+            let densities: Vec<&[f64]> = ind.genes.iter().map(|g| self.genes.get(&g.id)).collect();
+            mixture_pdf(&densities, &ind.weights, &mut self.mixture_pdf);
             v.push(moment(paths, &self.mixture_pdf));
         }
         self.individual_evaluations += population.len() as u64;
@@ -154,21 +266,25 @@ impl Evaluator {
         paths: &TestPaths,
         ind: &mut Individual,
         defensive: f64,
-        iterations: usize,
+        steps: Steps,
     ) -> f64 {
-        let densities: Vec<&[f64]> = ind
-            .genes
-            .iter()
-            .map(|g| self.densities[self.slot_of[&g.id]].as_slice())
-            .collect();
+        let densities: Vec<&[f64]> = ind.genes.iter().map(|g| self.genes.get(&g.id)).collect();
         optimise_weights(
             (&paths.f2_over_q, paths.sampled),
             &densities,
             &mut ind.weights,
             defensive,
-            iterations,
+            steps,
         )
     }
+}
+
+/// When [`optimise_weights`] stops: after `iterations` steps, or after the first step that
+/// lowers `V` by less than the share `tolerance` of it (that step is kept).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Steps {
+    pub iterations: usize,
+    pub tolerance: f64,
 }
 
 /// The mixture weights of fixed generators that minimise eq. 10 (beyond the paper).
@@ -184,13 +300,13 @@ impl Evaluator {
 ///
 /// `f2_over_q` and `sampled` are the test paths' ([`TestPaths`]), `densities[i]` generator
 /// `i`'s densities on the stored paths (component 0 is the defensive one), `weights` a
-/// feasible start, overwritten. Returns the final `V`.
+/// feasible start, overwritten, `steps` when to stop. Returns the final `V`.
 pub fn optimise_weights(
     (f2_over_q, sampled): (&[f64], usize),
     densities: &[&[f64]],
     weights: &mut [f64],
     defensive: f64,
-    iterations: usize,
+    steps: Steps,
 ) -> f64 {
     let n = weights.len();
     assert_eq!(densities.len(), n, "one density vector per weight");
@@ -203,17 +319,15 @@ pub fn optimise_weights(
     let mut gradient = vec![0.0; n];
     let mut candidate = vec![0.0; n];
     let mut eta = 1.0;
-    for _ in 0..iterations {
-        // g_i with the current pdf, every component's sum in one pass over the paths (each
-        // summed in path order, as alone).
-        gradient.iter_mut().for_each(|g| *g = 0.0);
-        for (j, (c, p)) in f2_over_q.iter().zip(&pdf).enumerate() {
-            let p2 = p * p;
-            for (g, d) in gradient.iter_mut().zip(densities) {
-                *g += c * d[j] / p2;
+    for _ in 0..steps.iterations {
+        // g_i with the current pdf, each summed in path order.
+        for (g, d) in gradient.iter_mut().zip(densities) {
+            let mut sum = 0.0;
+            for ((c, p), d) in f2_over_q.iter().zip(&pdf).zip(d.iter()) {
+                sum += c * d / (p * p);
             }
+            *g = sum / sampled as f64;
         }
-        gradient.iter_mut().for_each(|g| *g /= sampled as f64);
         let mut accepted = false;
         while eta > 1e-3 {
             for ((c, w), g) in candidate.iter_mut().zip(&*weights).zip(&gradient) {
@@ -223,7 +337,7 @@ pub fn optimise_weights(
             mixture_pdf(densities, &candidate, &mut pdf);
             let v_new = moment_of(f2_over_q, sampled, &pdf);
             if v_new < v {
-                accepted = v_new < v * (1.0 - 1e-9);
+                accepted = v_new < v * (1.0 - steps.tolerance);
                 weights.copy_from_slice(&candidate);
                 v = v_new;
                 break;
@@ -241,8 +355,17 @@ pub fn optimise_weights(
 
 /// `pdf = Σ_i weights[i] · densities[i]`, each path's sum in component order.
 fn mixture_pdf(densities: &[&[f64]], weights: &[f64], pdf: &mut [f64]) {
-    pdf.iter_mut().for_each(|p| *p = 0.0);
-    for (d, &wi) in densities.iter().zip(weights) {
+    let mut components = densities.iter().zip(weights);
+    match components.next() {
+        // `0 + w·d` is `w·d` for the non-negative densities and weights: no pass to zero.
+        Some((d, &wi)) => {
+            for (p, di) in pdf.iter_mut().zip(d.iter()) {
+                *p = wi * di;
+            }
+        }
+        None => pdf.iter_mut().for_each(|p| *p = 0.0),
+    }
+    for (d, &wi) in components {
         for (p, di) in pdf.iter_mut().zip(d.iter()) {
             *p += wi * di;
         }
@@ -295,6 +418,11 @@ mod tests {
 
     /// Three generators on 400 synthetic paths: the defensive one flat, the others each
     /// concentrated where a share of the contribution lies.
+    const TIGHT: Steps = Steps {
+        iterations: 200,
+        tolerance: 1e-9,
+    };
+
     fn problem() -> (Vec<f64>, Vec<Vec<f64>>) {
         let mut rng = sample_rng(3, 0, 0);
         let n = 400;
@@ -340,7 +468,7 @@ mod tests {
         let start = [0.4, 0.3, 0.3];
         let mut w = start;
         let refs: Vec<&[f64]> = d.iter().map(|v| v.as_slice()).collect();
-        let v = optimise_weights((&c, 2 * c.len()), &refs, &mut w, defensive, 200);
+        let v = optimise_weights((&c, 2 * c.len()), &refs, &mut w, defensive, TIGHT);
         let sum: f64 = w.iter().sum();
         assert!(
             (sum - 1.0).abs() < 1e-12 && w[0] >= defensive - 1e-12,
@@ -398,7 +526,7 @@ mod tests {
         let mut w = [0.25; 4];
         let refs: Vec<&[f64]> = d.iter().map(|v| v.as_slice()).collect();
         let tests = (&c[..], 2 * c.len());
-        let v = optimise_weights(tests, &refs, &mut w, defensive, 200);
+        let v = optimise_weights(tests, &refs, &mut w, defensive, TIGHT);
         let tolerance = 1e-3;
         let (kept, kept_w) = prune_components(tests, &refs, &w, (defensive, v, tolerance));
         assert_eq!(kept, [0, 1, 2], "weights {w:?}");

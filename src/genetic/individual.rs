@@ -271,7 +271,7 @@ impl<'a> GenePool<'a> {
                 .iter()
                 .map(|p| (p.0 * axis.dot(e1) + p.1 * axis.dot(e2), p.2))
                 .collect();
-            along.sort_by(|a, b| a.0.total_cmp(&b.0));
+            along.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
             let quantile = |q: f64| {
                 let mut sum = 0.0;
                 along

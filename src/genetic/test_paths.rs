@@ -27,8 +27,8 @@
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
-    fixed_light_pdf, Contribution, GeneratorDensity, LightEnd, Nee, PathGenerator, PathVertices,
-    Query, Walk,
+    fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
+    PathGenerator, PathVertices, Query, StepDensity, Walk,
 };
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView, SurfacePoint};
@@ -36,6 +36,7 @@ use crate::sampling::light_point::{finest_cell, PointCells};
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
 use glam::DVec3;
+use std::sync::OnceLock;
 
 /// Test paths of one pixel.
 /// A camera ray through a point uniform over the square of `side` pixels centred on pixel
@@ -116,6 +117,62 @@ pub struct TestPaths {
     wi: Vec<DVec3>,
     brdf_pdf: Vec<f64>,
     delta: Vec<bool>,
+    /// How [`Self::generator_pdfs_with`] walks the paths; found when first asked for,
+    /// forgotten by [`Self::push`].
+    walks: OnceLock<Walks>,
+}
+
+/// How [`TestPaths::generator_pdfs_with`] walks the stored paths, found once from them. A
+/// generator's density multiplies, along each path, its step `k`'s density of the direction
+/// out of the path's `k`-th non-delta vertex; which step reads a vertex depends on the path
+/// alone, so the densities of one sampler at step `k` serve every generator that has it
+/// there ([`crate::genetic::fitness::Evaluator`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Walks {
+    /// Per step: the vertices whose direction it reads, in the walk's order: a path's
+    /// non-delta vertices that the stored path before does not share, and with
+    /// [`Nee::Every`] the last vertex of a path that ends at a light point (its direction
+    /// the one to that point).
+    of_step: Vec<Vec<u32>>,
+    /// Per stored path, in order.
+    paths: Vec<PathWalk>,
+    /// The stored paths' reads of unshared vertices, path after path.
+    reads: Vec<Read>,
+}
+
+/// One vertex read by the walk: its place in its step's list of [`Walks::of_step`], and
+/// whether its scattering event is past what the estimator allows there (absorption 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Read {
+    place: u32,
+    past_max: bool,
+}
+
+/// What the walk does for one stored path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PathWalk {
+    /// Non-delta vertices it shares, bit for bit, with the stored path before.
+    shared: u32,
+    /// Its reads end at `Walks::reads[reads_end]`; they start where the path before's end.
+    reads_end: u32,
+    end: WalkEnd,
+}
+
+/// How a stored path's density ends, after its last read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum WalkEnd {
+    /// Nothing more: an emitter hit with [`Nee::Every`], or a path without a light point.
+    Direction,
+    /// With [`Nee::Every`], a light point: the sum of the two techniques, `p_dir + p_light`
+    /// (`PathGenerator::pdf_techniques`), the direction to it read at `read` (`place`
+    /// `u32::MAX` where the light is a delta one, which no direction finds).
+    Both {
+        read: Read,
+        area_to_solid_angle: f64,
+    },
+    /// With [`Nee::End`], a light point after the absorption at the last vertex (`past_max`:
+    /// at `max_bounces`, where it is 1).
+    Light { past_max: bool },
 }
 
 /// A stored path's end as every generator's light density reads it
@@ -377,6 +434,7 @@ impl TestPaths {
             wi: Vec::new(),
             brdf_pdf: Vec::new(),
             delta: Vec::new(),
+            walks: OnceLock::new(),
         }
     }
 
@@ -514,6 +572,7 @@ impl TestPaths {
     /// Stores the part of `path` that contribution `c` uses, with its `f_c²/q` (`sampled`,
     /// the `M` of eq. 10, is the caller's to count; `f2_over_q` is [`Self::weigh`]'s).
     pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: DVec3) {
+        self.walks = OnceLock::new();
         let every = self.estimator == Nee::Every;
         let scattering = if c.nee && !every { c.len - 1 } else { c.len };
         for (j, v) in path.vertices[..scattering].iter().enumerate() {
@@ -697,77 +756,193 @@ impl TestPaths {
 
     /// The density `p_g` of every stored path, into `out` (`out.len() == self.len()`):
     /// the same value as `PathGenerator::pdf_contribution` on the original path.
-    ///
-    /// The product of the direction densities runs along each sampled path once: a stored
-    /// path starts from the running product over the vertices it shares with the one before
-    /// it (`shared`), which is the same product of the same factors in the same order.
     pub fn generator_pdfs(&self, view: &SceneView, g: &PathGenerator, out: &mut [f64]) {
-        let every = self.estimator == Nee::Every;
-        let density = GeneratorDensity::new(g, view);
-        let direction = |j: usize, k: usize| {
-            let at = || (self.point[j], self.wi[j]);
-            density.direction(k, at, || self.brdf_pdf[j])
-        };
-        let light_pdf = |i: usize| {
-            let end = &self.light[i];
-            density.light(view, (end.fixed, end.prim), |level| {
-                PointCells::of_finest(end.cell, level)
+        let steps: Vec<Vec<f64>> = (0..self.step_count().min(g.steps.len()))
+            .map(|k| {
+                let mut densities = Vec::new();
+                self.step_pdfs(k, &g.steps[k].sampler, &mut densities);
+                densities
             })
-        };
-        // `prefix[t]`: the product over the first `t` vertices of the path last evaluated,
-        // and the number of non-delta ones among them; `absorbed`: its vertex
-        // `prefix.len() − 1` has absorption 1 (its density is 0 from there on).
-        let mut prefix: Vec<(f64, usize)> = vec![(1.0, 0)];
-        let mut absorbed = false;
-        for (i, out) in out.iter_mut().enumerate() {
-            let start = self.offsets[i] as usize;
-            let end = self.product_vertices(i).end;
-            let shared = self.shared[i] as usize;
-            if absorbed && shared >= prefix.len() {
-                *out = 0.0;
-                continue;
-            }
-            prefix.truncate(shared + 1);
-            absorbed = false;
-            let (mut pdf, mut k) = prefix[shared];
-            for j in start + shared..end {
-                if !self.delta[j] {
+            .collect();
+        let steps: Vec<&[f64]> = steps.iter().map(Vec::as_slice).collect();
+        let mut lights = Vec::new();
+        self.light_pdfs(view, g, &mut lights);
+        self.generator_pdfs_with(g, (&steps, &lights), out);
+    }
+
+    /// The density with which `g`'s light technique draws each stored path's light point
+    /// (`PathGenerator::light_pdf`; 0 for a path without one), into `out`: it depends on
+    /// `g`'s light-point sampler alone.
+    pub fn light_pdfs(&self, view: &SceneView, g: &PathGenerator, out: &mut Vec<f64>) {
+        let density = GeneratorDensity::new(g, view);
+        out.clear();
+        out.extend(self.walks().paths.iter().zip(&self.light).map(
+            |(walk, light)| match walk.end {
+                WalkEnd::Direction => 0.0,
+                _ => density.light(view, (light.fixed, light.prim), |level| {
+                    PointCells::of_finest(light.cell, level)
+                }),
+            },
+        ));
+    }
+
+    /// The number of steps whose densities [`Self::generator_pdfs_with`] reads: the most
+    /// non-delta vertices of a stored path.
+    pub fn step_count(&self) -> usize {
+        self.walks().of_step.len()
+    }
+
+    /// `sampler`'s densities as step `k` of a generator at the vertices where
+    /// [`Self::generator_pdfs_with`] reads them, into `out`.
+    pub fn step_pdfs(&self, k: usize, sampler: &DirectionSampler, out: &mut Vec<f64>) {
+        let density = StepDensity::new(sampler);
+        out.clear();
+        out.extend(self.walks().of_step[k].iter().map(|&j| {
+            let j = j as usize;
+            density.pdf(|| (self.point[j], self.wi[j]), || self.brdf_pdf[j])
+        }));
+    }
+
+    /// [`Walks`] of the stored paths.
+    fn walks(&self) -> &Walks {
+        self.walks.get_or_init(|| {
+            let every = self.estimator == Nee::Every;
+            let max = self.max_bounces as usize;
+            let mut walks = Walks::default();
+            let read = |walks: &mut Walks, j: usize, k: usize, past_max: bool| {
+                if walks.of_step.len() <= k {
+                    walks.of_step.resize_with(k + 1, Vec::new);
+                }
+                let place = walks.of_step[k].len() as u32;
+                walks.of_step[k].push(j as u32);
+                Read { place, past_max }
+            };
+            for i in 0..self.len() {
+                let start = self.offsets[i] as usize;
+                let end = self.product_vertices(i).end;
+                let unshared = start + self.shared[i] as usize;
+                let mut k = (start..unshared).filter(|&j| !self.delta[j]).count();
+                let shared = k as u32;
+                for j in (unshared..end).filter(|&j| !self.delta[j]) {
                     // With next-event estimation at every vertex a direction follows the
                     // light point: at `max_bounces` only a path that escaped to the
                     // environment stores one (`PathGenerator::pdf_techniques`); before it,
                     // both absorptions agree.
                     let bounce = j - start + 1;
-                    let a = if every {
-                        g.absorption_after_light(k, bounce, self.max_bounces)
-                    } else {
-                        g.absorption(k, bounce, self.max_bounces)
-                    };
-                    if a >= 1.0 {
-                        absorbed = true;
-                        break;
-                    }
-                    pdf *= (1.0 - a) * direction(j, k);
+                    let past_max = if every { bounce > max } else { bounce >= max };
+                    let r = read(&mut walks, j, k, past_max);
+                    walks.reads.push(r);
                     k += 1;
                 }
-                prefix.push((pdf, k));
+                let len = self.len[i] as usize;
+                let end = if every && self.connected[i] {
+                    let read = if self.light_delta[i] {
+                        Read {
+                            place: u32::MAX,
+                            past_max: true,
+                        }
+                    } else {
+                        read(&mut walks, end, k, len > max)
+                    };
+                    WalkEnd::Both {
+                        read,
+                        area_to_solid_angle: self.area_to_solid_angle[i],
+                    }
+                } else if self.nee[i] && !every {
+                    WalkEnd::Light {
+                        past_max: len >= max,
+                    }
+                } else {
+                    WalkEnd::Direction
+                };
+                walks.paths.push(PathWalk {
+                    shared,
+                    reads_end: walks.reads.len() as u32,
+                    end,
+                });
+            }
+            walks
+        })
+    }
+
+    /// [`Self::generator_pdfs`] with `g`'s direction densities at step `k` given by
+    /// `steps[k]` ([`Self::step_pdfs`] of its sampler there; every step below
+    /// [`Self::step_count`] that `g` has) and its light technique's by `lights`
+    /// ([`Self::light_pdfs`]).
+    ///
+    /// The product of the direction densities runs along each sampled path once: a stored
+    /// path starts from the running product over the vertices it shares with the one before
+    /// it, which is the same product of the same factors in the same order.
+    pub fn generator_pdfs_with(
+        &self,
+        g: &PathGenerator,
+        (steps, lights): (&[&[f64]], &[f64]),
+        out: &mut [f64],
+    ) {
+        let walks = self.walks();
+        // Per step of `g`: its absorption and its densities (none past those the paths
+        // read, where only an end-only light point may still follow the absorption).
+        let table: Vec<(f64, &[f64])> = g
+            .steps
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (s.absorption, steps.get(k).copied().unwrap_or_default()))
+            .collect();
+        // The absorption at `g`'s step `k` (1 past its steps or past `max_bounces`), and
+        // its densities.
+        let step = |k: usize, past_max: bool| match table.get(k) {
+            Some(&(a, densities)) if !past_max => (a, densities),
+            _ => (1.0, &[][..]),
+        };
+        // `prefix[t]`: the product over the first `t` reads of the path last evaluated;
+        // `absorbed`: its read `prefix.len() − 1` has absorption 1 (its density is 0 from
+        // there on).
+        let mut prefix: Vec<f64> = vec![1.0];
+        let mut absorbed = false;
+        let mut first = 0;
+        for ((walk, out), &light) in walks.paths.iter().zip(out.iter_mut()).zip(lights) {
+            let reads = &walks.reads[first..walk.reads_end as usize];
+            first = walk.reads_end as usize;
+            let mut k = walk.shared as usize;
+            if absorbed && k >= prefix.len() {
+                *out = 0.0;
+                continue;
+            }
+            prefix.truncate(k + 1);
+            absorbed = false;
+            let mut pdf = prefix[k];
+            for read in reads {
+                let (a, densities) = step(k, read.past_max);
+                if a >= 1.0 {
+                    absorbed = true;
+                    break;
+                }
+                pdf *= (1.0 - a) * densities[read.place as usize];
+                k += 1;
+                prefix.push(pdf);
             }
             if absorbed {
                 *out = 0.0;
                 continue;
             }
-            let len = self.len[i] as usize;
-            if every && self.connected[i] && pdf > 0.0 {
-                // As `PathGenerator::pdf_techniques`: `p_dir + p_light`.
-                let a = g.absorption_after_light(k, len, self.max_bounces);
-                let dir = if a >= 1.0 || self.light_delta[i] {
-                    0.0
-                } else {
-                    (1.0 - a) * direction(end, k)
-                };
-                let light = light_pdf(i) * self.area_to_solid_angle[i];
-                pdf = pdf * dir + pdf * light;
-            } else if self.nee[i] && !every && pdf > 0.0 {
-                pdf *= g.absorption(k, len, self.max_bounces) * light_pdf(i);
+            match walk.end {
+                WalkEnd::Both {
+                    read,
+                    area_to_solid_angle,
+                } if pdf > 0.0 => {
+                    let (a, densities) = step(k, read.past_max);
+                    let dir = if a >= 1.0 || read.place == u32::MAX {
+                        0.0
+                    } else {
+                        (1.0 - a) * densities[read.place as usize]
+                    };
+                    let light = light * area_to_solid_angle;
+                    pdf = pdf * dir + pdf * light;
+                }
+                WalkEnd::Light { past_max } if pdf > 0.0 => {
+                    pdf *= step(k, past_max).0 * light;
+                }
+                _ => {}
             }
             *out = pdf;
         }

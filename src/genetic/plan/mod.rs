@@ -61,7 +61,7 @@ pub use config::PlanConfig;
 pub use gate::{
     gate_margins, GateConfig, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
 };
-pub use pixel::{GaPixel, COMPONENT_TOLERANCE, CONVEX_ITERATIONS, PRUNE_SHARE};
+pub use pixel::{GaPixel, COMPONENT_TOLERANCE, CONVEX_STEPS, PRUNE_SHARE};
 pub use stages::{LearnStore, PlanError, WaveEntry};
 
 use super::nearest::PointGrid;

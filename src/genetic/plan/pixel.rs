@@ -22,10 +22,13 @@ use std::time::Instant;
 /// ~100 test paths carry light, too few to call a depth's share negligible.)
 pub const PRUNE_SHARE: f64 = 0.0;
 
-/// Iterations of [`fitness::optimise_weights`] with `GaConfig::convex_weights` (each costs
-/// two passes over the light-carrying test paths per generator; it stops earlier once `V`
-/// stops falling).
-pub const CONVEX_ITERATIONS: usize = 200;
+/// Steps of [`fitness::optimise_weights`] on the evolved mixture with
+/// `GaConfig::convex_weights` (each costs two passes over the light-carrying test paths per
+/// generator; it stops earlier once `V` stops falling).
+pub const CONVEX_STEPS: fitness::Steps = fitness::Steps {
+    iterations: 200,
+    tolerance: 1e-9,
+};
 
 /// With pruning (`PlanConfig::prune`), the evolved mixture of `ga` keeps only the components
 /// without which its `V` would rise by more than this share, in all
@@ -343,7 +346,7 @@ fn convex_weights(
         &refs,
         &mut best.weights,
         ga.defensive_weight,
-        CONVEX_ITERATIONS,
+        CONVEX_STEPS,
     );
     if let (Some(tolerance), true) = (prune, v.is_finite()) {
         let settings = (ga.defensive_weight, v, tolerance);
@@ -363,7 +366,7 @@ fn convex_weights(
                 &refs,
                 &mut best.weights,
                 ga.defensive_weight,
-                CONVEX_ITERATIONS,
+                CONVEX_STEPS,
             );
         }
     }
