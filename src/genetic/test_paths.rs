@@ -27,7 +27,7 @@
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::path::generator::{
-    fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
+    absorbs_at, fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
     PathGenerator, PathVertices, Query, StepDensity, Walk,
 };
 use crate::path::mixture::Mixture;
@@ -119,7 +119,18 @@ pub struct TestPaths {
     delta: Vec<bool>,
     /// How [`Self::generator_pdfs_with`] walks the paths; found when first asked for,
     /// forgotten by [`Self::push`].
-    walks: OnceLock<Walks>,
+    walks: WalksOnce,
+}
+
+/// [`Walks`], found from the stored paths when first asked for: state derived from them,
+/// which the equality of two stores leaves out.
+#[derive(Clone, Debug, Default)]
+struct WalksOnce(OnceLock<Walks>);
+
+impl PartialEq for WalksOnce {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// How [`TestPaths::generator_pdfs_with`] walks the stored paths, found once from them. A
@@ -127,7 +138,7 @@ pub struct TestPaths {
 /// out of the path's `k`-th non-delta vertex; which step reads a vertex depends on the path
 /// alone, so the densities of one sampler at step `k` serve every generator that has it
 /// there ([`crate::genetic::fitness::Evaluator`]).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 struct Walks {
     /// Per step: the vertices whose direction it reads, in the walk's order: a path's
     /// non-delta vertices that the stored path before does not share, and with
@@ -141,15 +152,15 @@ struct Walks {
 }
 
 /// One vertex read by the walk: its place in its step's list of [`Walks::of_step`], and
-/// whether its scattering event is past what the estimator allows there (absorption 1).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// whether every generator's absorption is 1 there ([`absorbs_at`]).
+#[derive(Clone, Copy, Debug)]
 struct Read {
     place: u32,
-    past_max: bool,
+    absorbs: bool,
 }
 
 /// What the walk does for one stored path.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 struct PathWalk {
     /// Non-delta vertices it shares, bit for bit, with the stored path before.
     shared: u32,
@@ -159,7 +170,7 @@ struct PathWalk {
 }
 
 /// How a stored path's density ends, after its last read.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 enum WalkEnd {
     /// Nothing more: an emitter hit with [`Nee::Every`], or a path without a light point.
     Direction,
@@ -170,9 +181,9 @@ enum WalkEnd {
         read: Read,
         area_to_solid_angle: f64,
     },
-    /// With [`Nee::End`], a light point after the absorption at the last vertex (`past_max`:
-    /// at `max_bounces`, where it is 1).
-    Light { past_max: bool },
+    /// With [`Nee::End`], a light point after the absorption at the last vertex (`absorbs`:
+    /// 1 for every generator there, [`absorbs_at`]).
+    Light { absorbs: bool },
 }
 
 /// A stored path's end as every generator's light density reads it
@@ -434,7 +445,7 @@ impl TestPaths {
             wi: Vec::new(),
             brdf_pdf: Vec::new(),
             delta: Vec::new(),
-            walks: OnceLock::new(),
+            walks: WalksOnce::default(),
         }
     }
 
@@ -572,7 +583,7 @@ impl TestPaths {
     /// Stores the part of `path` that contribution `c` uses, with its `f_c²/q` (`sampled`,
     /// the `M` of eq. 10, is the caller's to count; `f2_over_q` is [`Self::weigh`]'s).
     pub fn push(&mut self, view: &SceneView, path: &PathVertices, c: &Contribution, f2q: DVec3) {
-        self.walks = OnceLock::new();
+        self.walks = WalksOnce::default();
         let every = self.estimator == Nee::Every;
         let scattering = if c.nee && !every { c.len - 1 } else { c.len };
         for (j, v) in path.vertices[..scattering].iter().enumerate() {
@@ -805,17 +816,21 @@ impl TestPaths {
 
     /// [`Walks`] of the stored paths.
     fn walks(&self) -> &Walks {
-        self.walks.get_or_init(|| {
+        self.walks.0.get_or_init(|| {
             let every = self.estimator == Nee::Every;
-            let max = self.max_bounces as usize;
+            let max = self.max_bounces;
             let mut walks = Walks::default();
-            let read = |walks: &mut Walks, j: usize, k: usize, past_max: bool| {
+            // With next-event estimation at every vertex a direction follows the light
+            // point: at `max_bounces` only a path that escaped to the environment stores one
+            // (`PathGenerator::pdf_techniques`); before it, both absorptions agree.
+            let read = |walks: &mut Walks, j: usize, k: usize, bounce: usize| {
                 if walks.of_step.len() <= k {
                     walks.of_step.resize_with(k + 1, Vec::new);
                 }
                 let place = walks.of_step[k].len() as u32;
                 walks.of_step[k].push(j as u32);
-                Read { place, past_max }
+                let absorbs = absorbs_at(bounce, max, every);
+                Read { place, absorbs }
             };
             for i in 0..self.len() {
                 let start = self.offsets[i] as usize;
@@ -824,13 +839,7 @@ impl TestPaths {
                 let mut k = (start..unshared).filter(|&j| !self.delta[j]).count();
                 let shared = k as u32;
                 for j in (unshared..end).filter(|&j| !self.delta[j]) {
-                    // With next-event estimation at every vertex a direction follows the
-                    // light point: at `max_bounces` only a path that escaped to the
-                    // environment stores one (`PathGenerator::pdf_techniques`); before it,
-                    // both absorptions agree.
-                    let bounce = j - start + 1;
-                    let past_max = if every { bounce > max } else { bounce >= max };
-                    let r = read(&mut walks, j, k, past_max);
+                    let r = read(&mut walks, j, k, j - start + 1);
                     walks.reads.push(r);
                     k += 1;
                 }
@@ -839,10 +848,10 @@ impl TestPaths {
                     let read = if self.light_delta[i] {
                         Read {
                             place: u32::MAX,
-                            past_max: true,
+                            absorbs: true,
                         }
                     } else {
-                        read(&mut walks, end, k, len > max)
+                        read(&mut walks, end, k, len)
                     };
                     WalkEnd::Both {
                         read,
@@ -850,7 +859,7 @@ impl TestPaths {
                     }
                 } else if self.nee[i] && !every {
                     WalkEnd::Light {
-                        past_max: len >= max,
+                        absorbs: absorbs_at(len, max, false),
                     }
                 } else {
                     WalkEnd::Direction
@@ -882,16 +891,18 @@ impl TestPaths {
         let walks = self.walks();
         // Per step of `g`: its absorption and its densities (none past those the paths
         // read, where only an end-only light point may still follow the absorption).
-        let table: Vec<(f64, &[f64])> = g
-            .steps
-            .iter()
-            .enumerate()
-            .map(|(k, s)| (s.absorption, steps.get(k).copied().unwrap_or_default()))
+        let table: Vec<(f64, &[f64])> = (0..g.steps.len())
+            .map(|k| {
+                (
+                    g.absorption_unless(k, false),
+                    steps.get(k).copied().unwrap_or_default(),
+                )
+            })
             .collect();
-        // The absorption at `g`'s step `k` (1 past its steps or past `max_bounces`), and
-        // its densities.
-        let step = |k: usize, past_max: bool| match table.get(k) {
-            Some(&(a, densities)) if !past_max => (a, densities),
+        // `g`'s absorption at step `k` where a read `absorbs` or not, as
+        // [`PathGenerator::absorption_unless`], and its densities.
+        let step = |k: usize, absorbs: bool| match table.get(k) {
+            Some(&(a, densities)) if !absorbs => (a, densities),
             _ => (1.0, &[][..]),
         };
         // `prefix[t]`: the product over the first `t` reads of the path last evaluated;
@@ -912,7 +923,7 @@ impl TestPaths {
             absorbed = false;
             let mut pdf = prefix[k];
             for read in reads {
-                let (a, densities) = step(k, read.past_max);
+                let (a, densities) = step(k, read.absorbs);
                 if a >= 1.0 {
                     absorbed = true;
                     break;
@@ -930,7 +941,7 @@ impl TestPaths {
                     read,
                     area_to_solid_angle,
                 } if pdf > 0.0 => {
-                    let (a, densities) = step(k, read.past_max);
+                    let (a, densities) = step(k, read.absorbs);
                     let dir = if a >= 1.0 || read.place == u32::MAX {
                         0.0
                     } else {
@@ -939,8 +950,8 @@ impl TestPaths {
                     let light = light * area_to_solid_angle;
                     pdf = pdf * dir + pdf * light;
                 }
-                WalkEnd::Light { past_max } if pdf > 0.0 => {
-                    pdf *= step(k, past_max).0 * light;
+                WalkEnd::Light { absorbs } if pdf > 0.0 => {
+                    pdf *= step(k, absorbs).0 * light;
                 }
                 _ => {}
             }

@@ -240,6 +240,20 @@ pub struct PathGenerator {
     pub light: LightPointSampler,
 }
 
+/// Whether every generator's absorption is 1 at scattering event `bounce` (no direction is
+/// sampled there): from `max_bounces` on, or with next-event estimation at every vertex
+/// after the light point (`after_light`) only past it ([`PathGenerator::absorption`],
+/// [`PathGenerator::absorption_after_light`]). It depends on the path alone.
+#[inline]
+pub fn absorbs_at(bounce: usize, max_bounces: u32, after_light: bool) -> bool {
+    let max = max_bounces as usize;
+    if after_light {
+        bounce > max
+    } else {
+        bounce >= max
+    }
+}
+
 /// One vertex of a sampled eye path, with what any generator needs to evaluate its density.
 #[derive(Clone, Copy, Debug)]
 pub struct PathVertex {
@@ -564,13 +578,9 @@ impl PathGenerator {
     }
 
     /// Absorption at the `k`-th non-delta vertex, which is scattering event `bounce`: 1 after
-    /// the last step and at `max_bounces`.
+    /// the last step and at `max_bounces` ([`absorbs_at`]).
     pub fn absorption(&self, k: usize, bounce: usize, max_bounces: u32) -> f64 {
-        if bounce >= max_bounces as usize || k >= self.steps.len() {
-            1.0
-        } else {
-            self.steps[k].absorption
-        }
+        self.absorption_unless(k, absorbs_at(bounce, max_bounces, false))
     }
 
     /// With [`Nee::Every`], the absorption at the `k`-th non-delta vertex, scattering event
@@ -579,10 +589,16 @@ impl PathGenerator {
     /// BSDF sample: light points alone there have unbounded variance where an emitter meets
     /// the surface, as in a furnace's corners).
     pub fn absorption_after_light(&self, k: usize, bounce: usize, max_bounces: u32) -> f64 {
-        if bounce > max_bounces as usize || k >= self.steps.len() {
-            1.0
-        } else {
-            self.steps[k].absorption
+        self.absorption_unless(k, absorbs_at(bounce, max_bounces, true))
+    }
+
+    /// Step `k`'s absorption, 1 past the last step or where `absorbs` (the scattering event
+    /// is past the last that samples a direction, [`absorbs_at`]).
+    #[inline]
+    pub fn absorption_unless(&self, k: usize, absorbs: bool) -> f64 {
+        match self.steps.get(k) {
+            Some(step) if !absorbs => step.absorption,
+            _ => 1.0,
         }
     }
 
