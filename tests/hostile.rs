@@ -244,9 +244,11 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         };
         let inputs = PlanInputs::new(&ga, &config, PlanFor::Mixture, max_bounces);
         let plan = Plan::build(&view, &inputs, 3, false).map_err(|e| format!("GA: {e}"))?;
+        // `ga` keeps the plan's baseline samples, which must be finite too.
         let plan_ga = Ga {
             plan: plan.clone(),
             max_bounces,
+            keeps_taken: true,
         };
         films.push(plan_ga.render(&view, &settings));
         films.push(GaPt { plan, max_bounces }.render(&view, &settings));

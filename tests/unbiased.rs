@@ -25,7 +25,8 @@
 //! whose shadow rays stop at every mask is rejected. On `plastic.xml` (smooth plastics, whose
 //! vertices choose between a delta reflection and a diffuse lobe, and textured rough glass)
 //! every method agrees with `pt`, and an `srt` whose densities count the plastics' diffuse
-//! choices is rejected.
+//! choices is rejected. The GA plan's baseline samples, which the image keeps, agree with
+//! `pt` on their own, and the same sums miscounted are rejected.
 
 // The must-reject twins use the fault injections of feature `testing`.
 #![cfg(feature = "testing")]
@@ -123,15 +124,26 @@ fn small_plan(
     max_bounces: u32,
     seed: u64,
 ) -> Plan {
+    let plan = PlanConfig {
+        grid: 16,
+        ..PlanConfig::default()
+    };
+    small_plan_with(view, (plan_for, nee), max_bounces, seed, plan)
+}
+
+/// [`small_plan`] with the plan's settings `plan`.
+fn small_plan_with(
+    view: &SceneView,
+    (plan_for, nee): (PlanFor, Nee),
+    max_bounces: u32,
+    seed: u64,
+    plan: PlanConfig,
+) -> Plan {
     let ga = GaConfig {
         population: 16,
         generations: 8,
         test_paths: 4000,
         ..GaConfig::default()
-    };
-    let plan = PlanConfig {
-        grid: 16,
-        ..PlanConfig::default()
     };
     let inputs = PlanInputs {
         gate: GateConfig { gate: false },
@@ -373,7 +385,12 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             keeps_taken: true,
         }),
         (Some(plan), _, None) if guided => Box::new(GaPt { plan, max_bounces }),
-        (Some(plan), _, None) => Box::new(Ga { plan, max_bounces }),
+        // The plan's baseline samples (`srt`) stay in the image.
+        (Some(plan), _, None) => Box::new(Ga {
+            plan,
+            max_bounces,
+            keeps_taken: true,
+        }),
         (None, Some(mixture), None) => Box::new(MixtureIntegrator {
             mixture,
             max_bounces,
@@ -546,6 +563,54 @@ fn cbox_ga_with_srt_fallback_points_agrees_and_unnormalised_weights_do_not() {
     assert_agrees("cbox: ga with srt fallback points", &film, &pt);
     let wrong = render_with("cbox", ga(true), 5, SPP / 4, 23);
     assert_rejected("cbox: ga with unnormalised interpolation", &wrong, &pt);
+}
+
+/// The GA plan's baseline samples (`srt`, which the image of `ga` keeps) are
+/// samples of the image like any other: on fig5 and on `lights.xml` (whose camera rays that
+/// miss see the environment map), an image of the baseline's samples alone (a render of
+/// as many samples as the baseline took) agrees with `pt`; the same sums counted as half as
+/// many samples (the render then adds the other half from the GA's mixtures) are rejected.
+#[test]
+fn baseline_samples_agree_and_miscounted_ones_do_not() {
+    let spp = SPP / 2;
+    for name in ["fig5", "lights.xml"] {
+        let mut scene = Scene::load(&scene_file(name)).unwrap();
+        scene.resize(SIZE, SIZE);
+        let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
+        let view = SceneView::new(&scene, accel.as_ref());
+        let config = PlanConfig {
+            grid: 16,
+            baseline_spp: spp,
+            ..PlanConfig::default()
+        };
+        let plan = small_plan_with(&view, (PlanFor::Mixture, Nee::Every), 5, 23, config);
+        assert_eq!(plan.baseline().map(|b| b.spp), Some(spp), "{name}");
+        let settings = RenderSettings {
+            method: Method::Ga,
+            spp,
+            max_bounces: 5,
+            seed: 23,
+            progress: false,
+            shard: Default::default(),
+            control: Default::default(),
+        };
+        let render = |plan: Plan| {
+            let ga = Ga {
+                plan,
+                max_bounces: 5,
+                keeps_taken: true,
+            };
+            ga.render(&view, &settings)
+        };
+        let pt = render_with(name, Which::Pt, 5, spp, 11);
+        let film = render(plan.clone());
+        assert_eq!(film.spp, spp, "{name}: the image is the baseline's alone");
+        assert_agrees(&format!("{name}: the baseline's samples"), &film, &pt);
+        let mut miscounted = plan;
+        miscounted.baseline.spp /= 2;
+        let wrong = render(miscounted);
+        assert_rejected(&format!("{name}: the baseline miscounted"), &wrong, &pt);
+    }
 }
 
 /// With next-event estimation at every vertex, `srt` and `ga` whose mixtures leave the light

@@ -179,6 +179,11 @@ pub struct PlanArgs {
     /// srt samples per pixel of the baseline pass that places the extra GA pixels.
     #[arg(long, default_value_t = PlanConfig::default().baseline_spp, value_parser = clap::value_parser!(u32).range(1..=65_536))]
     pub baseline_spp: u32,
+    /// ga: the image keeps the baseline's samples (they count among --spp, which must hold
+    /// them) where the GA pixels' test paths show srt's variance at most this many times the
+    /// evolved mixtures' (median); 0: never, inf: always.
+    #[arg(long, default_value_t = PlanConfig::default().baseline_keep_ratio)]
+    pub baseline_keep_ratio: f64,
     /// Nearest GA pixels whose mixtures each pixel combines. Default: 2 for ga, 4 for ga-pt
     #[arg(long, value_name = "K")]
     pub ga_neighbours: Option<usize>,

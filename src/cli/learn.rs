@@ -505,15 +505,12 @@ fn training_shard(
 /// The per-pixel sums of the samples `learned`'s training took (an image of `pixels` pixels;
 /// zero where it took none): what the image of a render that learned starts from.
 pub fn training_layer(learned: &Learned, pixels: usize) -> LayerSums {
-    match learned.spatial.as_ref().filter(|s| s.samples.spp > 0) {
-        Some(spatial) => {
-            let samples = &spatial.samples;
-            LayerSums {
-                counts: vec![samples.spp; samples.sum.len()],
-                sum: samples.sum.clone(),
-                sum_sq: samples.sum_sq.clone(),
-            }
-        }
+    match learned.samples() {
+        Some(samples) => LayerSums {
+            counts: vec![samples.spp; samples.sum.len()],
+            sum: samples.sum.clone(),
+            sum_sq: samples.sum_sq.clone(),
+        },
         None => LayerSums::zero(pixels),
     }
 }

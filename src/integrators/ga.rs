@@ -1,7 +1,9 @@
 //! `ga`: genetic path generation (paper §4–5). Each pixel renders eq. 8 with the mixture its
 //! neighbouring GA pixels evolved, or with `pt` where the plan has none for it.
 
-use super::{Context, Integrator, Learned, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{
+    Context, Integrator, Learned, PixelEstimator, PixelIntegrator, PixelSums, PrepareError,
+};
 use crate::accel::Ray;
 use crate::genetic::plan::{Plan, PlanFor, PlanInputs};
 use crate::path::mixture::{Mixture, MixtureScratch};
@@ -14,9 +16,13 @@ use glam::DVec3;
 pub struct Ga {
     pub plan: Plan,
     pub max_bounces: u32,
+    /// Whether the image keeps the plan's baseline samples: not in a shard rendered with a
+    /// saved learned state ([`super::learned`]), whose training shard holds them.
+    pub keeps_taken: bool,
 }
 
-/// Builds the GA plan for `plan_for` with `context`'s settings.
+/// Builds the GA plan for `plan_for` with `context`'s settings; it keeps its baseline's
+/// samples for the image where they help ([`Plan::settle_baseline`]).
 pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareError> {
     let (config, settings) = (context.config, context.settings);
     let inputs = PlanInputs {
@@ -32,18 +38,16 @@ pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareE
         spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
         store: settings.control.learning.as_deref(),
     };
-    Ok(Plan::build(
-        context.view,
-        &inputs,
-        settings.seed,
-        settings.progress,
-    )?)
+    let mut plan = Plan::build(context.view, &inputs, settings.seed, settings.progress)?;
+    plan.settle_baseline(settings.spp, config.plan.baseline_keep_ratio);
+    Ok(plan)
 }
 
 pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(Ga {
         plan: build_plan(context, PlanFor::Mixture)?,
         max_bounces: context.settings.max_bounces,
+        keeps_taken: true,
     }))
 }
 
@@ -64,6 +68,12 @@ impl PixelIntegrator for Ga {
             local: None,
             scratch: MixtureScratch::default(),
         }
+    }
+    fn taken(&self) -> Option<&PixelSums> {
+        self.plan.baseline().filter(|_| self.keeps_taken)
+    }
+    fn taken_spp(&self) -> u32 {
+        self.plan.baseline.spp
     }
     fn plan(&self) -> Option<&Plan> {
         Some(&self.plan)

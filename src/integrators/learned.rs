@@ -33,9 +33,20 @@ pub struct SpatialLearned {
 }
 
 impl Learned {
+    /// The per-pixel sums of the samples preparing took, which the image of a render that
+    /// trained keeps: the spatial guide's training passes' (`pg`, `ga-pt`), or the GA plan's
+    /// baseline's (`ga`, where it keeps them).
+    pub fn samples(&self) -> Option<&PixelSums> {
+        match &self.spatial {
+            Some(spatial) => Some(&spatial.samples),
+            None => self.plan.as_ref().and_then(Plan::baseline),
+        }
+        .filter(|s| s.spp > 0)
+    }
+
     /// Samples per pixel the training took (in the image of a render that trained).
     pub fn training_spp(&self) -> u32 {
-        self.spatial.as_ref().map_or(0, |s| s.samples.spp)
+        self.samples().map_or(0, |s| s.spp)
     }
 }
 
@@ -64,6 +75,18 @@ pub fn prepare_learned(
         what,
     };
     let camera = &view.scene.camera;
+    let pixels = (camera.width * camera.height) as usize;
+    let check_sums = |s: &PixelSums, of: &str| {
+        if s.sum.len() != pixels || s.sum_sq.len() != pixels || s.spp > settings.spp {
+            return Err(mismatch(format!(
+                "{of} sums of {} pixels and {} spp for {pixels} pixels at {} spp",
+                s.sum.len(),
+                s.spp,
+                settings.spp
+            )));
+        }
+        Ok(())
+    };
     if let Some(plan) = &learned.plan {
         if (plan.width(), plan.height()) != (camera.width, camera.height) {
             return Err(mismatch(format!(
@@ -74,24 +97,23 @@ pub fn prepare_learned(
                 camera.height
             )));
         }
+        if let Some(baseline) = plan.baseline() {
+            check_sums(baseline, "baseline")?;
+        }
     }
     if let Some(spatial) = &learned.spatial {
-        let pixels = (camera.width * camera.height) as usize;
-        let s = &spatial.samples;
-        if s.sum.len() != pixels || s.sum_sq.len() != pixels || s.spp > settings.spp {
-            return Err(mismatch(format!(
-                "training sums of {} pixels and {} spp for {pixels} pixels at {} spp",
-                s.sum.len(),
-                s.spp,
-                settings.spp
-            )));
-        }
+        check_sums(&spatial.samples, "training")?;
         spatial.guide.check().map_err(mismatch)?;
     }
     let max_bounces = settings.max_bounces;
+    let keeps_taken = settings.shard.is_whole();
     let spatial_guide = config.spatial.spatial_guide;
     let integrator: Box<dyn Integrator> = match (settings.method, learned.plan, learned.spatial) {
-        (Method::Ga, Some(plan), None) => Box::new(Ga { plan, max_bounces }),
+        (Method::Ga, Some(plan), None) => Box::new(Ga {
+            plan,
+            max_bounces,
+            keeps_taken,
+        }),
         (Method::GaPt, Some(plan), None) if !spatial_guide => Box::new(GaPt { plan, max_bounces }),
         (Method::GaPt, Some(plan), Some(s)) if spatial_guide => {
             Box::new(spatial_integrator(Some(plan), s, settings))

@@ -279,7 +279,9 @@ impl Sweep<'_> {
         // of them (see `TrainingSchedule`).
         let plans: Vec<(Option<f64>, u32)> = match &self.budgets {
             Budgets::Spp(b) => b.iter().map(|&spp| (None, spp)).collect(),
-            Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), self.settings.spp)).collect(),
+            // Seconds decide how many samples a render takes: no sample count bounds what
+            // preparing may keep for the image (a GA plan's baseline).
+            Budgets::Seconds(b) => b.iter().map(|&t| (Some(t), u32::MAX)).collect(),
         };
         // The methods run one after the other at each budget, not each through all budgets
         // in turn: renders to be compared at equal time then run minutes closer together,

@@ -24,7 +24,7 @@ use bincode::Options;
 use std::path::{Path, PathBuf};
 
 /// The format version this genpath writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The mark every plan file starts with.
 pub const MAGIC: &[u8; 8] = b"GPPLAN\0\0";
 /// The longest header read.
@@ -37,8 +37,8 @@ pub struct PlanHeader {
     /// The identity of the render it was learned for (command `render` or `reference`, no
     /// plan): a render or reference with `--plan` must have this identity.
     pub identity: Identity,
-    /// Samples per pixel the training took (pg's and ga-pt's spatial training passes),
-    /// which the learn job wrote to its training shard.
+    /// Samples per pixel the training took (pg's and ga-pt's spatial training passes, and
+    /// a GA plan's baseline), which the learn job wrote to its training shard.
     pub training_spp: u32,
     /// What was learned, in brief (GA pixels, spatial passes, the trials' decisions).
     pub summary: serde_json::Value,

@@ -9,12 +9,23 @@ use super::*;
 use std::process::Output;
 
 /// Each method that learns with small settings: ga without the gate (so that its GA pixels
-/// render), pg and ga-pt with 2 spatial passes (3 of the 8 samples per pixel).
+/// render), whose image keeps its baseline's 4 of the 8 samples per pixel; pg and ga-pt
+/// with 2 spatial passes (3 of them).
 fn methods() -> Vec<(&'static str, Vec<&'static str>)> {
     vec![
         (
             "ga",
-            [&["--method", "ga", "--no-gate"][..], &SMALL_GA].concat(),
+            [
+                &[
+                    "--method",
+                    "ga",
+                    "--no-gate",
+                    "--baseline-keep-ratio",
+                    "inf",
+                ][..],
+                &SMALL_GA,
+            ]
+            .concat(),
         ),
         ("pg", vec!["--method", "pg", "--spatial-passes", "2"]),
         (
@@ -96,7 +107,8 @@ fn merge(files: &[PathBuf], out: &Path, extra: &[&str]) -> Output {
 }
 
 /// For ga, pg and ga-pt: the render with a saved plan has the in-process render's bits; the
-/// plan's training samples are in the training shard exactly when the method keeps them;
+/// plan's training samples (ga's baseline, pg's and ga-pt's passes) are in the training
+/// shard;
 /// the JSON names the plan file and its hash and leaves the pixels' mixtures to the file.
 /// Shards 0/2 and 1/2 rendered with the plan, merged with the training shard, are the
 /// in-process render bit for bit; without the training shard the merge is partial (and
@@ -108,12 +120,10 @@ fn saved_plans_render_and_shard_to_the_in_process_render_bit_for_bit() {
     for (method, flags) in methods() {
         let inline = ok_in("render", d, &format!("{method}-inline.exr"), &flags);
         let plan = ok_in("learn", d, &format!("{method}.plan"), &flags);
+        // Every one keeps samples of preparing: ga its plan's baseline, pg and ga-pt their
+        // spatial training passes'.
         let training = beside(&plan, ".shard");
-        assert_eq!(
-            training.exists(),
-            method != "ga",
-            "{method}: training shard"
-        );
+        assert!(training.exists(), "{method}: no training shard");
         let with = [&flags[..], &["--plan", plan.to_str().unwrap()]].concat();
         let saved = ok_in("render", d, &format!("{method}-saved.exr"), &with);
         assert_eq!(
@@ -149,22 +159,20 @@ fn saved_plans_render_and_shard_to_the_in_process_render_bit_for_bit() {
             })
             .collect();
         let merged = d.join(format!("{method}-merged.exr"));
-        if method != "ga" {
-            let output = merge(&files, &merged, &["--complete"]);
-            let err = stderr(&output);
-            assert!(
-                !output.status.success() && err.contains("training shard"),
-                "{err}"
-            );
-            assert!(!merged.exists());
-            let partial = merge(&files, &merged, &[]);
-            assert!(partial.status.success(), "{}", stderr(&partial));
-            files.push(training.clone());
-            // Twice the training shard is refused.
-            let twice = [&files[..], std::slice::from_ref(&training)].concat();
-            let output = merge(&twice, &d.join("twice.exr"), &[]);
-            assert!(stderr(&output).contains("both hold the learn job's training samples"));
-        }
+        let output = merge(&files, &merged, &["--complete"]);
+        let err = stderr(&output);
+        assert!(
+            !output.status.success() && err.contains("training shard"),
+            "{err}"
+        );
+        assert!(!merged.exists());
+        let partial = merge(&files, &merged, &[]);
+        assert!(partial.status.success(), "{}", stderr(&partial));
+        files.push(training.clone());
+        // Twice the training shard is refused.
+        let twice = [&files[..], std::slice::from_ref(&training)].concat();
+        let output = merge(&twice, &d.join("twice.exr"), &[]);
+        assert!(stderr(&output).contains("both hold the learn job's training samples"));
         let output = merge(&files, &merged, &["--complete"]);
         assert!(output.status.success(), "{method}: {}", stderr(&output));
         assert_eq!(

@@ -1,13 +1,17 @@
 //! Choosing the GA pixels: the grid's cells and their scattering pixels, the baseline pass
-//! of `srt` samples, and the pixels chosen from its variance.
+//! of `srt` samples, and the pixels chosen from its variance. The baseline's samples are
+//! unbiased samples of every pixel like any other, and the image keeps them
+//! ([`super::Plan::baseline`]).
 
 use super::super::luminance;
 use super::config::PlanConfig;
 use super::pixel::PixelContext;
 use super::PlanStats;
+use crate::integrators::PixelSums;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
+use glam::DVec3;
 use rayon::prelude::*;
 
 /// Why a GA pixel was chosen.
@@ -29,6 +33,9 @@ struct Baseline {
     sum_sq: f64,
     /// Some baseline ray hit a scattering surface.
     scatters: bool,
+    /// Sum and sum of squares of the samples (RGB), which the image keeps.
+    rgb_sum: DVec3,
+    rgb_sum_sq: DVec3,
 }
 
 /// The cells of a `grid`-pixel grid over a `width × height` image, row by row: `[x0, y0, x1,
@@ -109,7 +116,7 @@ pub(super) fn scattering_cells(
 
 /// The baseline pass and the GA pixels [`choose_pixels`] chooses from it in `cells` (those
 /// at `keep`, the pilot's, stay whatever their cells' variance), with the baseline's rays,
-/// low-variance cells and variance quartiles in `stats`.
+/// low-variance cells and variance quartiles in `stats`, and its samples' per-pixel sums.
 pub(super) fn baseline_choice(
     context: &PixelContext,
     cells: &[Option<(u32, u32)>],
@@ -129,7 +136,12 @@ pub(super) fn baseline_choice(
     stats.rays.add(counts);
     stats.baseline_ran = true;
     let size = (camera.width, camera.height);
-    let choice = choose_pixels(&base, cells, size, config, keep);
+    let mut choice = choose_pixels(&base, cells, size, config, keep);
+    choice.samples = PixelSums {
+        spp: config.baseline_spp,
+        sum: base.iter().map(|b| b.rgb_sum).collect(),
+        sum_sq: base.iter().map(|b| b.rgb_sum_sq).collect(),
+    };
     stats.low_variance_cells = choice.low.len();
     let mut v = choice.cell_variance.clone();
     v.sort_by(f64::total_cmp);
@@ -158,24 +170,30 @@ fn baseline(
                 .map(|x| {
                     let pixel = y as u64 * width as u64 + x as u64;
                     let (mut sum, mut sum_sq, mut scatters) = (0.0, 0.0, false);
+                    let (mut rgb_sum, mut rgb_sum_sq) = (DVec3::ZERO, DVec3::ZERO);
                     for s in 0..config.baseline_spp {
                         let mut rng = sample_rng(seed, pixel, s as u64);
                         let ray = camera_ray(camera, (x, y), &mut rng);
-                        let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) else {
-                            continue;
+                        // As `camera_sample` with the `srt` mixture, the hit's material
+                        // noted.
+                        let value = match view.trace_through(&ray, &mut rng, &mut counts) {
+                            None => view.seen_directly(None, ray.dir).as_dvec3(),
+                            Some(x1) => {
+                                scatters |= view.material(x1.prim).scatters();
+                                view.seen_directly(Some(&x1), ray.dir).as_dvec3()
+                                    + srt.estimate(
+                                        view,
+                                        ray.origin,
+                                        x1,
+                                        max_bounces,
+                                        &mut rng,
+                                        &mut counts,
+                                        &mut scratch,
+                                    )
+                            }
                         };
-                        let material = view.material(x1.prim);
-                        scatters |= material.scatters();
-                        let value = view.seen_directly(Some(&x1), ray.dir).as_dvec3()
-                            + srt.estimate(
-                                view,
-                                ray.origin,
-                                x1,
-                                max_bounces,
-                                &mut rng,
-                                &mut counts,
-                                &mut scratch,
-                            );
+                        rgb_sum += value;
+                        rgb_sum_sq += value * value;
                         let l = luminance(value);
                         sum += l;
                         sum_sq += l * l;
@@ -192,6 +210,8 @@ fn baseline(
                         sum,
                         sum_sq,
                         scatters,
+                        rgb_sum,
+                        rgb_sum_sq,
                     }
                 })
                 .collect();
@@ -214,6 +234,8 @@ pub(super) struct Choice {
     pub(super) low: Vec<(u32, u32)>,
     /// Pooled baseline relative variance of every cell with a GA pixel.
     cell_variance: Vec<f64>,
+    /// The baseline's samples of every pixel.
+    pub(super) samples: PixelSums,
 }
 
 /// The GA pixels: each cell's grid pixel ([`grid_pixels`]), then extras in the noisiest
@@ -281,5 +303,6 @@ fn choose_pixels(
         pixels: chosen,
         low: low_cells,
         cell_variance,
+        samples: PixelSums::default(),
     }
 }

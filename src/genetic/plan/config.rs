@@ -17,6 +17,10 @@ pub struct PlanConfig {
     pub extra: f64,
     /// `srt` samples per pixel of the baseline pass.
     pub baseline_spp: u32,
+    /// `ga` keeps the baseline's samples in the image where its GA pixels' test paths show
+    /// `srt`'s variance at most this many times the evolved mixtures' (median over the GA
+    /// pixels; [`super::Plan::settle_baseline`]): 0 never keeps them, `inf` always.
+    pub baseline_keep_ratio: f64,
     /// GA pixels whose mixtures each pixel combines (and whose best individuals start a
     /// warm-started GA pixel's population). `None`: 2 for `ga`, 4 for `ga-pt`. The union of
     /// `k` mixtures costs `ga` every component's densities on every path it samples, while
@@ -64,6 +68,7 @@ impl Default for PlanConfig {
             grid: 32,
             extra: 0.25,
             baseline_spp: 4,
+            baseline_keep_ratio: super::BASELINE_KEEP_RATIO,
             neighbours: None,
             prune: true,
             prune_variance: 0.5,
@@ -104,6 +109,12 @@ impl PlanConfig {
         }
         if self.baseline_spp == 0 {
             return fail("the baseline needs at least 1 sample per pixel".into());
+        }
+        if self.baseline_keep_ratio.is_nan() || self.baseline_keep_ratio < 0.0 {
+            return fail(format!(
+                "baseline keep ratio {} must be ≥ 0 (inf: always keep)",
+                self.baseline_keep_ratio
+            ));
         }
         if !(self.prune_variance.is_finite() && self.prune_variance >= 0.0) {
             return fail(format!(

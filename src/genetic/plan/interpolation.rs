@@ -104,9 +104,11 @@ impl Plan {
 mod tests {
     use super::super::{GaPixel, Moments, Origin, PlanFor, PlanStats, Trial};
     use super::*;
+    use crate::integrators::PixelSums;
     use crate::path::generator::PathGenerator;
     use crate::sampling::light_point::LightPointSampler;
     use crate::scene::SceneAnalysis;
+    use glam::DVec3;
     use std::sync::OnceLock;
 
     fn mixture(absorption: f64) -> Mixture {
@@ -168,6 +170,7 @@ mod tests {
             },
             unnormalised: false,
             stats: PlanStats::default(),
+            baseline: PixelSums::default(),
             index: OnceLock::new(),
         }
     }
@@ -231,5 +234,32 @@ mod tests {
         wrong.unnormalised = true;
         let m = wrong.local(4, 0).expect("evolved mixture");
         assert!((m.weights.iter().sum::<f64>() - 1.0).abs() > 1e-3);
+    }
+
+    /// `ga`'s image keeps the baseline's samples where the median `V_srt / V_best` is at
+    /// most the keep ratio and `--spp` holds them; `ga-pt`'s never.
+    #[test]
+    fn the_baseline_stays_where_srt_is_near_the_evolved_mixtures() {
+        // V_srt / V_best of 1.5, 3 and 1: median 1.5.
+        let with = |plan_for, spp, ratio| {
+            let mut p = plan(false);
+            p.plan_for = plan_for;
+            for (px, v_best) in p.pixels.iter_mut().zip([2.0 / 3.0, 1.0 / 3.0, 1.0]) {
+                px.v_best = v_best;
+            }
+            p.baseline = PixelSums {
+                spp: 4,
+                sum: vec![DVec3::ONE; 40],
+                sum_sq: vec![DVec3::ONE; 40],
+            };
+            p.settle_baseline(spp, ratio);
+            (p.baseline().map(|b| b.spp), p.stats.baseline_kept_spp)
+        };
+        assert_eq!(with(PlanFor::Mixture, 8, 2.0), (Some(4), 4));
+        assert_eq!(with(PlanFor::Mixture, 4, 1.5), (Some(4), 4));
+        // The median above the ratio, fewer samples than the baseline's, a guide's plan.
+        assert_eq!(with(PlanFor::Mixture, 8, 1.4), (None, 0));
+        assert_eq!(with(PlanFor::Mixture, 3, 2.0), (None, 0));
+        assert_eq!(with(PlanFor::Guide, 8, f64::INFINITY), (None, 0));
     }
 }

@@ -7,7 +7,9 @@
 //!    pixel at its centre or the scattering pixel closest to it.
 //! 2. **Baseline and extra GA pixels.** A few `srt` samples per pixel estimate its relative
 //!    variance; extra GA pixels go to the cells with the highest baseline relative variance,
-//!    at their noisiest pixel.
+//!    at their noisiest pixel. The samples are unbiased samples of the image, drawn from
+//!    their own streams: the image keeps them ([`Plan::baseline`]), as `pg` keeps its
+//!    training passes' (on fig1 at 2 s they were 0.33 s of a 0.65 s plan).
 //! 3. **Evolution.** Per GA pixel, `M` test paths from the defensive `srt` density and the
 //!    genetic algorithm on them, in parallel; every pixel has its own random streams, derived
 //!    from the seed and the pixel alone, so the result does not depend on the thread count.
@@ -66,6 +68,7 @@ pub use stages::{LearnStore, PlanError, WaveEntry};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
+use crate::integrators::PixelSums;
 use crate::path::generator::{Nee, SrtAbsorption};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
@@ -174,6 +177,8 @@ pub struct PlanStats {
     pub time_limited_pixels: usize,
     /// Whether the baseline ran: not where the gate's pilot closed the GA.
     pub baseline_ran: bool,
+    /// Samples per pixel of the baseline that the image keeps ([`Plan::settle_baseline`]).
+    pub baseline_kept_spp: u32,
     /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
     /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
     pub cell_variance: [f64; 3],
@@ -215,6 +220,12 @@ impl PlanStats {
     }
 }
 
+/// The default of `PlanConfig::baseline_keep_ratio`. Averaged with equal weights, `b`
+/// samples of variance `r σ²` beside `n` of variance `σ²` lower the variance of the mean
+/// while `r < 2 + b/n`. (Test paths at 256², seed 401: the median of `V_srt / V_best` is 1.16
+/// on fig1, 1.37 on cbox, 2.25 on glossy and 5.6 on fig5.)
+pub const BASELINE_KEEP_RATIO: f64 = 2.0;
+
 /// GA pixels and their mixtures, and how every other pixel combines them. It serialises
 /// (a plan file, `genpath learn`) without its lookup index, which is rebuilt on first use.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -243,6 +254,10 @@ pub struct Plan {
     /// Fault injection for statistical tests: leave the interpolation weights unnormalised.
     unnormalised: bool,
     pub stats: PlanStats,
+    /// The per-pixel sums of the baseline's `srt` samples (none where it did not run, or
+    /// where the image does not keep them: [`Self::settle_baseline`]): unbiased samples of
+    /// the image, which `ga` keeps as `pg` keeps its training passes'.
+    pub baseline: PixelSums,
     /// `pixels` and then `fallback_points`, bucketed for [`Self::interpolation`] on first use.
     #[serde(skip)]
     index: OnceLock<PointGrid>,
@@ -313,11 +328,11 @@ impl Plan {
         let closed = gate && !pilot_pays && closes;
         let mut fallback_points = Vec::new();
         // Seconds of the baseline, which runs between GA waves.
-        let baseline_part = if !gate || pilot_pays {
+        let (baseline_part, baseline) = if !gate || pilot_pays {
             waves.past_pilot(&cells, scout, &mut stats, &mut fallback_points)?
         } else {
             waves.leave_to_pt(&grid, &mut stats, &mut fallback_points);
-            0.0
+            (0.0, PixelSums::default())
         };
         if inputs.store.is_some_and(|s| s.split()) {
             return Err(PlanError::ShareDone {
@@ -343,6 +358,7 @@ impl Plan {
             analysis: scene.analysis(),
             unnormalised: false,
             stats,
+            baseline,
             index: OnceLock::new(),
         })
     }
@@ -379,6 +395,36 @@ impl Plan {
 
     pub fn height(&self) -> u32 {
         self.height
+    }
+
+    /// Keeps the baseline's samples for an image of `spp` samples per pixel where they lower
+    /// its error: a mixture's plan ([`PlanFor::Mixture`]) whose baseline `spp` holds, and
+    /// whose GA pixels' test paths show `srt` at most `keep_ratio` times the evolved
+    /// mixtures' variance (the median over the GA pixels of eq. 10's `V_srt / V_best`;
+    /// [`BASELINE_KEEP_RATIO`]). Else it drops them and the image takes all its samples
+    /// itself. The choice depends on the test paths alone, drawn from their own streams, so
+    /// the image stays unbiased. A guide's plan (`ga-pt`) keeps none: the test paths do not
+    /// measure its guided path tracer, and on fig5 at 2 s its 4 baseline samples among
+    /// about 45 raised `ga-pt`'s error from 0.33 to 1.12 × `pt`'s.
+    pub fn settle_baseline(&mut self, spp: u32, keep_ratio: f64) {
+        let mut ratios: Vec<f64> = (self.pixels.iter())
+            .filter(|p| p.v_best > 0.0)
+            .map(|p| p.v_srt / p.v_best)
+            .collect();
+        ratios.sort_by(f64::total_cmp);
+        let srt_near = ratios
+            .get(ratios.len() / 2)
+            .is_none_or(|&r| r <= keep_ratio);
+        let keep = self.plan_for == PlanFor::Mixture && self.baseline.spp <= spp && srt_near;
+        if !keep {
+            self.baseline = PixelSums::default();
+        }
+        self.stats.baseline_kept_spp = self.baseline.spp;
+    }
+
+    /// The baseline's samples, if the plan has any.
+    pub fn baseline(&self) -> Option<&PixelSums> {
+        (self.baseline.spp > 0).then_some(&self.baseline)
     }
 
     /// Wall-clock time of the whole plan (baseline and GA).

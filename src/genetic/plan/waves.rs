@@ -6,6 +6,7 @@ use super::baseline::{baseline_choice, Origin};
 use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
 use super::stages::{LearnStore, PlanError, WaveEntry};
 use super::{PlanFor, PlanStats};
+use crate::integrators::PixelSums;
 use crate::progress::progress_bar;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -234,14 +235,14 @@ impl<'a> Waves<'a> {
     /// Past a pilot that pays, or without the gate: the baseline, which chooses the other GA
     /// pixels (the pilot's stay, whatever their cells' variance), then [`Self::evolve_rest`].
     /// The low-variance cells' pixels go to `fallback_points`, and with the gate, for a
-    /// mixture, the late ones too. Returns the baseline's seconds.
+    /// mixture, the late ones too. Returns the baseline's seconds and samples.
     pub(super) fn past_pilot(
         &mut self,
         cells: &[Option<(u32, u32)>],
         scout: usize,
         stats: &mut PlanStats,
         fallback_points: &mut Vec<(u32, u32)>,
-    ) -> Result<f64, PlanError> {
+    ) -> Result<(f64, PixelSums), PlanError> {
         let t2 = Instant::now();
         let keep = self.positions();
         let choice = baseline_choice(self.context, cells, &keep, stats);
@@ -261,7 +262,7 @@ impl<'a> Waves<'a> {
             let chosen = &self.chosen;
             fallback_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
         }
-        Ok(baseline_part)
+        Ok((baseline_part, choice.samples))
     }
 
     /// Past a pilot that does not pay: no baseline, and every other cell's pixel in `grid`
