@@ -452,7 +452,22 @@ pub fn camera_sample<G: PathGuide>(
         };
         return radiance.as_dvec3();
     };
-    match view.trace_through(ray, rng, counts) {
+    let hit = view.trace_through(ray, rng, counts);
+    mixture_sample(view, (ray, hit), max_bounces, mixture, rng, counts, scratch)
+}
+
+/// The mixture branch of [`camera_sample`], for camera ray `ray` already traced to `hit`:
+/// what is seen directly there plus `mixture`'s estimator (eq. 8) from the hit.
+pub fn mixture_sample(
+    view: &SceneView,
+    (ray, hit): (&Ray, Option<SurfacePoint>),
+    max_bounces: u32,
+    mixture: &Mixture,
+    rng: &mut Rng,
+    counts: &mut RayCounts,
+    scratch: &mut MixtureScratch,
+) -> DVec3 {
+    match hit {
         None => view.seen_directly(None, ray.dir).as_dvec3(),
         Some(x1) => {
             let direct = view.seen_directly(Some(&x1), ray.dir).as_dvec3();

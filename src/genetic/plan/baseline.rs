@@ -9,7 +9,7 @@ use super::pixel::PixelContext;
 use super::PlanStats;
 use crate::integrators::PixelSums;
 use crate::path::mixture::{Mixture, MixtureScratch};
-use crate::path::{RayCounts, SceneView};
+use crate::path::{mixture_sample, RayCounts, SceneView};
 use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -116,13 +116,13 @@ pub(super) fn scattering_cells(
 
 /// The baseline pass and the GA pixels [`choose_pixels`] chooses from it in `cells` (those
 /// at `keep`, the pilot's, stay whatever their cells' variance), with the baseline's rays,
-/// low-variance cells and variance quartiles in `stats`, and its samples' per-pixel sums.
+/// low-variance cells and variance quartiles in `stats`; and its samples' per-pixel sums.
 pub(super) fn baseline_choice(
     context: &PixelContext,
     cells: &[Option<(u32, u32)>],
     keep: &[(u32, u32)],
     stats: &mut PlanStats,
-) -> Choice {
+) -> (Choice, PixelSums) {
     let &PixelContext {
         view,
         srt,
@@ -136,8 +136,8 @@ pub(super) fn baseline_choice(
     stats.rays.add(counts);
     stats.baseline_ran = true;
     let size = (camera.width, camera.height);
-    let mut choice = choose_pixels(&base, cells, size, config, keep);
-    choice.samples = PixelSums {
+    let choice = choose_pixels(&base, cells, size, config, keep);
+    let samples = PixelSums {
         spp: config.baseline_spp,
         sum: base.iter().map(|b| b.rgb_sum).collect(),
         sum_sq: base.iter().map(|b| b.rgb_sum_sq).collect(),
@@ -148,7 +148,7 @@ pub(super) fn baseline_choice(
     if !v.is_empty() {
         stats.cell_variance = [v[0], v[v.len() / 2], v[v.len() - 1]];
     }
-    choice
+    (choice, samples)
 }
 
 fn baseline(
@@ -174,24 +174,17 @@ fn baseline(
                     for s in 0..config.baseline_spp {
                         let mut rng = sample_rng(seed, pixel, s as u64);
                         let ray = camera_ray(camera, (x, y), &mut rng);
-                        // As `camera_sample` with the `srt` mixture, the hit's material
-                        // noted.
-                        let value = match view.trace_through(&ray, &mut rng, &mut counts) {
-                            None => view.seen_directly(None, ray.dir).as_dvec3(),
-                            Some(x1) => {
-                                scatters |= view.material(x1.prim).scatters();
-                                view.seen_directly(Some(&x1), ray.dir).as_dvec3()
-                                    + srt.estimate(
-                                        view,
-                                        ray.origin,
-                                        x1,
-                                        max_bounces,
-                                        &mut rng,
-                                        &mut counts,
-                                        &mut scratch,
-                                    )
-                            }
-                        };
+                        let hit = view.trace_through(&ray, &mut rng, &mut counts);
+                        scatters |= hit.is_some_and(|x1| view.material(x1.prim).scatters());
+                        let value = mixture_sample(
+                            view,
+                            (&ray, hit),
+                            max_bounces,
+                            srt,
+                            &mut rng,
+                            &mut counts,
+                            &mut scratch,
+                        );
                         rgb_sum += value;
                         rgb_sum_sq += value * value;
                         let l = luminance(value);
@@ -234,8 +227,6 @@ pub(super) struct Choice {
     pub(super) low: Vec<(u32, u32)>,
     /// Pooled baseline relative variance of every cell with a GA pixel.
     cell_variance: Vec<f64>,
-    /// The baseline's samples of every pixel.
-    pub(super) samples: PixelSums,
 }
 
 /// The GA pixels: each cell's grid pixel ([`grid_pixels`]), then extras in the noisiest
@@ -303,6 +294,5 @@ fn choose_pixels(
         pixels: chosen,
         low: low_cells,
         cell_variance,
-        samples: PixelSums::default(),
     }
 }

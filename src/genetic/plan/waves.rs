@@ -245,7 +245,7 @@ impl<'a> Waves<'a> {
     ) -> Result<(f64, PixelSums), PlanError> {
         let t2 = Instant::now();
         let keep = self.positions();
-        let choice = baseline_choice(self.context, cells, &keep, stats);
+        let (choice, samples) = baseline_choice(self.context, cells, &keep, stats);
         let gate = self.context.gate;
         fallback_points.extend(&choice.low);
         self.add(&choice.pixels, &keep);
@@ -262,7 +262,7 @@ impl<'a> Waves<'a> {
             let chosen = &self.chosen;
             fallback_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
         }
-        Ok((baseline_part, choice.samples))
+        Ok((baseline_part, samples))
     }
 
     /// Past a pilot that does not pay: no baseline, and every other cell's pixel in `grid`
