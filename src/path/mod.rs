@@ -61,6 +61,15 @@ impl SurfacePoint {
     }
 }
 
+/// Where a shadow ray ends: a point and the unit normal of its surface there (zero for a
+/// point light), all that [`SceneView::segment`] reads of it. Light samples carry this
+/// rather than a whole [`SurfacePoint`], which they would copy for nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct EndPoint {
+    pub p: Vec3,
+    pub ng: Vec3,
+}
+
 /// A scene together with the ray queries over it.
 pub struct SceneView<'a> {
     pub scene: &'a Scene,
@@ -327,6 +336,11 @@ impl<'a> SceneView<'a> {
     /// The segment between surface points `x` and `y` as a shadow ray (`t ∈ [0, 1]`), both
     /// ends pushed off their surfaces towards each other.
     pub fn shadow_ray(&self, x: &SurfacePoint, y: &SurfacePoint) -> Ray {
+        self.segment(x, &EndPoint { p: y.p, ng: y.ng })
+    }
+
+    /// [`Self::shadow_ray`] to the end point `y` of a light sample.
+    pub fn segment(&self, x: &SurfacePoint, y: &EndPoint) -> Ray {
         let d = y.p - x.p;
         let from = x.p + x.ng * self.epsilon.copysign(x.ng.dot(d));
         let to = y.p + y.ng * self.epsilon.copysign(-y.ng.dot(d));

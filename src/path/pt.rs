@@ -24,7 +24,7 @@
 //! material's own ([`Bsdf`]), is plain path tracing, and [`NoRecorder`] records nothing:
 //! [`radiance`] is the loop with those two.
 
-use super::{emitted, RayCounts, SceneView, SurfacePoint};
+use super::{emitted, EndPoint, RayCounts, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, BrdfSample, Frame};
 use crate::sampling::specular;
@@ -191,7 +191,9 @@ fn light_pdf_solid_angle(pdf_area: f64, dist2: f32, cos_light: f32) -> f32 {
 
 /// A point `y` on an emitter, sampled for next-event estimation at `x`, and what joins them.
 pub struct LightPoint {
-    pub y: SurfacePoint,
+    /// `y`, the unit normal of its emitter there, and the emitter's triangle.
+    pub y: EndPoint,
+    pub prim: u32,
     /// The unit direction from `x` to `y`, and their squared distance.
     pub wi: Vec3,
     pub dist2: f32,
@@ -230,7 +232,10 @@ impl LightPoint {
             return None;
         }
         let ls = scene.emitters.sample_seen_from(&scene.mesh, x.p, u);
-        let y = SurfacePoint::flat(ls.point, ls.normal, ls.prim);
+        let y = EndPoint {
+            p: ls.point,
+            ng: ls.normal,
+        };
         let d = y.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
@@ -238,6 +243,7 @@ impl LightPoint {
         let cos_light = -y.ng.dot(wi);
         (cos_light > 0.0 && dist2 > 0.0).then_some(Self {
             y,
+            prim: ls.prim,
             wi,
             dist2,
             cos_x,
@@ -278,7 +284,7 @@ struct LightHit {
 #[derive(Clone, Copy, Debug)]
 enum Target {
     /// To a point (on an area emitter, or a point light's position).
-    Point(SurfacePoint),
+    Point(EndPoint),
     /// Out of the scene (the environment, a directional light).
     Infinity,
 }
@@ -332,14 +338,14 @@ impl LightCandidate {
             LightPick::Delta(i) => {
                 let a = scene.delta_lights[i].arrival(x.p)?;
                 let target = match a.position {
-                    Some(p) => Target::Point(SurfacePoint::flat(p, Vec3::ZERO, u32::MAX)),
+                    Some(p) => Target::Point(EndPoint { p, ng: Vec3::ZERO }),
                     None => Target::Infinity,
                 };
                 (a.wi, a.value, Density::Delta, target)
             }
             LightPick::Area => {
                 let l = LightPoint::from_uniforms(view, at, [u0 as f32, u[1], u[2]])?;
-                let le = view.material(l.y.prim).ke;
+                let le = view.material(l.prim).ke;
                 let density = Density::Area(l.pdf_solid_angle());
                 (l.wi, le, density, Target::Point(l.y))
             }
@@ -382,7 +388,7 @@ impl LightCandidate {
         counts: &mut RayCounts,
     ) -> bool {
         match &self.target {
-            Target::Point(y) => view.unoccluded(x, y, rng, counts),
+            Target::Point(y) => view.unblocked_through(&view.segment(x, y), rng, counts),
             Target::Infinity => view.escapes(x, self.wi, rng, counts),
         }
     }
