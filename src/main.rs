@@ -149,7 +149,7 @@ mod tests {
         let docs = std::fs::read_to_string(&path).unwrap_or_default();
         assert!(
             docs == text,
-            "docs/cli.md is stale: GENPATH_WRITE_DOCS=1 cargo test --release --all-features --bin genpath"
+            "docs/cli.md is stale: GENPATH_WRITE_DOCS=1 cargo test --profile release-tests --all-features --bin genpath"
         );
     }
 }

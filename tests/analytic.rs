@@ -5,7 +5,7 @@
 //! invisible (it neither creates nor loses energy), and a grey diffuse sphere or a slightly
 //! absorbing glass one in its place is seen; XML spheres and disks are placed as Mitsuba
 //! places them; and Embree and obvhs give the same answers on them, single rays and packets
-//! alike. Run with `cargo test --release --test analytic`
+//! alike. Run with `cargo test --profile release-tests --test analytic`
 //! (`-- --nocapture` prints every statistic).
 
 // The shared harness, of which this file uses the sphere binning only.

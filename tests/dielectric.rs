@@ -8,7 +8,7 @@
 //! weights with that compression undone sum to the number of samples, which a
 //! transmittance of 0.97 must fail. And the smooth plastic's choice of its delta reflection
 //! where a ray meets it, by the same binomial test (an index 3 % off rejected), with its
-//! weights. Run with `cargo test --release --test dielectric`.
+//! weights. Run with `cargo test --profile release-tests --test dielectric`.
 
 use genpath::sampling::specular;
 use genpath::scene::{Dielectric, Material};

@@ -4,7 +4,7 @@
 //! deliberately wrong densities that the same histogram must reject: the density without the
 //! `sin θ` of the map's Jacobian (`du dv` taken for solid angle), and the density of the map
 //! mirrored (`u → −u`, the direction mapping turned around). Run with
-//! `cargo test --release --test envmap` (`-- --nocapture` prints every statistic).
+//! `cargo test --profile release-tests --test envmap` (`-- --nocapture` prints every statistic).
 
 #[allow(dead_code)]
 #[path = "../src/sampling/chi2.rs"]

@@ -1,7 +1,7 @@
 //! Statistical tests of the anchor-point, patch and light-point samplers (design §10): χ² of sample
 //! histograms against the samplers' own densities, each paired with deliberately wrong
 //! densities that the same histogram must reject; and `∫ pdf = 1` by quadrature that does not
-//! use the samplers, at the parameters' bounds. Run with `cargo test --release --test samplers`
+//! use the samplers, at the parameters' bounds. Run with `cargo test --profile release-tests --test samplers`
 //! (`-- --nocapture` prints every statistic).
 
 #[path = "../src/sampling/chi2.rs"]

@@ -3,7 +3,7 @@
 //! histograms against the densities the renderer evaluates, each paired with deliberately
 //! wrong densities that the same histogram must reject; and `∫ pdf` by quadrature that does
 //! not use the samplers; Mitsuba's smooth `plastic` against Mitsuba's values (`plastic`).
-//! Run with `cargo test --release --test brdf_sampler` (`-- --nocapture` prints every statistic).
+//! Run with `cargo test --profile release-tests --test brdf_sampler` (`-- --nocapture` prints every statistic).
 //!
 //! The outcome of a draw: `brdf::pdf` is the density, over the full sphere, of the direction
 //! the sampler *generates*; the Phong lobe about the mirror direction can put some of it below
