@@ -62,7 +62,7 @@ impl SurfacePoint {
 }
 
 /// Where a shadow ray ends: a point and the unit normal of its surface there (zero for a
-/// point light), all that [`SceneView::segment`] reads of it. Light samples carry this
+/// point light), all that [`SceneView::shadow_ray`] reads of it. Light samples carry this
 /// rather than a whole [`SurfacePoint`], which they would copy for nothing.
 #[derive(Clone, Copy, Debug)]
 pub struct EndPoint {
@@ -321,26 +321,21 @@ impl<'a> SceneView<'a> {
         Ray::new(x.p + offset, dir, 0.0, f32::INFINITY)
     }
 
-    /// Whether the segment between surface points `x` and `y` is free of occluders (masks
-    /// passed at random: [`SceneView::unblocked_through`]).
+    /// Whether the segment from surface point `x` to the light sample's end `y` is free of
+    /// occluders (masks passed at random: [`SceneView::unblocked_through`]).
     pub fn unoccluded(
         &self,
         x: &SurfacePoint,
-        y: &SurfacePoint,
+        y: &EndPoint,
         rng: &mut Rng,
         counts: &mut RayCounts,
     ) -> bool {
         self.unblocked_through(&self.shadow_ray(x, y), rng, counts)
     }
 
-    /// The segment between surface points `x` and `y` as a shadow ray (`t ∈ [0, 1]`), both
-    /// ends pushed off their surfaces towards each other.
-    pub fn shadow_ray(&self, x: &SurfacePoint, y: &SurfacePoint) -> Ray {
-        self.segment(x, &EndPoint { p: y.p, ng: y.ng })
-    }
-
-    /// [`Self::shadow_ray`] to the end point `y` of a light sample.
-    pub fn segment(&self, x: &SurfacePoint, y: &EndPoint) -> Ray {
+    /// The segment from surface point `x` to the light sample's end `y` as a shadow ray
+    /// (`t ∈ [0, 1]`), both ends pushed off their surfaces towards each other.
+    pub fn shadow_ray(&self, x: &SurfacePoint, y: &EndPoint) -> Ray {
         let d = y.p - x.p;
         let from = x.p + x.ng * self.epsilon.copysign(x.ng.dot(d));
         let to = y.p + y.ng * self.epsilon.copysign(-y.ng.dot(d));

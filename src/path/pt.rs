@@ -388,7 +388,7 @@ impl LightCandidate {
         counts: &mut RayCounts,
     ) -> bool {
         match &self.target {
-            Target::Point(y) => view.unblocked_through(&view.segment(x, y), rng, counts),
+            Target::Point(y) => view.unoccluded(x, y, rng, counts),
             Target::Infinity => view.escapes(x, self.wi, rng, counts),
         }
     }

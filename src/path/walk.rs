@@ -6,7 +6,7 @@ use super::generator::{
     PathVertex, PathVertices,
 };
 use super::pt::Receiver;
-use super::{emitted, SceneView, SurfacePoint};
+use super::{emitted, EndPoint, SceneView, SurfacePoint};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
@@ -489,7 +489,7 @@ impl LightDraw {
             LightPick::Delta(i) => {
                 let a = scene.delta_lights[i].arrival(x.p)?;
                 let shadow = match a.position {
-                    Some(p) => view.shadow_ray(x, &SurfacePoint::flat(p, Vec3::ZERO, u32::MAX)),
+                    Some(p) => view.shadow_ray(x, &EndPoint { p, ng: Vec3::ZERO }),
                     None => view.spawn(x, a.wi),
                 };
                 (LightEnd::Delta, a.wi, a.value, (1.0, 1.0), shadow)
@@ -498,8 +498,10 @@ impl LightDraw {
                 let (y, prim) = g
                     .light
                     .sample(&scene.mesh, &scene.emitters, [u0, u[1], u[2]]);
-                let y_point =
-                    SurfacePoint::flat(y.as_vec3(), scene.mesh.normal_at(prim, y).as_vec3(), prim);
+                let y_point = EndPoint {
+                    p: y.as_vec3(),
+                    ng: scene.mesh.normal_at(prim, y).as_vec3(),
+                };
                 let d = y_point.p - x.p;
                 let dist2 = d.length_squared();
                 let wi = d / dist2.sqrt();
