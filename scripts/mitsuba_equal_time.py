@@ -6,7 +6,7 @@ its seconds, relMSE against the reference (by `genpath compare`, genpath's own d
 and efficiency 1 / (relMSE × seconds), the columns `sweep` writes. A tool for people, never
 run by the build, the tests or CI.
 
-    pip install mitsuba==3.9.1; apt-get install libllvm19     # for llvm_ad_rgb
+    pip install mitsuba==3.9.1 numpy; apt-get install libllvm19   # for llvm_ad_rgb (numpy: reading its pixels back)
     cargo build --release
     python3 scripts/mitsuba_equal_time.py scenes/mitsuba/sunroom.xml \
         --ref reports/refs/sunroom_ref.exr --budgets 2,8 [--seeds 401,402] [--threads 2] [--res N]

@@ -1,7 +1,7 @@
 """Times genpath's `pt` against Mitsuba 3 on the same Mitsuba XML scenes, in one run: the
 benchmark of the speed issue, for people to rerun (never run by the build, the tests or CI).
 
-    pip install mitsuba==3.9.1; apt-get install libllvm19     # for llvm_ad_rgb
+    pip install mitsuba==3.9.1 numpy; apt-get install libllvm19   # for llvm_ad_rgb (numpy: reading its pixels back)
     cargo build --release
     python3 scripts/mitsuba_speed.py [NAME ...] [--spp 256] [--res 128] [--threads 2]
                                      [--runs 5] [--variant llvm_ad_rgb] [--genpath PATH]
