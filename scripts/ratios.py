@@ -6,7 +6,9 @@
 For each scene, `ga-pt`'s and `pt`'s relMSE over `pg`'s: at 2 s the
 geometric mean of the per-seed ratios over the paired seeds of SCENE-2s-reps.csv, with a
 bootstrap 95 % upper bound (10 000 resamples of the seeds, fixed random seed), and at 8 and
-30 s the single seed of SCENE.csv. Prints a Markdown table.
+30 s the single seed of SCENE.csv. Prints a Markdown table. A ratio counts only where both
+renders are free of NaN, infinite and negative pixels (the CSV's `bad_fraction`, which relMSE
+leaves out): a pair with any such pixel is left out and named on stderr.
 """
 import csv
 import math
@@ -23,6 +25,11 @@ def paired(path, method, base):
     """log(relMSE_method / relMSE_base) per (seed, budget) where both rendered."""
     by = defaultdict(dict)
     for r in rows(path):
+        if float(r.get("bad_fraction") or 0) > 0:
+            # Older CSVs have no such column: their images were not checked.
+            print(f"{path}: {r['method']} seed {r['seed']} budget {r['budget']}: "
+                  f"bad_fraction {r['bad_fraction']}, left out", file=sys.stderr)
+            continue
         by[(r["seed"], r["budget"])][r["method"]] = float(r["relmse"])
     return {k: math.log(v[method] / v[base]) for k, v in by.items() if method in v and base in v}
 

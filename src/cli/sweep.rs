@@ -125,6 +125,16 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
                     r.method, r.spp, r.seconds, r.ga_seconds, r.relmse
                 );
             }
+            if r.bad_fraction > 0.0 {
+                // Printed even with --quiet: the row's relMSE does not compare with others.
+                eprintln!(
+                    "genpath: warning: {} (seed {}, budget {}): {:.3} % of the pixels are NaN,                      infinite or negative; relMSE leaves them out (the CSV's bad_fraction)",
+                    r.method,
+                    r.seed,
+                    r.budget,
+                    100.0 * r.bad_fraction
+                );
+            }
             if args.picture.is_some() && shown(r) {
                 pictured.push((r.clone(), image.clone()));
             }

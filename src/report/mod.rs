@@ -110,6 +110,10 @@ pub struct Row {
     pub relmse: f64,
     pub mse: f64,
     pub seed: u64,
+    /// Fraction of the image's pixels with a NaN, infinite or negative channel, which
+    /// relMSE leaves out of its mean ([`crate::image::metrics::ErrorMetrics`]): a row's
+    /// relMSE compares with another's only where both are 0.
+    pub bad_fraction: f64,
 }
 
 impl Row {
@@ -122,7 +126,10 @@ impl Row {
 
 /// Header of the CSV that [`csv`] writes.
 pub const CSV_HEADER: &str =
-    "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget";
+    "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget,bad_fraction";
+
+/// Fields of a row of [`CSV_HEADER`].
+const CSV_FIELDS: usize = 11;
 
 /// The rows as CSV, with [`CSV_HEADER`].
 pub fn csv(rows: &[Row]) -> String {
@@ -131,7 +138,7 @@ pub fn csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             out,
-            "{},{},{},{:.6},{:.6},{:.6e},{:.6e},{},{:.6e},{}",
+            "{},{},{},{:.6},{:.6},{:.6e},{:.6e},{},{:.6e},{},{}",
             r.scene,
             r.method,
             r.spp,
@@ -141,7 +148,8 @@ pub fn csv(rows: &[Row]) -> String {
             r.mse,
             r.seed,
             r.efficiency(),
-            r.budget
+            r.budget,
+            r.bad_fraction
         );
     }
     out
@@ -159,8 +167,8 @@ pub fn parse_csv(text: &str) -> Result<Vec<Row>, String> {
     for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         let f: Vec<&str> = line.split(',').collect();
         let bad = |what: &str| format!("line {}: {what}", i + 1);
-        if f.len() != 10 {
-            return Err(bad(&format!("{} fields, not 10", f.len())));
+        if f.len() != CSV_FIELDS {
+            return Err(bad(&format!("{} fields, not {CSV_FIELDS}", f.len())));
         }
         let num = |k: usize| {
             f[k].parse::<f64>()
@@ -180,6 +188,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<Row>, String> {
             mse: num(6)?,
             seed: int(7)?,
             budget: num(9)?,
+            bad_fraction: num(10)?,
         });
     }
     Ok(rows)
@@ -327,6 +336,7 @@ impl Sweep<'_> {
                         relmse: m.relmse,
                         mse: m.mse,
                         seed: settings.seed,
+                        bad_fraction: m.bad_fraction,
                     };
                     on_row(&row, &film.image);
                     rows.push(row);
@@ -380,4 +390,48 @@ pub fn summary(rows: &[Row]) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &str, bad_fraction: f64) -> Row {
+        Row {
+            scene: "fig5".into(),
+            method: method.into(),
+            budget: 2.0,
+            spp: 40,
+            seconds: 2.01,
+            ga_seconds: 0.5,
+            relmse: 3.5e-3,
+            mse: 1.25e-3,
+            seed: 401,
+            bad_fraction,
+        }
+    }
+
+    /// The CSV keeps each row's fraction of bad pixels, and a CSV without that column (an
+    /// older sweep's) is refused by its header rather than read with a made-up one.
+    #[test]
+    fn csv_round_trip_keeps_bad_fraction() {
+        let rows = [row("pt", 0.0), row("ga", 3.0 / 65536.0)];
+        let back = parse_csv(&csv(&rows)).unwrap();
+        let fractions: Vec<f64> = back.iter().map(|r| r.bad_fraction).collect();
+        assert_eq!(fractions, [0.0, 3.0 / 65536.0]);
+        assert_eq!(back[1].relmse, 3.5e-3);
+        let old = "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget\n\
+                   fig5,pt,40,2.01,0.5,3.5e-3,1.25e-3,401,1.4e2,2\n";
+        let err = parse_csv(old).unwrap_err();
+        assert!(
+            err.contains("line 1") && err.contains("bad_fraction"),
+            "{err}"
+        );
+        let short = format!("{CSV_HEADER}\nfig5,pt,40,2.01,0.5,3.5e-3,1.25e-3,401,1.4e2,2\n");
+        let err = parse_csv(&short).unwrap_err();
+        assert!(
+            err.contains("line 2") && err.contains("10 fields, not 11"),
+            "{err}"
+        );
+    }
 }

@@ -110,12 +110,13 @@ fn sweep_writes_csv_and_plot() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget"
+        "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget,bad_fraction"
     );
     assert_eq!(lines.len(), 1 + 3 * 2 * 2, "{csv}");
     for line in &lines[1..] {
         let fields: Vec<&str> = line.split(',').collect();
-        assert_eq!(fields.len(), 10, "{line}");
+        assert_eq!(fields.len(), 11, "{line}");
+        assert_eq!(fields[10], "0", "no bad pixels in these renders: {line}");
         assert_eq!(fields[0], "fig5");
         let relmse: f64 = fields[5].parse().unwrap();
         assert!(relmse.is_finite() && relmse > 0.0, "{line}");
