@@ -30,14 +30,15 @@ for spp in 16 64 256; do
 done
 for M in 100 1000 10000; do
   for spp in 16 64 256; do
-    # Every sample from the GA's mixtures (none of the plan's baseline `srt` samples): the
-    # figure compares estimators at equal paths.
-    "$bin" render "$scene" --method ga --nee "$nee" --test-paths $M --spp $spp --max-bounces 5 \
-        --baseline-keep-ratio 0 -q -o "$out/ga-$M-$spp.exr"
+    # Every sample from the GA's mixtures (none of the plan's baseline `srt` samples, and
+    # without the gate, which would send pixels to `pt`): the figure compares the paper's
+    # estimators at equal paths.
+    "$bin" render "$scene" --method ga --no-gate --nee "$nee" --test-paths $M --spp $spp \
+        --max-bounces 5 --baseline-keep-ratio 0 -q -o "$out/ga-$M-$spp.exr"
     row ga $M $spp "$out/ga-$M-$spp.exr"
   done
 done
 # The default M, once.
-"$bin" render "$scene" --method ga --nee "$nee" --spp 64 --max-bounces 5 --baseline-keep-ratio 0 \
-    -q -o "$out/ga-default-64.exr"
+"$bin" render "$scene" --method ga --no-gate --nee "$nee" --spp 64 --max-bounces 5 \
+    --baseline-keep-ratio 0 -q -o "$out/ga-default-64.exr"
 row ga default 64 "$out/ga-default-64.exr"
