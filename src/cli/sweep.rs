@@ -119,22 +119,7 @@ pub fn run_sweep(args: SweepArgs, matches: &ArgMatches) -> Result<()> {
     let mut pictured = Vec::new();
     let rows = session.pool.install(|| {
         sweep.run(&view, |r, image| {
-            if !quiet {
-                eprintln!(
-                    "genpath: {:<24} {:>6} spp {:>8.2} s (GA {:>6.2} s)  relMSE {:.4e}",
-                    r.method, r.spp, r.seconds, r.ga_seconds, r.relmse
-                );
-            }
-            if r.bad_fraction > 0.0 {
-                // Printed even with --quiet: the row's relMSE does not compare with others.
-                eprintln!(
-                    "genpath: warning: {} (seed {}, budget {}): {:.3} % of the pixels are NaN,                      infinite or negative; relMSE leaves them out (the CSV's bad_fraction)",
-                    r.method,
-                    r.seed,
-                    r.budget,
-                    100.0 * r.bad_fraction
-                );
-            }
+            report_row(r, quiet);
             if args.picture.is_some() && shown(r) {
                 pictured.push((r.clone(), image.clone()));
             }
@@ -286,6 +271,27 @@ fn identity(
         "reps": args.reps,
         "settings": base,
     }))
+}
+
+/// A finished render of the sweep on stderr, unless `quiet`; a warning, even when quiet,
+/// where some of its pixels are bad (its relMSE then does not compare with the others').
+fn report_row(r: &genpath::report::Row, quiet: bool) {
+    if !quiet {
+        eprintln!(
+            "genpath: {:<24} {:>6} spp {:>8.2} s (GA {:>6.2} s)  relMSE {:.4e}",
+            r.method, r.spp, r.seconds, r.ga_seconds, r.relmse
+        );
+    }
+    if r.bad_fraction > 0.0 {
+        eprintln!(
+            "genpath: warning: {} (seed {}, budget {}): {:.3} % of the pixels are NaN, \
+             infinite or negative; relMSE leaves them out (the CSV's bad_fraction)",
+            r.method,
+            r.seed,
+            r.budget,
+            100.0 * r.bad_fraction
+        );
+    }
 }
 
 /// One part of a sweep as its files hold it.
