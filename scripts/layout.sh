@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Prints the source tree as Markdown, one line per file: its path, its line count and the
-# first line of its module documentation (`//!` in Rust, the first comment of a script).
+# first line of its module documentation (`//!` in Rust, the first comment of a script or a
+# C++ file).
 # docs/layout.md is this script's output: bash scripts/layout.sh > docs/layout.md
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -17,6 +18,7 @@ first_doc() {
     *.sh) sed -n '2,6p' "$1" | grep -m1 '^#' | sed 's|^# *||' || true ;;
     # A Python script's docstring's first line, else its first comment.
     *.py) sed -n '1,6p' "$1" | grep -v '^#!' | grep -m1 -E '^("""|#)' | sed -E 's/^("""|# *)//' || true ;;
+    *.cpp) grep -m1 '^//' "$1" | sed 's|^// *||' || true ;;
     *) true ;;
     esac
 }
