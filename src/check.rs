@@ -53,7 +53,7 @@ impl CheckConfig {
                 // Without the gate, so that `ga` and `ga-pt` render with evolved mixtures
                 // wherever the GA found one, not with `pt`.
                 plan: PlanConfig {
-                    grid: 8,
+                    grid: Some(8),
                     ..PlanConfig::default()
                 },
                 gate: GateConfig { gate: false },

@@ -239,7 +239,7 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
             ..GaConfig::default()
         };
         let config = PlanConfig {
-            grid: 2,
+            grid: Some(2),
             ..PlanConfig::default()
         };
         let inputs = PlanInputs::new(&ga, &config, PlanFor::Mixture, max_bounces);

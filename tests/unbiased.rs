@@ -125,7 +125,7 @@ fn small_plan(
     seed: u64,
 ) -> Plan {
     let plan = PlanConfig {
-        grid: 16,
+        grid: Some(16),
         ..PlanConfig::default()
     };
     small_plan_with(view, (plan_for, nee), max_bounces, seed, plan)
@@ -579,7 +579,7 @@ fn baseline_samples_agree_and_miscounted_ones_do_not() {
         let accel = accel::build(AccelKind::default_available(), &scene.mesh).unwrap();
         let view = SceneView::new(&scene, accel.as_ref());
         let config = PlanConfig {
-            grid: 16,
+            grid: Some(16),
             baseline_spp: spp,
             ..PlanConfig::default()
         };

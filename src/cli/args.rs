@@ -170,9 +170,9 @@ pub struct GaArgs {
 #[command(next_help_heading = "GA plan (--method ga, ga-pt)")]
 #[allow(dead_code)]
 pub struct PlanArgs {
-    /// Distance between GA pixels on the grid, in pixels.
-    #[arg(long, default_value_t = PlanConfig::default().grid, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
-    pub ga_grid: u32,
+    /// Distance between GA pixels on the grid, in pixels. Default: 32 for ga, 64 for ga-pt
+    #[arg(long, value_name = "PIXELS", value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub ga_grid: Option<u32>,
     /// Extra GA pixels where the baseline variance is high, as a fraction of the grid's.
     #[arg(long, default_value_t = PlanConfig::default().extra)]
     pub ga_extra: f64,

@@ -16,7 +16,7 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     let plan = guide_plan(
         &view,
         PlanConfig {
-            grid: 8,
+            grid: Some(8),
             time_limit: Some(0.0),
             ..PlanConfig::default()
         },
@@ -59,7 +59,7 @@ fn a_mixture_pilot_that_cannot_pay_stops_early_and_leaves_pt() {
     let view = SceneView::new(&scene, accel.as_ref());
     let ga = small_mixture_ga();
     let config = PlanConfig {
-        grid: 8,
+        grid: Some(8),
         ..PlanConfig::default()
     };
     let one_thread = rayon::ThreadPoolBuilder::new()
@@ -144,7 +144,7 @@ fn ga_mixtures_keep_only_the_components_that_pay() {
     let ga = small_mixture_ga();
     let plan = |prune| {
         let config = PlanConfig {
-            grid: 16,
+            grid: Some(16),
             prune,
             warm_start: false,
             ..PlanConfig::default()
@@ -195,7 +195,7 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
     let plan = guide_plan(
         &view,
         PlanConfig {
-            grid: 12,
+            grid: Some(12),
             footprint: Some(0.0),
             ..PlanConfig::default()
         },

@@ -136,7 +136,8 @@ pub(super) fn baseline_choice(
     stats.rays.add(counts);
     stats.baseline_ran = true;
     let size = (camera.width, camera.height);
-    let choice = choose_pixels(&base, cells, size, config, keep);
+    let grid = config.grid(context.plan_for);
+    let choice = choose_pixels(&base, cells, (size, grid), config, keep);
     let samples = PixelSums {
         spp: config.baseline_spp,
         sum: base.iter().map(|b| b.rgb_sum).collect(),
@@ -229,13 +230,13 @@ pub(super) struct Choice {
     cell_variance: Vec<f64>,
 }
 
-/// The GA pixels: each cell's grid pixel ([`grid_pixels`]), then extras in the noisiest
-/// cells; with pruning, none in cells whose pooled baseline relative variance is below
+/// The GA pixels, in cells `grid` pixels wide: each cell's grid pixel ([`grid_pixels`]),
+/// then extras in the noisiest cells; with pruning, none in cells whose pooled baseline relative variance is below
 /// `config.prune_variance`, except at `keep` (the pilot, already evolved).
 fn choose_pixels(
     base: &[Baseline],
     cells: &[Option<(u32, u32)>],
-    (width, height): (u32, u32),
+    ((width, height), grid): ((u32, u32), u32),
     config: &PlanConfig,
     keep: &[(u32, u32)],
 ) -> Choice {
@@ -243,7 +244,7 @@ fn choose_pixels(
     let mut low_cells = Vec::new();
     let mut noisy = Vec::new();
     let mut cell_variance = Vec::new();
-    for ([x0, y0, x1, y1], cell) in grid_cells(width, height, config.grid).zip(cells) {
+    for ([x0, y0, x1, y1], cell) in grid_cells(width, height, grid).zip(cells) {
         let Some((x, y)) = *cell else {
             continue;
         };

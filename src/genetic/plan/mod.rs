@@ -303,7 +303,7 @@ impl Plan {
         let mut stats = PlanStats::default();
 
         let t0 = Instant::now();
-        let cells = scattering_cells(view, config.grid, &mut stats);
+        let cells = scattering_cells(view, config.grid(plan_for), &mut stats);
         let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
         let grid_seconds = t0.elapsed().as_secs_f64();
 

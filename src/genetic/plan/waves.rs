@@ -284,7 +284,7 @@ impl<'a> Waves<'a> {
     /// evolved neighbours. Returns the pixels the time limit left out.
     fn evolve_rest(&mut self, scout: usize) -> Result<Vec<usize>, PlanError> {
         let config = self.context.config;
-        let g = config.grid;
+        let g = config.grid(self.context.plan_for);
         let white = |i: usize| {
             let (x, y, origin) = self.chosen[i];
             origin == Origin::Grid && (x / g + y / g) % 2 == 0
@@ -374,7 +374,7 @@ pub(super) fn neighbour_seeds(
     context: &PixelContext,
 ) -> Vec<Individual> {
     let config = context.config;
-    let reach = 2.0 * config.grid as f64;
+    let reach = 2.0 * config.grid(context.plan_for) as f64;
     let mut near: Vec<(f64, usize, &Individual)> = done
         .iter()
         .enumerate()
