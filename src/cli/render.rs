@@ -281,8 +281,8 @@ fn left_out(
     }
     if !s.baseline_ran {
         out.push(format!(
-            "the baseline and the GA at {} grid pixels: the gate's pilot predicted no gain",
-            s.gated_pixels
+            "the baseline and the GA at {} grid pixels: the gate's pilot predicted no gain (its gains over pt: geometric mean {:.2})",
+            s.gated_pixels, s.pilot_gain
         ));
         return out;
     }

@@ -126,6 +126,25 @@ pub(super) fn scout_pilot(waves: &mut Waves, scout: usize, closes: bool) -> Resu
     Ok(())
 }
 
+/// The geometric mean of the scouted pilot pixels' predicted gains over `pt`
+/// ([`geometric_mean_gain`]).
+pub(super) fn pilot_gain(waves: &Waves) -> f64 {
+    let trials = waves.done.iter().flatten().filter_map(|(p, _)| p.trial);
+    geometric_mean_gain(trials.map(|t| t.gain))
+}
+
+/// The geometric mean of trials' gains: 0 without a finite one; a gain of 0 (nothing to
+/// gain) counts as 10⁻⁹, and a NaN or infinite one is left out.
+fn geometric_mean_gain(gains: impl Iterator<Item = f64>) -> f64 {
+    let (sum, n) = gains
+        .filter(|g| g.is_finite())
+        .fold((0.0, 0usize), |(sum, n), g| (sum + g.max(1e-9).ln(), n + 1));
+    match n {
+        0 => 0.0,
+        _ => (sum / n as f64).exp(),
+    }
+}
+
 /// Whether the GA goes on past the scouted pilot: where at least half the pilot pixels
 /// predict a gain above the winning margin. One pixel alone (an outlier, or a small region)
 /// does not pay for evolving the whole image. (Without the gate there is no pilot, and it
@@ -295,5 +314,20 @@ fn mixture_moments(
         mean,
         variance: variance.max(floor),
         cost: cost.cost,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::geometric_mean_gain;
+
+    #[test]
+    fn pilot_gain_is_the_geometric_mean_of_finite_gains() {
+        let g = geometric_mean_gain([2.0, 8.0, f64::NAN, f64::INFINITY].into_iter());
+        assert!((g - 4.0).abs() < 1e-12, "{g}");
+        // The arithmetic mean (5) is not it; a gain of 0 pulls it to nearly 0.
+        assert!((geometric_mean_gain([2.0, 8.0, 0.0].into_iter())) < 1e-2);
+        assert_eq!(geometric_mean_gain(std::iter::empty()), 0.0);
+        assert_eq!(geometric_mean_gain([f64::NAN].into_iter()), 0.0);
     }
 }

@@ -74,7 +74,7 @@ use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::scene::SceneAnalysis;
 use baseline::scattering_cells;
-use gate::{pilot_pays, pilot_pixels, scout_pilot};
+use gate::{pilot_gain, pilot_pays, pilot_pixels, scout_pilot};
 use pixel::{Evolved, PixelContext};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -171,6 +171,10 @@ pub struct PlanStats {
     /// Grid pixels not evolved because fewer than half the pilot pixels predicted a gain
     /// over `pt` (gate).
     pub gated_pixels: usize,
+    /// The geometric mean of the scouted pilot pixels' predicted gains over `pt` (0 without
+    /// a pilot).
+    #[serde(default)]
+    pub pilot_gain: f64,
     /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
     pub pt_pixels: usize,
     /// GA pixels not evolved because the plan reached `PlanConfig::time_limit`.
@@ -324,6 +328,7 @@ impl Plan {
         // Whether a pilot that fails leaves every pixel to `pt` or the spatial guide.
         let closes = plan_for == PlanFor::Mixture || inputs.spatial_guide;
         scout_pilot(&mut waves, scout, closes)?;
+        stats.pilot_gain = pilot_gain(&waves);
         let pilot_pays = pilot_pays(&waves);
         let closed = gate && !pilot_pays && closes;
         let mut fallback_points = Vec::new();
