@@ -12,7 +12,8 @@
 # Writes reports/SCENE.csv, reports/SCENE.svg and reports/SCENE.md (the table behind the plot)
 # and reports/bench*.json (`genpath bench`), reports/bench-stress.txt (`cargo bench --bench
 # rays`), reports/fig5-60s.* and reports/fig1-60s.* (at 60 s), and reports/SCENE-2s-reps.*
-# (2 s, six seeds), and the same (pt, pg, ga-pt) for the four new scenes. Takes about
+# (2 s, six seeds), and the same (pt, pg, ga-pt) for the four new scenes, and reports/explain/
+# (what the GA learned on each scene: --explain pictures and a table). Takes about
 # 50 × (sum of budgets) seconds and 20 minutes more.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -75,6 +76,22 @@ if [ -z "${NEW_SCENES+x}" ] || [[ " $NEW_SCENES " == *" sunroom "* ]]; then
         --time --budgets 2 --reps 6 --methods pt,pg,ga-pt --max-bounces 5 \
         --quiet --seed 401 -o reports/sunroom-2s-reps > reports/sunroom-2s-reps.md
     echo "reports/sunroom: done"
+fi
+# What the GA learned on every scene (issue 24): ga-pt with the gate off, so that the GA runs
+# everywhere, at 64 spp (seed 401): its --explain picture, and the table of its mixtures
+# from the render's JSON (scripts/learned.py).
+if [ -z "${NEW_SCENES+x}" ] && [ -z "${SCENES+x}" ]; then
+    learned=$(mktemp -d)
+    mkdir -p reports/explain
+    for scene in fig5 fig1 cbox glossy gap shelf window corridor; do
+        "$bin" render "scenes/$scene/scene.toml" --method ga-pt --no-gate --spp 64 \
+            --width 256 --height 256 --max-bounces 5 --seed 401 --quiet \
+            -o "$learned/$scene.exr" --explain "reports/explain/$scene.svg"
+    done
+    python3 scripts/learned.py "$learned"/{fig5,fig1,cbox,glossy,gap,shelf,window,corridor}.exr.json \
+        > reports/explain/learned.md
+    rm -r "$learned"
+    echo "reports/explain: done"
 fi
 # Best of 10 passes: on the shared machine the packet rates swing by a third from one
 # half-minute to the next (reports/README.md), single rays much less.
