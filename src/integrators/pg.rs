@@ -559,9 +559,9 @@ impl<'a> TrialArms<'a> {
     }
 
     /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
-    /// sum of squares `pass` at a cost of `cost` rays, and whose mean over the passes before
-    /// is `mean`. Pixels the plan does not guide (`pt`'s points, a closed plan) are in
-    /// neither arm.
+    /// sum of squares `pass` at a cost of `cost` rays, and around which the mean over the
+    /// passes before is `mean` ([`TRIAL_MEAN_RADIUS`]). Pixels the plan does not guide
+    /// (`pt`'s points, a closed plan) are in neither arm.
     fn add(
         &mut self,
         plan: &'a Plan,
