@@ -91,10 +91,15 @@ pub struct GaPixel {
 
 impl GaPixel {
     /// Whether the gate's trial predicts the evolved estimator for `plan_for` to beat `pt`
-    /// here by the winning margin ([`gate_margins`]).
+    /// here by the winning margin ([`gate_margins`]): a guide's gain one standard error below
+    /// its estimate ([`Trial::cautious_gain`]); a mixture's as estimated, whose margin of 2
+    /// already allows for its prediction's uncertainty.
     pub fn pays(&self, plan_for: PlanFor) -> bool {
-        self.trial
-            .is_some_and(|t| t.gain > gate_margins(plan_for).1)
+        let win = gate_margins(plan_for).1;
+        self.trial.is_some_and(|t| match plan_for {
+            PlanFor::Guide => t.cautious_gain() > win,
+            PlanFor::Mixture => t.gain > win,
+        })
     }
 
     /// Whether this pixel's estimator should be `pt`: it kept `srt`, or its trial predicts
