@@ -11,12 +11,13 @@ use super::*;
 /// `Plan::build`.)
 #[test]
 fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
-    let (scene, accel) = fig5_sized(AccelKind::default_available(), 96);
+    let (size, grid) = (96, 12);
+    let (scene, accel) = fig5_sized(AccelKind::default_available(), size);
     let view = SceneView::new(&scene, accel.as_ref());
     let plan = guide_plan(
         &view,
         PlanConfig {
-            grid: Some(12),
+            grid: Some(grid),
             time_limit: Some(0.0),
             ..PlanConfig::default()
         },
@@ -36,13 +37,13 @@ fn cells_the_time_limit_leaves_out_take_their_neighbours_guides() {
     assert_eq!(plan.pixels.len(), PILOT_PIXELS, "only the pilot evolves");
     assert!(stats.time_limited_pixels > 0);
     assert_eq!(plan.fallback_points.len(), stats.low_variance_cells);
-    let guided = (0..96)
-        .flat_map(|y| (0..96).map(move |x| (x, y)))
+    let guided = (0..size)
+        .flat_map(|y| (0..size).map(move |x| (x, y)))
         .filter(|&(x, y)| plan.local(x, y).is_some())
         .count();
     // Were the late cells `pt` points, a pixel would render guided only where a pilot
-    // pixel's weight dominates, about its own 12 × 12 cell: 8 × 144 pixels.
-    let cells = PILOT_PIXELS * 144;
+    // pixel's weight dominates, about its own grid × grid cell.
+    let cells = PILOT_PIXELS * (grid * grid) as usize;
     assert!(guided > 2 * cells, "{guided} guided pixels");
 }
 
