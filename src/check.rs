@@ -13,13 +13,14 @@
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
+use crate::film::pixel_sample;
+use crate::film::Film;
 use crate::genetic::plan::{GateConfig, Plan, PlanConfig};
 use crate::genetic::GaConfig;
-use crate::integrators::{prepare, Film, Method, PrepareError, RenderSettings, Settings};
+use crate::integrators::{prepare, Method, PrepareError, RenderSettings, Settings};
 use crate::path::generator::{Contribution, Nee, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
-use crate::sampling::{camera_ray, sample_rng};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// What `check` renders and samples.
@@ -156,12 +157,7 @@ impl PdfSurvey {
         let mut contributions: Vec<Contribution> = Vec::new();
         let mut counts = RayCounts::default();
         for j in 0..n {
-            let mut rng = sample_rng(
-                seed,
-                u64::from(y) * u64::from(camera.width) + u64::from(x),
-                j as u64,
-            );
-            let ray = camera_ray(camera, (x, y), &mut rng);
+            let (ray, mut rng) = pixel_sample(camera, seed, (x, y), j as u64);
             let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) else {
                 continue;
             };
@@ -249,6 +245,7 @@ fn render_every_method(
             progress: false,
             shard: Default::default(),
             control: Default::default(),
+            learning: None,
         };
         let integrator = prepare(view, &methods, &settings)?;
         films.push((label, integrator.render(view, &settings)));

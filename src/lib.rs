@@ -5,6 +5,7 @@
 
 pub mod accel;
 pub mod check;
+pub mod film;
 pub mod genetic;
 pub mod guiding;
 pub mod image;

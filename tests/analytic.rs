@@ -253,6 +253,7 @@ fn render_against(scene: &Scene, method: Method, expected: Vec3) -> (Vec3, f64) 
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let config = genpath::integrators::Settings::default();
     let film = genpath::integrators::prepare(&view, &config, &settings)

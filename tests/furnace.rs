@@ -12,7 +12,8 @@
 mod common;
 
 use genpath::accel::{self, AccelKind};
-use genpath::integrators::{prepare, Film, Method, RenderSettings, Settings};
+use genpath::film::Film;
+use genpath::integrators::{prepare, Method, RenderSettings, Settings};
 use genpath::path::generator::Nee;
 use genpath::path::SceneView;
 use genpath::scene::Scene;
@@ -80,6 +81,7 @@ fn render_small_ga(
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let mut config = Settings::default();
     config.srt.nee = nee;

@@ -214,6 +214,7 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let srt = Mixture::new(
         vec![PathGenerator::srt(
@@ -435,6 +436,7 @@ fn xml_mean(dir: &Path, name: &str, text: &str) -> [f64; 3] {
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let film = PathTracing { max_bounces: 3 }.render(&view, &settings);
     let mut sum = [0.0f64; 3];

@@ -26,9 +26,10 @@
 
 use flate2::write::ZlibEncoder;
 use genpath::accel::{self, AccelKind};
+use genpath::film::Film;
 use genpath::image::Image;
 use genpath::integrators::pt::PathTracing;
-use genpath::integrators::{Film, Integrator, Method, RenderSettings};
+use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::SceneView;
 use genpath::scene::Scene;
 use glam::Vec3;
@@ -56,6 +57,7 @@ fn render(scene: &Scene, spp: u32) -> Film {
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     PathTracing {
         max_bounces: scene.render.max_bounces,
@@ -293,6 +295,7 @@ fn hide_emitters_hides_the_sky_and_the_light_from_the_camera_only() {
                 progress: false,
                 shard: Default::default(),
                 control: Default::default(),
+                learning: None,
             };
             let mut config = genpath::integrators::Settings::default();
             for setting in [
@@ -1680,6 +1683,7 @@ fn pt_agrees_with_mitsuba_on_masks_and_inverted_opacities_or_opaque_shadows_do_n
             progress: false,
             shard: Default::default(),
             control: Default::default(),
+            learning: None,
         };
         let film = PathTracing {
             max_bounces: scene.render.max_bounces,

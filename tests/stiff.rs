@@ -201,6 +201,7 @@ fn generators_at_their_bounds_stay_finite() {
             progress: false,
             shard: Default::default(),
             control: Default::default(),
+            learning: None,
         };
         let integrator = MixtureIntegrator {
             mixture: mixture.clone(),
@@ -286,6 +287,7 @@ fn a_tiny_sun_in_an_environment_map_converges() {
             progress: false,
             shard: Default::default(),
             control: Default::default(),
+            learning: None,
         };
         let film = PathTracing { max_bounces: 5 }.render(&view, &settings);
         let pixels = &film.image.pixels;

@@ -32,6 +32,7 @@
 #![cfg(feature = "testing")]
 
 use genpath::accel::{self, AccelKind};
+use genpath::film::Film;
 use genpath::genetic::plan::{GateConfig, Plan, PlanConfig, PlanFor, PlanInputs};
 use genpath::genetic::GaConfig;
 use genpath::integrators::ga::Ga;
@@ -40,7 +41,7 @@ use genpath::integrators::mixture::MixtureIntegrator;
 use genpath::integrators::pg::{train_spatial, SpatialIntegrator, TrainingSchedule};
 use genpath::integrators::pt::PathTracing;
 use genpath::integrators::settings::SpatialConfig;
-use genpath::integrators::{Film, Integrator, Method, RenderSettings};
+use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::generator::{Nee, PathGenerator};
 use genpath::path::mixture::Mixture;
 use genpath::path::{mixture_file, SceneView};
@@ -233,6 +234,7 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {
@@ -593,6 +595,7 @@ fn baseline_samples_agree_and_miscounted_ones_do_not() {
             progress: false,
             shard: Default::default(),
             control: Default::default(),
+            learning: None,
         };
         let render = |plan: Plan| {
             let ga = Ga {

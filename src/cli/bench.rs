@@ -223,6 +223,7 @@ fn thread_scaling(
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let integrator = prepare(view, config, &settings)?;
     println!(

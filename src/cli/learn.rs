@@ -18,10 +18,9 @@ use super::check_dir;
 use super::session::{beside, shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
+use genpath::film::{LayerSums, Shard, Stop};
 use genpath::genetic::plan::{LearnStore, PlanError, WaveEntry};
-use genpath::integrators::{
-    prepare, LayerSums, Learned, Method, PrepareError, RenderSettings, Shard, Stop,
-};
+use genpath::integrators::{prepare, Learned, Method, PrepareError, RenderSettings};
 use genpath::path::SceneView;
 use genpath::shard::plan_file::{self, PlanHeader, TrainingHeader, WaveHeader};
 use genpath::shard::{Identity, Part, PlanRef};
@@ -253,11 +252,11 @@ fn learn_one(
 ) -> Result<Option<Learned>> {
     let store = LearnDir::open(target.dir.clone(), target.identity, shard, stop.clone())?;
     let settings = RenderSettings {
-        control: genpath::integrators::Control {
+        control: genpath::film::Control {
             stop: stop.clone(),
-            learning: Some(Arc::new(store)),
             ..Default::default()
         },
+        learning: Some(Arc::new(store)),
         ..target.settings
     };
     let t_learn = Instant::now();
@@ -506,11 +505,7 @@ fn training_shard(
 /// zero where it took none): what the image of a render that learned starts from.
 pub fn training_layer(learned: &Learned, pixels: usize) -> LayerSums {
     match learned.samples() {
-        Some(samples) => LayerSums {
-            counts: vec![samples.spp; samples.sum.len()],
-            sum: samples.sum.clone(),
-            sum_sq: samples.sum_sq.clone(),
-        },
+        Some(samples) => LayerSums::from(samples),
         None => LayerSums::zero(pixels),
     }
 }

@@ -9,10 +9,9 @@ use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{bail, Result};
 use clap::{ArgMatches, Args};
+use genpath::film::{Control, Film, LayerSums, Shard};
 use genpath::image::Image;
-use genpath::integrators::{
-    prepare, prepare_learned, Control, Film, LayerSums, Learned, RenderSettings, Shard,
-};
+use genpath::integrators::{prepare, prepare_learned, Learned, RenderSettings};
 use genpath::path::SceneView;
 use genpath::sampling::{derive_seed, Stream};
 use genpath::shard::{Identity, Part};
@@ -103,7 +102,6 @@ pub fn run_reference(args: ReferenceArgs, matches: &ArgMatches) -> Result<()> {
                 stop: continuation.stop.clone(),
                 resume: continuation.resumed(i),
                 checkpoint: continuation.checkpoint(&session, layers),
-                learning: None,
             },
             ..session.settings(&args.scene, method, half_spp)
         };

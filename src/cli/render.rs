@@ -7,9 +7,10 @@ use super::resume::Continuation;
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{anyhow, bail, Result};
 use clap::{ArgMatches, Args};
+use genpath::film::{Control, Film};
 use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::integrators::{
-    prepare, prepare_learned, Control, Film, Integrator, Method, RenderSettings, Settings,
+    prepare, prepare_learned, Integrator, Method, RenderSettings, Settings,
 };
 use genpath::path::SceneView;
 use genpath::shard::{Identity, Part};
@@ -104,7 +105,6 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         stop: continuation.stop.clone(),
         resume: continuation.resumed(0),
         checkpoint: continuation.checkpoint(&session, |sums| vec![sums.clone()]),
-        learning: None,
     };
     let settings = RenderSettings {
         control,

@@ -7,7 +7,8 @@
 use super::args::ShardArgs;
 use super::session::Session;
 use anyhow::{bail, Context, Result};
-use genpath::integrators::{Checkpoint, LayerSums, Method, Shard, Stop};
+use genpath::film::{Checkpoint, LayerSums, Shard, Stop};
+use genpath::integrators::Method;
 use genpath::shard::{Header, Identity, Part};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicUsize;
@@ -271,6 +272,7 @@ fn read_resume(
 /// The header of the shard file that `session`'s render with `identity` writes.
 pub fn header(session: &Session, identity: Identity, (shard, part): (Shard, Part)) -> Header {
     Header {
+        splats: false,
         shard,
         identity,
         scene_path: session.scene.path.clone(),

@@ -3,7 +3,8 @@
 use super::args::SceneArgs;
 use anyhow::{Context, Result};
 use genpath::accel::{self, Accel};
-use genpath::integrators::{Method, RenderSettings, Settings, Shard};
+use genpath::film::Shard;
+use genpath::integrators::{Method, RenderSettings, Settings};
 use genpath::path::RayCounts;
 use genpath::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -58,6 +59,7 @@ impl Session {
             progress: !args.quiet,
             shard: Shard::WHOLE,
             control: Default::default(),
+            learning: None,
         }
     }
 

@@ -5,7 +5,8 @@ use super::check_dir;
 use super::session::Session;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{ArgMatches, Args};
-use genpath::integrators::{Method, Shard};
+use genpath::film::Shard;
+use genpath::integrators::Method;
 use genpath::path::SceneView;
 use std::path::{Path, PathBuf};
 

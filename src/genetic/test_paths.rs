@@ -26,6 +26,7 @@
 
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
+use crate::film::{pixel_sample, sample_stream};
 use crate::path::generator::{
     absorbs_at, fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
     PathGenerator, PathVertices, Query, StepDensity, Walk,
@@ -198,11 +199,6 @@ struct StoredLight {
     cell: u32,
 }
 
-/// Index of pixel `(x, y)` in its random streams `sample_rng(seed, pixel, j)`.
-fn pixel_index(view: &SceneView, (x, y): (u32, u32)) -> u64 {
-    y as u64 * view.scene.camera.width as u64 + x as u64
-}
-
 /// One path of a packet: its random stream, walk, pending query, and buffers reused from
 /// packet to packet.
 struct Lane {
@@ -280,11 +276,10 @@ impl Wave {
         counts: &mut RayCounts,
     ) {
         self.n = js.len();
-        let index = pixel_index(view, pixel);
         let lanes = &mut self.lanes[..self.n];
         self.rays.clear();
         for (lane, j) in lanes.iter_mut().zip(js) {
-            lane.rng = sample_rng(seed, index, j as u64);
+            lane.rng = sample_stream(&view.scene.camera, seed, pixel, j as u64);
             let ray = footprint_ray(&view.scene.camera, pixel, side, &mut lane.rng);
             self.rays.push(ray);
         }
@@ -533,14 +528,12 @@ impl TestPaths {
         max_bounces: u32,
         seed: u64,
     ) -> (Self, RayCounts) {
-        let pixel = pixel_index(view, (x, y));
         let mut paths = Self::new(max_bounces, q.nee);
         let mut counts = RayCounts::default();
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
         for j in 0..m {
-            let mut rng: Rng = sample_rng(seed, pixel, j as u64);
-            let ray = camera_ray(&view.scene.camera, (x, y), &mut rng);
+            let (ray, mut rng) = pixel_sample(&view.scene.camera, seed, (x, y), j as u64);
             contributions.clear();
             if let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) {
                 let g = q.choose(uniform(&mut rng) as f64);

@@ -1,10 +1,9 @@
 //! `ga`: genetic path generation (paper §4–5). Each pixel renders eq. 8 with the mixture its
 //! neighbouring GA pixels evolved, or with `pt` where the plan has none for it.
 
-use super::{
-    Context, Integrator, Learned, PixelEstimator, PixelIntegrator, PixelSums, PrepareError,
-};
+use super::{Context, Integrator, Learned, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::film::{PixelEstimator, PixelSums, Splats};
 use crate::genetic::plan::{Plan, PlanFor, PlanInputs};
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::pt::Unguided;
@@ -36,7 +35,7 @@ pub fn build_plan(context: &Context, plan_for: PlanFor) -> Result<Plan, PrepareE
             .absorption(plan_for.test_path_nee(config.srt.nee)),
         nee: config.srt.nee,
         spatial_guide: plan_for == PlanFor::Guide && config.spatial.spatial_guide,
-        store: settings.control.learning.as_deref(),
+        store: settings.learning.as_deref(),
     };
     let mut plan = Plan::build(context.view, &inputs, settings.seed, settings.progress)?;
     plan.settle_baseline(settings.spp, config.plan.baseline_keep_ratio);
@@ -96,6 +95,7 @@ impl PixelEstimator for GaEstimator<'_> {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         let mixture = (self.local.as_ref(), None::<&Unguided>);
         camera_sample(

@@ -3,8 +3,9 @@
 //! the vertices past them are guided as `pg` guides them ([`super::pg`]).
 
 use super::ga::build_plan;
-use super::{pg, Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{pg, Context, Integrator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::film::{PixelEstimator, Splats};
 use crate::genetic::plan::{Plan, PlanFor};
 use crate::guiding::{Guide, PathSegmentStorage};
 use crate::path::mixture::Mixture;
@@ -118,6 +119,7 @@ impl PixelEstimator for GuideEstimator<'_> {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         self.radiance((view, ray), self.guided, rng, counts, None)
     }

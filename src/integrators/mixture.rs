@@ -1,7 +1,8 @@
 //! `srt` and `mixture`: one mixture of path generators at every pixel, estimated by eq. 8.
 
-use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::film::{PixelEstimator, Splats};
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::pt::Unguided;
 use crate::path::{camera_sample, mixture_file, RayCounts, SceneView};
@@ -69,6 +70,7 @@ impl PixelEstimator for MixtureEstimator<'_> {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         let mixture = (Some(self.mixture), None::<&Unguided>);
         camera_sample(

@@ -4,9 +4,9 @@
 //! A method is *prepared* once per render by [`prepare`]: it builds what it renders with
 //! (a mixture, a GA plan, a spatial guide with its training passes) and owns it, as a
 //! [`Integrator`]. Every command renders an integrator the same way,
-//! [`Integrator::render`], which runs the shared image loop ([`tiles`]): each tile asks the
-//! integrator for a [`PixelEstimator`], starts it at each pixel, and sums the radiance of
-//! its samples. Samples an integrator took while preparing (a spatial guide's training
+//! [`Integrator::render`], which runs the film's loop ([`crate::film::render`]): each tile
+//! asks the integrator for a [`PixelEstimator`], starts it at each pixel, and sums the
+//! radiance of its samples. Samples an integrator took while preparing (a spatial guide's training
 //! passes) are part of its image, and only the integrator counts them.
 //!
 //! Adding a method is one file here with a `prepare` function and one line in
@@ -21,19 +21,16 @@ pub mod pt;
 pub mod settings;
 #[cfg(feature = "testing")]
 pub mod test_method;
-pub mod tiles;
 
-use crate::accel::Ray;
-use crate::genetic::plan::{Plan, PlanError};
+use crate::film::{self, Control, Film, Pass, PixelEstimator, PixelSums, Shard};
+use crate::genetic::plan::{LearnStore, Plan, PlanError};
 use crate::genetic::GaConfigError;
 use crate::guiding::SpatialField;
 use crate::path::mixture::Mixture;
-use crate::path::{RayCounts, SceneView};
-use crate::sampling::Rng;
-use glam::DVec3;
+use crate::path::SceneView;
 pub use learned::{prepare_learned, Learned};
 pub use settings::Settings;
-pub use tiles::{Checkpoint, Control, Film, LayerSums, PixelSums, Shard, Stop};
+use std::sync::Arc;
 
 /// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
 /// variant (its documentation is its help text) and the function that prepares it.
@@ -122,6 +119,24 @@ pub struct RenderSettings {
     /// learn: see [`Method::learns`]).
     #[serde(skip)]
     pub control: Control,
+    /// Where learning keeps what it finished between processes (`genpath learn`): a GA
+    /// plan's waves of GA pixels and the spatial guide's passes, so that learning goes on
+    /// after a signal, and the GA splits over jobs.
+    #[serde(skip)]
+    pub learning: Option<Arc<dyn LearnStore>>,
+}
+
+impl RenderSettings {
+    /// The film's run of `spp` samples per pixel with these settings.
+    pub fn pass(&self, spp: u32) -> Pass {
+        Pass {
+            spp,
+            seed: self.seed,
+            shard: self.shard,
+            control: self.control.clone(),
+            progress: self.progress,
+        }
+    }
 }
 
 /// Why a method cannot be prepared.
@@ -160,21 +175,6 @@ pub struct Context<'a> {
     pub view: &'a SceneView<'a>,
     pub config: &'a Settings,
     pub settings: &'a RenderSettings,
-}
-
-/// The estimator of one pixel's samples, reused from pixel to pixel of a tile.
-pub trait PixelEstimator {
-    /// Makes this the estimator of pixel `(x, y)` (its neighbours' mixture, its guide).
-    fn start(&mut self, x: u32, y: u32);
-    /// One sample of the radiance along camera ray `ray`, drawn from `rng` (the sample's
-    /// own stream, after the camera ray's two numbers).
-    fn sample(
-        &mut self,
-        view: &SceneView,
-        ray: &Ray,
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-    ) -> DVec3;
 }
 
 /// A prepared method as the image loop sees it: it gives each tile a [`PixelEstimator`].
@@ -234,11 +234,7 @@ pub trait Integrator: Send + Sync {
 
 impl<I: PixelIntegrator> Integrator for I {
     fn render_more(&self, view: &SceneView, settings: &RenderSettings, spp: u32) -> Film {
-        let settings = RenderSettings {
-            spp,
-            ..settings.clone()
-        };
-        tiles::render(view, &settings, self)
+        film::render(view, &settings.pass(spp), self.taken(), || self.estimator())
     }
     fn samples_taken(&self) -> u32 {
         self.taken_spp()

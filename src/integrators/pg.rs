@@ -8,11 +8,9 @@
 
 use super::ga_pt::GuideEstimator;
 use super::settings::SpatialConfig;
-use super::tiles::{self, render_tile, PixelResult, PixelSums};
-use super::{
-    Context, Control, Integrator, PixelEstimator, PixelIntegrator, PrepareError, RenderSettings,
-};
+use super::{Context, Control, Integrator, PixelIntegrator, PrepareError, RenderSettings};
 use crate::accel::Ray;
+use crate::film::{self, render_tile, Pass, PixelEstimator, PixelResult, PixelSums, Splats};
 use crate::genetic::plan::{LearnStore, Plan};
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::path::mixture::Mixture;
@@ -129,6 +127,7 @@ impl PixelEstimator for SpatialEstimator<'_> {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         let recorder = match &mut self.recorder {
             Some((r, recorded)) if self.taken < *recorded => Some(r),
@@ -254,15 +253,16 @@ impl TrainingSchedule {
 /// The settings of training pass `pass` (`2^pass` samples per pixel from its own stream) of
 /// a render with `settings`: nothing resumes or checkpoints it, and a stop (`genpath learn`
 /// on a signal) ends it and the training, which the learning then discards.
-fn training_pass(settings: &RenderSettings, pass: u32) -> RenderSettings {
-    RenderSettings {
+fn training_pass(settings: &RenderSettings, pass: u32) -> Pass {
+    Pass {
         spp: 1 << pass,
         seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
+        shard: settings.shard,
         control: Control {
             stop: settings.control.stop.clone(),
             ..Default::default()
         },
-        ..settings.clone()
+        progress: settings.progress,
     }
 }
 
@@ -289,11 +289,11 @@ pub fn train_spatial(
 ) -> Result<SpatialTraining, PrepareError> {
     let start = Instant::now();
     let camera = &view.scene.camera;
-    let tiles = tiles::tiles(camera.width, camera.height);
+    let tiles = film::tiles(camera.width, camera.height);
     let pixels = (camera.width * camera.height) as usize;
     let mut records = SampleStorage::around(&view.scene.mesh);
     let open_plan = plan.filter(|p| !p.is_closed());
-    let store = settings.control.learning.as_deref();
+    let store = settings.learning.as_deref();
     let kept = |e: String| PrepareError::Kept(e);
     let mut at = Between::start(store, &mut records, pixels, open_plan.is_some())?;
     let bar = progress_bar(0, "guide", settings.progress);

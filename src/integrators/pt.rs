@@ -1,7 +1,8 @@
 //! `pt`: path tracing with next-event estimation at every vertex ([`crate::path::pt`]).
 
-use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::film::{PixelEstimator, Splats};
 use crate::path::{pt, RayCounts, SceneView};
 use crate::sampling::Rng;
 use glam::DVec3;
@@ -33,6 +34,7 @@ impl PixelEstimator for PathTracing {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         pt::radiance(view, ray, self.max_bounces, rng, counts).as_dvec3()
     }

@@ -6,8 +6,9 @@
 //! show that a method is this one file and one line in the list of [`super::Method`]s, and
 //! that every command renders it.
 
-use super::{Context, Integrator, PixelEstimator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
+use crate::film::{PixelEstimator, Splats};
 use crate::path::pt::LightCandidate;
 use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
 use crate::sampling::brdf::{self, Frame};
@@ -61,6 +62,7 @@ impl PixelEstimator for NeeOnly {
         ray: &Ray,
         rng: &mut Rng,
         counts: &mut RayCounts,
+        _splats: &mut Splats,
     ) -> DVec3 {
         let (mut ray, mut beta, mut radiance) = (*ray, Vec3::ONE, Vec3::ZERO);
         // Whether emission at the next hit counts: no light sample could have found it.

@@ -9,10 +9,9 @@ pub mod bench;
 pub mod picture;
 pub mod plot;
 
+use crate::film::Shard;
 use crate::image::{metrics, Image};
-use crate::integrators::{
-    prepare, Integrator, Method, PrepareError, RenderSettings, Settings, Shard,
-};
+use crate::integrators::{prepare, Integrator, Method, PrepareError, RenderSettings, Settings};
 use crate::path::SceneView;
 use crate::progress::progress_bar;
 use std::fmt::Write as _;

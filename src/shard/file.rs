@@ -7,12 +7,14 @@
 //! | 4 | header length `H`, `u32` (at most [`MAX_HEADER`]) |
 //! | H | the [`Header`] as JSON (UTF-8) |
 //! | per layer | `P` sample counts `u32`, then `3P` sums `f64` (r, g, b per pixel), then `3P` sums of squares `f64` |
+//! | after each layer, if the header's `splats` | the splat layer: its light paths `u64`, then `3P` sums `f64` |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
 //!
 //! with `P` = width × height pixels, pixels row by row. The length follows from the header,
 //! so a truncated file is refused before its checksum is even read.
 
 use super::{Header, LayerSums, ShardError};
+use crate::film::SplatLayer;
 use glam::DVec3;
 use std::io::Read;
 use std::path::Path;
@@ -28,20 +30,41 @@ const PIXEL_BYTES: u64 = 4 + 6 * 8;
 
 /// The file's bytes.
 pub fn encode(header: &Header, layers: &[LayerSums]) -> Vec<u8> {
-    let json = serde_json::to_vec(header).expect("a header serialises");
-    let body_len = layers.len() * header.pixels() as usize * PIXEL_BYTES as usize;
+    let header = Header {
+        splats: layers.iter().any(|l| l.splats.is_some()),
+        ..header.clone()
+    };
+    let json = serde_json::to_vec(&header).expect("a header serialises");
+    let body_len = layers.len() * layer_bytes(&header) as usize;
     super::frame::encode(MAGIC, VERSION, &json, body_len, |out| {
         for layer in layers {
             for c in &layer.counts {
                 out.extend_from_slice(&c.to_le_bytes());
             }
-            for values in [&layer.sum, &layer.sum_sq] {
-                for v in values.iter().flat_map(|v| v.to_array()) {
-                    out.extend_from_slice(&v.to_le_bytes());
-                }
+            put_vectors(out, &layer.sum);
+            put_vectors(out, &layer.sum_sq);
+            if header.splats {
+                let zero = SplatLayer::zero(layer.counts.len());
+                let splats = layer.splats.as_ref().unwrap_or(&zero);
+                out.extend_from_slice(&splats.light_paths.to_le_bytes());
+                put_vectors(out, &splats.sum);
             }
         }
     })
+}
+
+/// Appends `values`' components, r, g, b per pixel.
+fn put_vectors(out: &mut Vec<u8>, values: &[DVec3]) {
+    for v in values.iter().flat_map(|v| v.to_array()) {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// Bytes of one layer (with its splat layer, if the header has them).
+fn layer_bytes(header: &Header) -> u64 {
+    let pixels = header.pixels();
+    let splats = if header.splats { 8 + 24 * pixels } else { 0 };
+    pixels * PIXEL_BYTES + splats
 }
 
 /// Writes a shard file atomically (temporary file, then rename).
@@ -84,7 +107,7 @@ pub fn read(path: &Path) -> Result<(Header, Vec<LayerSums>), ShardError> {
     let json = bytes.get(16..16 + length).ok_or_else(too_short)?;
     let header = parse_header(path, json)?;
     let pixels = header.pixels();
-    let expected = 16 + length as u64 + header.layers() as u64 * pixels * PIXEL_BYTES + 4;
+    let expected = 16 + length as u64 + header.layers() as u64 * layer_bytes(&header) + 4;
     if bytes.len() as u64 != expected {
         return Err(ShardError::Length {
             path: path.to_path_buf(),
@@ -108,19 +131,25 @@ pub fn read(path: &Path) -> Result<(Header, Vec<LayerSums>), ShardError> {
             .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
             .collect();
         at += 4 * pixels;
-        let mut vectors = || {
-            let v: Vec<DVec3> = body[at..at + 24 * pixels]
-                .chunks_exact(24)
-                .map(|b| {
-                    DVec3::from_array(std::array::from_fn(|c| {
-                        f64::from_le_bytes(b[8 * c..8 * c + 8].try_into().expect("8 bytes"))
-                    }))
-                })
-                .collect();
-            at += 24 * pixels;
-            v
+        let sum = take_vectors(body, &mut at, pixels);
+        let sum_sq = take_vectors(body, &mut at, pixels);
+        let splats = if header.splats {
+            let light_paths = u64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
+            at += 8;
+            Some(SplatLayer {
+                light_paths,
+                sum: take_vectors(body, &mut at, pixels),
+            })
+        } else {
+            None
         };
-        let (sum, sum_sq) = (vectors(), vectors());
+        if header.splats && counts.iter().any(|&c| c != counts[0]) {
+            // A render that splats stops only between passes of one sample per pixel.
+            return Err(ShardError::Inconsistent {
+                path: path.to_path_buf(),
+                message: "its pixels hold different sample counts beside a splat layer".into(),
+            });
+        }
         if let Some(i) = counts.iter().position(|&c| c > most) {
             return Err(ShardError::Inconsistent {
                 path: path.to_path_buf(),
@@ -134,9 +163,24 @@ pub fn read(path: &Path) -> Result<(Header, Vec<LayerSums>), ShardError> {
             counts,
             sum,
             sum_sq,
+            splats,
         });
     }
     Ok((header, layers))
+}
+
+/// The `pixels` vectors at `body[*at..]`, r, g, b per pixel; moves `at` past them.
+fn take_vectors(body: &[u8], at: &mut usize, pixels: usize) -> Vec<DVec3> {
+    let v = body[*at..*at + 24 * pixels]
+        .chunks_exact(24)
+        .map(|b| {
+            DVec3::from_array(std::array::from_fn(|c| {
+                f64::from_le_bytes(b[8 * c..8 * c + 8].try_into().expect("8 bytes"))
+            }))
+        })
+        .collect();
+    *at += 24 * pixels;
+    v
 }
 
 /// The header's length from the file's first 16 bytes (`prefix`, fewer if the file is

@@ -12,7 +12,7 @@
 //! learn job's training shard ([`Part::Training`]): its sums come first, then the shards'.
 
 use super::{file, Header, Identity, LayerSums, Part, ShardError};
-use crate::integrators::Shard;
+use crate::film::{Shard, SplatLayer};
 use std::path::{Path, PathBuf};
 
 /// The most missing shards a [`Coverage::Missing`] lists.
@@ -195,6 +195,10 @@ fn add(total: &mut LayerSums, layer: &LayerSums, path: &Path) -> Result<(), Shar
             })?;
         total.sum[i] += layer.sum[i];
         total.sum_sq[i] += layer.sum_sq[i];
+    }
+    if let Some(splats) = &layer.splats {
+        let pixels = total.counts.len();
+        (total.splats.get_or_insert_with(|| SplatLayer::zero(pixels))).add_layer(splats);
     }
     Ok(())
 }

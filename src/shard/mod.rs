@@ -15,8 +15,9 @@ mod frame;
 pub mod merge;
 pub mod plan_file;
 
-pub use crate::integrators::LayerSums;
-use crate::integrators::{RenderSettings, Settings, Shard};
+pub use crate::film::LayerSums;
+use crate::film::Shard;
+use crate::integrators::{RenderSettings, Settings};
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 
@@ -165,6 +166,10 @@ pub struct Header {
     /// Which of the render's samples it holds besides `shard`'s.
     #[serde(default, skip_serializing_if = "Part::is_samples")]
     pub part: Part,
+    /// Whether each layer is followed by its splat layer (a method whose samples splat onto
+    /// other pixels); [`file::encode`] sets it from the layers.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub splats: bool,
 }
 
 /// What a shard file holds, of a render whose identity has a [`PlanRef`] with training

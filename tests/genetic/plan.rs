@@ -213,6 +213,7 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
         progress: false,
         shard: Default::default(),
         control: Default::default(),
+        learning: None,
     };
     let schedule = TrainingSchedule::Passes(5);
     let trial_of = |plan: &Plan| {

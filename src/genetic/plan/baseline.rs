@@ -7,10 +7,11 @@ use super::super::luminance;
 use super::config::PlanConfig;
 use super::pixel::PixelContext;
 use super::PlanStats;
-use crate::integrators::PixelSums;
+use crate::film::pixel_sample;
+use crate::film::PixelSums;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{mixture_sample, RayCounts, SceneView};
-use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
+use crate::sampling::{derived_seed, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -169,12 +170,10 @@ fn baseline(
             let mut scratch = MixtureScratch::default();
             let row = (0..width)
                 .map(|x| {
-                    let pixel = y as u64 * width as u64 + x as u64;
                     let (mut sum, mut sum_sq, mut scatters) = (0.0, 0.0, false);
                     let (mut rgb_sum, mut rgb_sum_sq) = (DVec3::ZERO, DVec3::ZERO);
                     for s in 0..config.baseline_spp {
-                        let mut rng = sample_rng(seed, pixel, s as u64);
-                        let ray = camera_ray(camera, (x, y), &mut rng);
+                        let (ray, mut rng) = pixel_sample(camera, seed, (x, y), s as u64);
                         let hit = view.trace_through(&ray, &mut rng, &mut counts);
                         scatters |= hit.is_some_and(|x1| view.material(x1.prim).scatters());
                         let value = mixture_sample(

@@ -8,11 +8,12 @@ use super::pixel::{Evolved, GaRun, PixelContext};
 use super::stages::PlanError;
 use super::waves::{Job, Waves};
 use super::PlanFor;
+use crate::film::pixel_sample;
 use crate::guiding::Guide;
 use crate::path::generator::Nee;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
-use crate::sampling::{camera_ray, derived_seed, sample_rng, sample_variance, Stream};
+use crate::sampling::{derived_seed, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -231,15 +232,13 @@ fn sample_moments(
         seed,
     } = trial;
     let camera = &view.scene.camera;
-    let pixel = y as u64 * camera.width as u64 + x as u64;
     let seed = derived_seed(seed, stream.tag());
     let mut scratch = MixtureScratch::default();
     let mut c = RayCounts::default();
     let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
     let mut values = Vec::with_capacity(n as usize);
     for s in 0..n {
-        let mut rng = sample_rng(seed, pixel, s as u64);
-        let ray = camera_ray(camera, (x, y), &mut rng);
+        let (ray, mut rng) = pixel_sample(camera, seed, (x, y), s as u64);
         let value = camera_sample(
             view,
             &ray,

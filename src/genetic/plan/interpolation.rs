@@ -104,7 +104,7 @@ impl Plan {
 mod tests {
     use super::super::{GaPixel, Moments, Origin, PlanFor, PlanStats, Trial};
     use super::*;
-    use crate::integrators::PixelSums;
+    use crate::film::PixelSums;
     use crate::path::generator::PathGenerator;
     use crate::sampling::light_point::LightPointSampler;
     use crate::scene::SceneAnalysis;

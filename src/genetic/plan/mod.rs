@@ -68,7 +68,7 @@ pub use stages::{LearnStore, PlanError, WaveEntry};
 
 use super::nearest::PointGrid;
 use super::{GaConfig, GaConfigError};
-use crate::integrators::PixelSums;
+use crate::film::PixelSums;
 use crate::path::generator::{Nee, SrtAbsorption};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};

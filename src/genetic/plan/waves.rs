@@ -6,7 +6,7 @@ use super::baseline::{baseline_choice, Origin};
 use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
 use super::stages::{LearnStore, PlanError, WaveEntry};
 use super::{PlanFor, PlanStats};
-use crate::integrators::PixelSums;
+use crate::film::PixelSums;
 use crate::progress::progress_bar;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
