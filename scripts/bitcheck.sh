@@ -64,12 +64,14 @@ rm -rf "$work/out"
 mkdir -p "$work/out/base" "$work/out/new"
 differ=0 count=0
 for scene in $scenes; do
+    # A scene name (scenes/NAME/scene.toml) or a scene file's path (TOML or Mitsuba XML).
     file=scenes/$scene/scene.toml
+    [[ $scene == *.toml || $scene == *.xml ]] && file=$scene
     variants=("${methods[@]}")
-    [[ -f scenes/$scene/anchors.toml ]] && variants+=("mixture --generators scenes/$scene/anchors.toml")
+    [[ -f $(dirname "$file")/anchors.toml ]] && variants+=("mixture --generators $(dirname "$file")/anchors.toml")
     for m in "${variants[@]}"; do
         read -ra margs <<<"$m"
-        tag=$scene-$(tr ' /' '__' <<<"$m" | tr -s '_' | sed 's/--//g')
+        tag=$(tr '/' '_' <<<"${scene%.*}")-$(tr ' /' '__' <<<"$m" | tr -s '_' | sed 's/--//g')
         for side in base new; do
             bin=$base_bin
             [[ $side == new ]] && bin=$new_bin

@@ -15,7 +15,7 @@
 
 use crate::film::pixel_sample;
 use crate::film::Film;
-use crate::genetic::plan::{GateConfig, Plan, PlanConfig};
+use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::GaConfig;
 use crate::integrators::{prepare, Method, PrepareError, RenderSettings, Settings};
 use crate::path::generator::{Contribution, Nee, PathGenerator, PathVertices};
@@ -192,14 +192,15 @@ impl PdfSurvey {
     }
 }
 
-/// The methods `check` renders: every [`Method`] with `config`'s settings (`mixture` only
-/// with a mixture), `ga-pt` without the spatial guide, and `srt` and `ga` with the
-/// estimator that `config` does not use.
+/// The methods `check` renders: every [`Method`] that renders the scene's image with
+/// `config`'s settings (`mixture` only with a mixture), `ga-pt` without the spatial guide,
+/// and `srt` and `ga` with the estimator that `config` does not use.
 fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     use clap::ValueEnum as _;
     let mut out: Vec<_> = Method::value_variants()
         .iter()
         .filter(|&&m| m != Method::Mixture || config.loaded_mixture.is_some())
+        .filter(|&&m| m.info().renders_the_scene)
         .map(|&m| {
             let name = m.to_possible_value().map(|v| v.get_name().to_string());
             (name.unwrap_or_default(), m, config.clone())
@@ -228,14 +229,15 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
 /// Films with their methods' labels.
 type LabelledFilms = Vec<(String, Film)>;
 
-/// Renders every method of [`variants`] as `genpath render` would; the films, labelled, and
-/// the GA plans they rendered with.
+/// Renders every method of [`variants`] as `genpath render` would; the films, labelled; the
+/// densities of the mixtures they chose are surveyed into `survey` and the numbers they
+/// learned gathered in `numbers` ([`crate::integrators::SelfCheck`]).
 fn render_every_method(
     view: &SceneView,
     config: &CheckConfig,
-) -> Result<(LabelledFilms, Vec<Plan>), PrepareError> {
+    (survey, numbers): (&mut PdfSurvey, &mut Vec<f64>),
+) -> Result<LabelledFilms, PrepareError> {
     let mut films = Vec::new();
-    let mut plans = Vec::new();
     for (label, method, methods) in variants(&config.methods) {
         let settings = RenderSettings {
             method,
@@ -249,9 +251,13 @@ fn render_every_method(
         };
         let integrator = prepare(view, &methods, &settings)?;
         films.push((label, integrator.render(view, &settings)));
-        plans.extend(integrator.plan().cloned());
+        let checked = integrator.self_check();
+        for &(at, mixture) in &checked.mixtures {
+            survey_mixture(survey, view, config, (at, mixture));
+        }
+        numbers.extend(checked.numbers);
     }
-    Ok((films, plans))
+    Ok(films)
 }
 
 /// Each film's bad pixels and its image mean against the first film's (`pt`'s), with the
@@ -305,8 +311,8 @@ fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<Met
     (methods, z_critical)
 }
 
-/// The densities `srt` and every evolved generator sample with, from their GA pixels.
-fn survey_densities(view: &SceneView, config: &CheckConfig, plans: &[Plan]) -> PdfSurvey {
+/// The densities `srt` samples with, from the image's centre.
+fn survey_srt(view: &SceneView, config: &CheckConfig) -> PdfSurvey {
     let methods = &config.methods.srt;
     let srt = mixture_file::srt(
         view.scene,
@@ -326,43 +332,42 @@ fn survey_densities(view: &SceneView, config: &CheckConfig, plans: &[Plan]) -> P
         config.max_bounces,
         config.seed,
     );
-    for p in plans.iter().flat_map(|plan| &plan.pixels) {
-        for g in &p.mixture.generators {
-            survey.sample(
-                view,
-                g,
-                &p.mixture,
-                (p.x, p.y),
-                config.paths_per_generator / 4,
-                config.max_bounces,
-                config.seed,
-            );
-        }
-    }
     survey
+}
+
+/// Adds the densities each generator of `mixture` samples with from pixel `at` to `survey`.
+fn survey_mixture(
+    survey: &mut PdfSurvey,
+    view: &SceneView,
+    config: &CheckConfig,
+    (at, mixture): ((u32, u32), &Mixture),
+) {
+    for g in &mixture.generators {
+        survey.sample(
+            view,
+            g,
+            mixture,
+            at,
+            config.paths_per_generator / 4,
+            config.max_bounces,
+            config.seed,
+        );
+    }
 }
 
 /// Runs every check on `view`'s scene at its camera's size.
 pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, PrepareError> {
     let mut failures = Vec::new();
-    let (films, plans) = render_every_method(view, config)?;
+    let mut survey = survey_srt(view, config);
+    let mut values = Vec::new();
+    let films = render_every_method(view, config, (&mut survey, &mut values))?;
     let (methods, z_critical) = judge_films(&films, &mut failures);
-    let survey = survey_densities(view, config, &plans);
     if survey.bad > 0 {
         failures.push(format!(
             "{} of {} sampled densities are not finite and positive",
             survey.bad, survey.count
         ));
     }
-    let values: Vec<f64> = plans
-        .iter()
-        .flat_map(|plan| &plan.pixels)
-        .flat_map(|p| {
-            [p.v_srt, p.v_best]
-                .into_iter()
-                .chain(p.history.iter().flat_map(|h| [h.best, h.mean]))
-        })
-        .collect();
     let fitness_bad = values.iter().filter(|v| !v.is_finite()).count();
     if fitness_bad > 0 {
         failures.push(format!(

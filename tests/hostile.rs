@@ -250,9 +250,15 @@ fn check_scene(path: &Path, with_ga: bool) -> Result<Outcome, String> {
             plan: plan.clone(),
             max_bounces,
             keeps_taken: true,
+            from_plan_file: false,
         };
         films.push(plan_ga.render(&view, &settings));
-        films.push(GaPt { plan, max_bounces }.render(&view, &settings));
+        let plan_ga_pt = GaPt {
+            plan,
+            max_bounces,
+            from_plan_file: false,
+        };
+        films.push(plan_ga_pt.render(&view, &settings));
     }
     for film in &films {
         if let Some(p) = film

@@ -385,13 +385,19 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             training,
             max_bounces,
             keeps_taken: true,
+            from_plan_file: false,
         }),
-        (Some(plan), _, None) if guided => Box::new(GaPt { plan, max_bounces }),
+        (Some(plan), _, None) if guided => Box::new(GaPt {
+            plan,
+            max_bounces,
+            from_plan_file: false,
+        }),
         // The plan's baseline samples (`srt`) stay in the image.
         (Some(plan), _, None) => Box::new(Ga {
             plan,
             max_bounces,
             keeps_taken: true,
+            from_plan_file: false,
         }),
         (None, Some(mixture), None) => Box::new(MixtureIntegrator {
             mixture,
@@ -602,6 +608,7 @@ fn baseline_samples_agree_and_miscounted_ones_do_not() {
                 plan,
                 max_bounces: 5,
                 keeps_taken: true,
+                from_plan_file: false,
             };
             ga.render(&view, &settings)
         };

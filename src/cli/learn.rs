@@ -105,8 +105,10 @@ pub fn run_learn(args: LearnArgs, matches: &ArgMatches) -> Result<()> {
         training_spp: learned.iter().map(Learned::training_spp).max().unwrap_or(0),
     };
     let summary = match &learned[..] {
-        [one] => summary(one),
-        halves => serde_json::json!({ "halves": halves.iter().map(summary).collect::<Vec<_>>() }),
+        [one] => one.summary(),
+        halves => {
+            serde_json::json!({ "halves": halves.iter().map(Learned::summary).collect::<Vec<_>>() })
+        }
     };
     let header = PlanHeader {
         identity: identity.clone(),
@@ -294,17 +296,23 @@ fn learn_one(
 
 /// Refuses a `method` that learns nothing, and a split (`shard`) of one without a GA.
 fn check_learns(method: Method, shard: Shard) -> Result<()> {
+    use clap::ValueEnum;
+    let name = method.name();
+    let learning: Vec<String> = (Method::value_variants().iter())
+        .filter(|m| m.learns())
+        .map(|m| m.name())
+        .collect();
     if !method.learns() {
         bail!(
-            "--method {} learns nothing (learn is for pg, ga and ga-pt): render it, with \
-             --shard K/N to split it",
-            method.name()
+            "--method {name} learns nothing (learn is for {}): render it, with --shard K/N to \
+             split it",
+            learning.join(", ")
         );
     }
-    if !shard.is_whole() && method == Method::Pg {
+    if !shard.is_whole() && !method.info().splits_learning {
         bail!(
-            "--shard {shard}: pg learns no GA plan to split (its spatial guide's training passes \
-             run in one job): learn it without --shard"
+            "--shard {shard}: {name} learns no GA plan to split (its learning runs in one \
+             job): learn it without --shard"
         );
     }
     Ok(())
@@ -508,27 +516,6 @@ pub fn training_layer(learned: &Learned, pixels: usize) -> LayerSums {
         Some(samples) => LayerSums::from(samples),
         None => LayerSums::zero(pixels),
     }
-}
-
-/// What a plan file's header and a render's JSON say of what was learned.
-fn summary(learned: &Learned) -> serde_json::Value {
-    let plan = learned.plan.as_ref().map(|p| {
-        serde_json::json!({
-            "plan_for": p.plan_for,
-            "ga_pixels": p.pixels.len(),
-            "improved_pixels": p.pixels.iter().filter(|x| !x.kept_srt).count(),
-            "fallback_points": p.fallback_points.len(),
-            "closed_by_gate": p.is_closed(),
-            "stats": p.stats,
-        })
-    });
-    let spatial = learned.spatial.as_ref().map(|s| {
-        serde_json::json!({
-            "stats": s.guide.stats,
-            "plan_guides": s.plan_guides,
-        })
-    });
-    serde_json::json!({ "plan": plan, "spatial": spatial })
 }
 
 /// A plan file read for a render (`render --plan FILE`) or a reference (`reference --plan

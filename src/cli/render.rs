@@ -8,7 +8,6 @@ use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{anyhow, bail, Result};
 use clap::{ArgMatches, Args};
 use genpath::film::{Control, Film};
-use genpath::genetic::plan::{Plan, PlanConfig};
 use genpath::integrators::{
     prepare, prepare_learned, Integrator, Method, RenderSettings, Settings,
 };
@@ -45,11 +44,19 @@ pub struct RenderArgs {
     pub method: MethodArgs,
 }
 
-/// Refuses `--explain FILE` for a method without a GA plan, or a FILE that is not an SVG
-/// in a directory that exists.
+/// Refuses `--explain FILE` for a method that explains nothing, or a FILE that is not an
+/// SVG in a directory that exists.
 fn check_explain(explain: &std::path::Path, method: Method) -> Result<()> {
-    if !matches!(method, Method::Ga | Method::GaPt) {
-        bail!("--explain is only used with --method ga or ga-pt");
+    if !method.info().explains {
+        use clap::ValueEnum;
+        let explaining: Vec<String> = (Method::value_variants().iter())
+            .filter(|m| m.info().explains)
+            .map(|m| m.name())
+            .collect();
+        bail!(
+            "--explain is only used with --method {}",
+            explaining.join(" or ")
+        );
     }
     if explain.extension().and_then(|e| e.to_str()) != Some("svg") {
         bail!(
@@ -116,7 +123,6 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         Some(learned) => prepare_learned(&view, &config, &settings, learned),
         None => prepare(&view, &config, &settings),
     })?;
-    let plan = prepared.plan();
     let film = session.pool.install(|| prepared.render(&view, &settings));
     let layers = std::slice::from_ref(&film.sums);
     continuation.check_stopped(&session, layers, of, identity)?;
@@ -125,10 +131,10 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     for output in &args.outputs {
         genpath::image::write(output, &film.image)?;
     }
-    if let (Some(file), Some(plan)) = (&args.explain, plan) {
-        let camera = &view.scene.camera;
-        let svg = genpath::genetic::explain::svg(camera, &film.image, plan)
-            .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let explained = (args.explain.as_ref())
+        .and_then(|file| Some((file, prepared.explain(&view.scene.camera, &film.image)?)));
+    if let Some((file, svg)) = explained {
+        let svg = svg.map_err(|e| anyhow!("{}: {e}", file.display()))?;
         genpath::image::write_bytes_atomic(file, svg.as_bytes())?;
     }
     let resume = args.shard.resume.as_deref();
@@ -146,7 +152,13 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     stats.insert("shard".into(), serde_json::json!(shard));
     write_stats(&args.outputs, &serde_json::Value::Object(stats))?;
     if !args.scene.quiet {
-        report(&session, &settings, prepared.as_ref(), &film, &args.outputs);
+        report(
+            &session,
+            (&settings, &config),
+            prepared.as_ref(),
+            &film,
+            &args.outputs,
+        );
     }
     Ok(())
 }
@@ -177,36 +189,27 @@ fn render_stats(
     write_s: f64,
     saved: Option<&SavedPlan>,
 ) -> serde_json::Map<String, serde_json::Value> {
-    let plan = prepared.plan();
     let render_s = film.elapsed.as_secs_f64();
-    let plan_s = plan.map_or(0.0, |p| p.elapsed().as_secs_f64());
-    let spatial_s = prepared.spatial().map_or(0.0, |s| s.stats.seconds);
+    let description = prepared.describe(config);
+    let prepare_s: f64 = description.phases.iter().map(|(_, s)| s).sum();
     let mut stats = session.stats(settings);
     stats.insert("method_settings".into(), serde_json::json!(config));
-    stats.insert("mixture".into(), serde_json::json!(prepared.mixture()));
-    let plan_file = saved.map(|s| s.json());
+    stats.extend(description.stats);
     stats.insert(
-        "ga".into(),
-        serde_json::json!(plan.map(|p| ga_stats(p, config, plan_file.is_some()))),
+        "plan_file".into(),
+        serde_json::json!(saved.map(|s| s.json())),
     );
-    stats.insert("plan_file".into(), serde_json::json!(plan_file));
-    stats.insert(
-        "times_s".into(),
-        serde_json::json!({
-            "load": session.load_s,
-            "accel_build": session.accel_s,
-            "baseline": plan.map(|p| p.stats.baseline_seconds),
-            "ga": plan.map(|p| p.stats.ga_seconds),
-            "spatial": spatial_s,
-            "render": render_s,
-            "write": write_s,
-            "total_render": plan_s + spatial_s + render_s,
-        }),
-    );
-    stats.insert(
-        "spatial".into(),
-        serde_json::json!(prepared.spatial().map(|s| &s.stats)),
-    );
+    let mut times = serde_json::json!({
+        "load": session.load_s,
+        "accel_build": session.accel_s,
+        "render": render_s,
+        "write": write_s,
+        "total_render": prepare_s + render_s,
+    });
+    for (phase, seconds) in description.phases {
+        times[phase] = serde_json::json!(seconds);
+    }
+    stats.insert("times_s".into(), times);
     stats.insert("rays".into(), rays_json(film.rays));
     stats.insert(
         "rays_per_s".into(),
@@ -218,25 +221,14 @@ fn render_stats(
 /// What a render tells on stderr.
 fn report(
     session: &Session,
-    settings: &RenderSettings,
+    (settings, config): (&RenderSettings, &Settings),
     prepared: &dyn Integrator,
     film: &Film,
     outputs: &[PathBuf],
 ) {
     let render_s = film.elapsed.as_secs_f64();
-    if let Some(plan) = prepared.plan() {
-        let improved = plan.pixels.iter().filter(|p| !p.kept_srt).count();
-        eprintln!(
-            "genpath: GA on {} pixels ({improved} improved on srt) in {:.2} s",
-            plan.pixels.len(),
-            plan.elapsed().as_secs_f64()
-        );
-    }
-    if let Some(s) = prepared.spatial() {
-        eprintln!(
-            "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
-            s.stats.trained_cells, s.stats.cells, s.stats.records, s.stats.passes, s.stats.spp, s.stats.seconds
-        );
+    for line in prepared.describe(config).lines {
+        eprintln!("{line}");
     }
     let shard = if settings.shard.is_whole() {
         String::new()
@@ -255,105 +247,4 @@ fn report(
             .collect::<Vec<_>>()
             .join(", ")
     );
-}
-
-/// What the GA plan and the renderer left out for this scene, and why (design §8).
-fn left_out(
-    plan: &Plan,
-    config: &PlanConfig,
-    analysis: &genpath::scene::SceneAnalysis,
-) -> Vec<String> {
-    let mut out = Vec::new();
-    if analysis.glossy_triangles == 0 {
-        out.push("glossy-lobe (Phong, microfacet) evaluation and sampling: no glossy material (the BRDF code runs only the lobes a material has)".to_string());
-    }
-    if analysis.mirror_triangles == 0 {
-        out.push("delta vertices: no mirror, conductor or dielectric material".to_string());
-    }
-    let s = &plan.stats;
-    out.push(format!(
-        "GA at {} pixels that see only background or emitters ({} grid cells without a scattering pixel)",
-        s.skipped_pixels, s.empty_cells
-    ));
-    if !config.prune {
-        out.push("nothing else: pruning is off (--no-prune)".to_string());
-        return out;
-    }
-    if !s.baseline_ran {
-        out.push(format!(
-            "the baseline and the GA at {} grid pixels: the gate's pilot predicted no gain (its gains over pt: geometric mean {:.2})",
-            s.gated_pixels, s.pilot_gain
-        ));
-        return out;
-    }
-    out.push(format!(
-        "GA in {} grid cells whose pooled baseline relative variance is below {} (cells: min {:.3}, median {:.3}, max {:.3})",
-        s.low_variance_cells, config.prune_variance, s.cell_variance[0], s.cell_variance[1], s.cell_variance[2]
-    ));
-    let max_steps = plan.pixels.iter().map(|p| p.steps).max().unwrap_or(0);
-    let cut = plan.pixels.iter().filter(|p| p.steps < max_steps).count();
-    out.push(format!(
-        "generator steps past the depth the test paths need (all but {} of Σ F²/q): {} of {} GA pixels evolve fewer steps than the deepest ({max_steps}); steps per pixel {:?}",
-        genpath::genetic::plan::PRUNE_SHARE,
-        cut,
-        plan.pixels.len(),
-        {
-            let mut h = std::collections::BTreeMap::new();
-            for p in &plan.pixels {
-                *h.entry(p.steps).or_insert(0usize) += 1;
-            }
-            h
-        }
-    ));
-    out
-}
-
-/// What the JSON statistics record of a GA plan: settings, per-phase totals, every GA
-/// pixel's evolved mixture, and the fitness curves of a few pixels spread over the list;
-/// of a plan read from a plan file (`from_file`), a summary without the pixels and curves
-/// (the file has them).
-fn ga_stats(plan: &Plan, settings: &Settings, from_file: bool) -> serde_json::Value {
-    const CURVES: usize = 8;
-    let n = plan.pixels.len();
-    let curves: Vec<_> = (0..n.min(CURVES))
-        .map(|i| {
-            let p = &plan.pixels[i * n / n.min(CURVES)];
-            serde_json::json!({ "x": p.x, "y": p.y, "history": p.history })
-        })
-        .collect();
-    let pixels: Vec<_> = plan
-        .pixels
-        .iter()
-        .map(|p| {
-            serde_json::json!({
-                "x": p.x, "y": p.y, "origin": p.origin,
-                "v_srt": p.v_srt, "v_best": p.v_best, "v_evolved": p.v_evolved, "kept_srt": p.kept_srt,
-                "trial": p.trial, "warm": p.warm,
-                "test_paths": p.test_paths, "light_paths": p.light_paths, "steps": p.steps,
-                "test_path_seconds": p.test_path_seconds, "ga_seconds": p.ga_seconds,
-                "mixture": p.mixture,
-            })
-        })
-        .collect();
-    let evolve_s = plan.stats.evolve_cpu_seconds.max(1e-9);
-    let analysis = plan.analysis.clone();
-    let (curves, pixels) = if from_file {
-        let there = serde_json::json!("in the plan file (see plan_file)");
-        (there.clone(), there)
-    } else {
-        (serde_json::json!(curves), serde_json::json!(pixels))
-    };
-    serde_json::json!({
-        "config": settings.ga,
-        "plan": settings.plan,
-        "gate": settings.gate,
-        "left_out": left_out(plan, &settings.plan, &analysis),
-        "scene_analysis": analysis,
-        "stats": plan.stats,
-        "ga_pixels": n,
-        "improved_pixels": plan.pixels.iter().filter(|p| !p.kept_srt).count(),
-        "individual_evaluations_per_cpu_s": plan.stats.individual_evaluations as f64 / evolve_s,
-        "fitness_curves": curves,
-        "pixels": pixels,
-    })
 }

@@ -160,8 +160,13 @@ fn develop(
     let pixels = (width * height) as usize;
     let mut image = Image::new(width, height);
     let mut variance_of_mean = vec![[0.0; 3]; pixels];
-    for i in 0..pixels {
-        (image.pixels[i], variance_of_mean[i]) = sums.estimate(i);
+    for (i, (pixel, variance)) in image
+        .pixels
+        .iter_mut()
+        .zip(&mut variance_of_mean)
+        .enumerate()
+    {
+        (*pixel, *variance) = sums.estimate(i);
     }
     Film {
         image,

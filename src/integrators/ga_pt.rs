@@ -2,25 +2,62 @@
 //! its neighbouring GA pixels evolved ([`Guide`]); with the spatial guide (the default),
 //! the vertices past them are guided as `pg` guides them ([`super::pg`]).
 
-use super::ga::build_plan;
-use super::{pg, Context, Integrator, PixelIntegrator, PrepareError};
+use super::ga::{
+    build_plan, check_plan_size, describe_plan, explain_plan, plan_check, plan_summary,
+};
+use super::pg::SpatialIntegrator;
+use super::{
+    pg, Context, Description, ExplainError, Integrator, Learned, Method, MethodInfo,
+    PixelIntegrator, PrepareError, SelfCheck, Settings,
+};
 use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::genetic::plan::{Plan, PlanFor};
 use crate::guiding::{Guide, PathSegmentStorage};
+use crate::image::Image;
 use crate::path::mixture::Mixture;
 use crate::path::pt::Unguided;
 use crate::path::{pt, RayCounts, SceneView};
 use crate::sampling::Rng;
+use crate::scene::Camera;
 use glam::DVec3;
 
 /// A GA plan's guides, with path tracing's own sampling past them.
 pub struct GaPt {
     pub plan: Plan,
     pub max_bounces: u32,
+    /// Whether the plan was read from a plan file rather than built.
+    pub from_plan_file: bool,
 }
 
-pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+/// `ga-pt` learns a GA plan (whose GA pixels `learn --shard` splits over jobs), and with
+/// the spatial guide the guide's training beside it; it explains its plan.
+pub const METHOD: MethodInfo = MethodInfo {
+    prepare_learned: Some(prepare_learned),
+    splits_learning: true,
+    explains: true,
+    ..MethodInfo::plain(prepare)
+};
+
+/// `ga-pt` from a learned plan, with the spatial guide's learned training where the
+/// settings ask for the guide.
+fn prepare_learned(
+    context: &Context,
+    learned: Learned,
+) -> Result<Box<dyn Integrator>, PrepareError> {
+    if context.config.spatial.spatial_guide {
+        return Ok(Box::new(SpatialIntegrator::learned(context, learned)?));
+    }
+    let plan: Plan = learned.state()?;
+    check_plan_size(&plan, context)?;
+    Ok(Box::new(GaPt {
+        plan,
+        max_bounces: context.settings.max_bounces,
+        from_plan_file: true,
+    }))
+}
+
+fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let spatial = context.config.spatial.spatial_guide;
     if spatial {
         pg::check_schedule(context)?;
@@ -32,6 +69,7 @@ pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(GaPt {
         plan,
         max_bounces: context.settings.max_bounces,
+        from_plan_file: false,
     }))
 }
 
@@ -98,14 +136,18 @@ impl PixelIntegrator for GaPt {
     fn estimator(&self) -> GuideEstimator<'_> {
         GuideEstimator::new(Some(&self.plan), self.max_bounces, Guide::default())
     }
-    fn plan(&self) -> Option<&Plan> {
-        Some(&self.plan)
+    fn learned(&self) -> Option<Learned> {
+        let summary = serde_json::json!({ "plan": plan_summary(&self.plan), "spatial": null });
+        Some(Learned::new(Method::GaPt, None, &self.plan, &summary))
     }
-    fn learned(&self) -> Option<super::Learned> {
-        Some(super::Learned {
-            plan: Some(self.plan.clone()),
-            spatial: None,
-        })
+    fn describe(&self, config: &Settings) -> Description {
+        describe_plan(&self.plan, config, self.from_plan_file)
+    }
+    fn explain(&self, camera: &Camera, image: &Image) -> Option<Result<String, ExplainError>> {
+        Some(explain_plan(camera, image, &self.plan))
+    }
+    fn self_check(&self) -> SelfCheck<'_> {
+        plan_check(&self.plan)
     }
 }
 

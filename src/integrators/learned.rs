@@ -1,62 +1,67 @@
-//! What a method that learns learned while it was prepared ([`Learned`]): the GA plan of
-//! `ga` and `ga-pt`, and the spatial guide of `pg` and `ga-pt` with its training passes'
-//! per-pixel sums and the decision of its trial of the plan's guides. Saved in a plan file
-//! (`genpath learn`, [`crate::shard::plan_file`]) it prepares the method again without
-//! training ([`prepare_learned`]): the render is the one that trained in-process, bit for
-//! bit, and shards of it render with one learned state.
+//! What a method that learns learned while it was prepared ([`Learned`]): the samples its
+//! training took (which the image keeps) and the method's own state, which only the method
+//! reads. Saved in a plan file (`genpath learn`, [`crate::shard::plan_file`]) it prepares
+//! the method again without training ([`prepare_learned`], through the method's
+//! [`super::MethodInfo::prepare_learned`]): the render is the one that trained in-process,
+//! bit for bit, and shards of it render with one learned state.
 
-use super::ga::Ga;
-use super::ga_pt::GaPt;
-use super::pg::{PlanGuides, SpatialIntegrator, SpatialTraining};
-use super::{Integrator, Method, PixelSums, PrepareError, RenderSettings, Settings};
-use crate::genetic::plan::Plan;
-use crate::guiding::SpatialField;
+use super::{Context, Integrator, Method, PrepareError, RenderSettings, Settings};
+use crate::film::PixelSums;
 use crate::path::SceneView;
-use std::sync::Arc;
 
 /// The learned state of a prepared method.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Learned {
-    /// The GA plan (`ga`, `ga-pt`).
-    pub plan: Option<Plan>,
-    /// The spatial guide and its training (`pg`, `ga-pt` with the spatial guide).
-    pub spatial: Option<SpatialLearned>,
-}
-
-/// A trained spatial guide, the per-pixel sums of its training passes' samples (which the
-/// image keeps), and where the plan's guides sample beside it.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct SpatialLearned {
-    pub guide: SpatialField,
-    pub samples: PixelSums,
-    pub plan_guides: PlanGuides,
+    /// The `--method` name of the method that learned it.
+    pub method: String,
+    /// The per-pixel sums of the samples its training took, which the image of a render
+    /// that trained keeps.
+    pub samples: Option<PixelSums>,
+    /// The method's own state, encoded by [`Learned::new`] (`bincode`: every float as its
+    /// bits, so that it round-trips exactly).
+    pub state: Vec<u8>,
+    /// What was learned, in brief, as JSON text: for the plan file's header.
+    pub summary: String,
 }
 
 impl Learned {
-    /// The per-pixel sums of the samples preparing took, which the image of a render that
-    /// trained keeps: the spatial guide's training passes' (`pg`, `ga-pt`), or the GA plan's
-    /// baseline's (`ga`, where it keeps them).
-    pub fn samples(&self) -> Option<&PixelSums> {
-        match &self.spatial {
-            Some(spatial) => Some(&spatial.samples),
-            None => self.plan.as_ref().and_then(Plan::baseline),
+    /// `method`'s learned `state`, beside the samples its training took and a summary.
+    pub fn new<T: serde::Serialize>(
+        method: Method,
+        samples: Option<PixelSums>,
+        state: &T,
+        summary: &serde_json::Value,
+    ) -> Self {
+        Self {
+            method: method.name(),
+            samples,
+            state: bincode::serialize(state).expect("a learned state serialises"),
+            summary: summary.to_string(),
         }
-        .filter(|s| s.spp > 0)
+    }
+
+    /// The method's state, as [`Learned::new`] was given it.
+    pub fn state<T: serde::de::DeserializeOwned>(&self) -> Result<T, PrepareError> {
+        bincode::deserialize(&self.state).map_err(|e| PrepareError::Learned {
+            method: self.method.clone(),
+            what: format!("its state does not decode: {e}"),
+        })
+    }
+
+    /// The per-pixel sums of the samples preparing took, which the image of a render that
+    /// trained keeps, if it took any.
+    pub fn samples(&self) -> Option<&PixelSums> {
+        self.samples.as_ref().filter(|s| s.spp > 0)
     }
 
     /// Samples per pixel the training took (in the image of a render that trained).
     pub fn training_spp(&self) -> u32 {
         self.samples().map_or(0, |s| s.spp)
     }
-}
 
-impl From<&SpatialTraining> for SpatialLearned {
-    fn from(training: &SpatialTraining) -> Self {
-        Self {
-            guide: training.guide.as_ref().clone(),
-            samples: training.samples.clone(),
-            plan_guides: training.plan_guides,
-        }
+    /// The summary as JSON.
+    pub fn summary(&self) -> serde_json::Value {
+        serde_json::from_str(&self.summary).unwrap_or(serde_json::Value::Null)
     }
 }
 
@@ -70,79 +75,35 @@ pub fn prepare_learned(
     settings: &RenderSettings,
     learned: Learned,
 ) -> Result<Box<dyn Integrator>, PrepareError> {
+    let method = settings.method;
     let mismatch = |what: String| PrepareError::Learned {
-        method: settings.method,
+        method: method.name(),
         what,
     };
+    if learned.method != method.name() {
+        return Err(mismatch(format!("it is --method {}'s", learned.method)));
+    }
     let camera = &view.scene.camera;
     let pixels = (camera.width * camera.height) as usize;
-    let check_sums = |s: &PixelSums, of: &str| {
+    if let Some(s) = &learned.samples {
         if s.sum.len() != pixels || s.sum_sq.len() != pixels || s.spp > settings.spp {
             return Err(mismatch(format!(
-                "{of} sums of {} pixels and {} spp for {pixels} pixels at {} spp",
+                "training sums of {} pixels and {} spp for {pixels} pixels at {} spp",
                 s.sum.len(),
                 s.spp,
                 settings.spp
             )));
         }
-        Ok(())
-    };
-    if let Some(plan) = &learned.plan {
-        if (plan.width(), plan.height()) != (camera.width, camera.height) {
-            return Err(mismatch(format!(
-                "a GA plan of {}×{} pixels for an image of {}×{}",
-                plan.width(),
-                plan.height(),
-                camera.width,
-                camera.height
-            )));
-        }
-        if let Some(baseline) = plan.baseline() {
-            check_sums(baseline, "baseline")?;
-        }
     }
-    if let Some(spatial) = &learned.spatial {
-        check_sums(&spatial.samples, "training")?;
-        spatial.guide.check().map_err(mismatch)?;
-    }
-    let max_bounces = settings.max_bounces;
-    let keeps_taken = settings.shard.is_whole();
-    let spatial_guide = config.spatial.spatial_guide;
-    let integrator: Box<dyn Integrator> = match (settings.method, learned.plan, learned.spatial) {
-        (Method::Ga, Some(plan), None) => Box::new(Ga {
-            plan,
-            max_bounces,
-            keeps_taken,
-        }),
-        (Method::GaPt, Some(plan), None) if !spatial_guide => Box::new(GaPt { plan, max_bounces }),
-        (Method::GaPt, Some(plan), Some(s)) if spatial_guide => {
-            Box::new(spatial_integrator(Some(plan), s, settings))
-        }
-        (Method::Pg, None, Some(s)) => Box::new(spatial_integrator(None, s, settings)),
-        (_, plan, spatial) => {
-            return Err(mismatch(format!(
-                "{} GA plan and {} spatial guide",
-                if plan.is_some() { "a" } else { "no" },
-                if spatial.is_some() { "a" } else { "no" },
-            )))
-        }
+    let Some(prepare) = method.info().prepare_learned else {
+        return Err(mismatch("the method learns nothing".into()));
     };
-    Ok(integrator)
-}
-
-fn spatial_integrator(
-    plan: Option<Plan>,
-    spatial: SpatialLearned,
-    settings: &RenderSettings,
-) -> SpatialIntegrator {
-    SpatialIntegrator {
-        plan,
-        training: SpatialTraining {
-            guide: Arc::new(spatial.guide),
-            samples: spatial.samples,
-            plan_guides: spatial.plan_guides,
+    prepare(
+        &Context {
+            view,
+            config,
+            settings,
         },
-        max_bounces: settings.max_bounces,
-        keeps_taken: settings.shard.is_whole(),
-    }
+        learned,
+    )
 }

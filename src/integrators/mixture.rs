@@ -1,6 +1,8 @@
 //! `srt` and `mixture`: one mixture of path generators at every pixel, estimated by eq. 8.
 
-use super::{Context, Integrator, PixelIntegrator, PrepareError};
+use super::{
+    Context, Description, Integrator, MethodInfo, PixelIntegrator, PrepareError, Settings,
+};
 use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::path::mixture::{Mixture, MixtureScratch};
@@ -16,7 +18,12 @@ pub struct MixtureIntegrator {
 }
 
 /// `srt`: the paper's stochastic ray tracing, a mixture of its one generator.
-pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+/// `srt`: the paper's stochastic ray tracing, one generator.
+pub const SRT: MethodInfo = MethodInfo::plain(prepare_srt);
+/// `mixture`: a mixture of generators from a file.
+pub const METHOD: MethodInfo = MethodInfo::plain(prepare);
+
+fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let max_bounces = context.settings.max_bounces;
     let srt = &context.config.srt;
     let mixture = mixture_file::srt(context.view.scene, max_bounces, srt.absorption(srt.nee))
@@ -28,7 +35,7 @@ pub fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareErro
 }
 
 /// `mixture`: the mixture read from `--generators`.
-pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let mixture = context
         .config
         .loaded_mixture
@@ -57,8 +64,10 @@ impl PixelIntegrator for MixtureIntegrator {
             scratch: MixtureScratch::default(),
         }
     }
-    fn mixture(&self) -> Option<&Mixture> {
-        Some(&self.mixture)
+    fn describe(&self, _config: &Settings) -> Description {
+        let mut description = Description::default();
+        (description.stats).insert("mixture".into(), serde_json::json!(self.mixture));
+        description
     }
 }
 

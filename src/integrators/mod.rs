@@ -9,8 +9,8 @@
 //! radiance of its samples. Samples an integrator took while preparing (a spatial guide's training
 //! passes) are part of its image, and only the integrator counts them.
 //!
-//! Adding a method is one file here with a `prepare` function and one line in
-//! [`methods!`]'s list below.
+//! Adding a method is one file here that declares its [`MethodInfo`] and one line in
+//! [`methods!`]'s list below (docs/architecture.md has the recipe).
 
 pub mod ga;
 pub mod ga_pt;
@@ -21,21 +21,24 @@ pub mod pt;
 pub mod settings;
 #[cfg(feature = "testing")]
 pub mod test_method;
+#[cfg(feature = "testing")]
+pub mod test_splat;
 
 use crate::film::{self, Control, Film, Pass, PixelEstimator, PixelSums, Shard};
-use crate::genetic::plan::{LearnStore, Plan, PlanError};
+use crate::genetic::plan::{LearnStore, PlanError};
 use crate::genetic::GaConfigError;
-use crate::guiding::SpatialField;
+use crate::image::Image;
 use crate::path::mixture::Mixture;
 use crate::path::SceneView;
+use crate::scene::Camera;
 pub use learned::{prepare_learned, Learned};
 pub use settings::Settings;
 use std::sync::Arc;
 
-/// Declares [`Method`] and [`prepare`] from one list: each entry is a method's `--method`
-/// variant (its documentation is its help text) and the function that prepares it.
+/// Declares [`Method`] from one list: each entry is a method's `--method` variant (its
+/// documentation is its help text) and the [`MethodInfo`] its file declares.
 macro_rules! methods {
-    ($($(#[doc = $doc:literal])* $(#[cfg($cfg:meta)])? $variant:ident => $prepare:path,)*) => {
+    ($($(#[doc = $doc:literal])* $(#[cfg($cfg:meta)])? $variant:ident => $info:path,)*) => {
         /// Rendering methods selectable with `--method`.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
         #[serde(rename_all = "kebab-case")]
@@ -43,18 +46,12 @@ macro_rules! methods {
             $($(#[doc = $doc])* $(#[cfg($cfg)])? $variant,)*
         }
 
-        /// Prepares `settings.method`: builds and trains what it renders with.
-        pub fn prepare(
-            view: &SceneView,
-            config: &Settings,
-            settings: &RenderSettings,
-        ) -> Result<Box<dyn Integrator>, PrepareError> {
-            let context = Context { view, config, settings };
-            if !settings.shard.is_whole() && settings.method.learns() {
-                return Err(PrepareError::ShardLearns(settings.method));
-            }
-            match settings.method {
-                $($(#[cfg($cfg)])? Method::$variant => $prepare(&context),)*
+        impl Method {
+            /// What the method's file declares of it.
+            pub fn info(self) -> &'static MethodInfo {
+                match self {
+                    $($(#[cfg($cfg)])? Method::$variant => &$info,)*
+                }
             }
         }
     };
@@ -63,35 +60,99 @@ macro_rules! methods {
 methods! {
     /// Path tracing: NEE at every vertex + BSDF sampling, power heuristic, Russian roulette
     /// from depth 5 (the modern baseline, as Mitsuba 3 `path`).
-    Pt => pt::prepare,
+    Pt => pt::METHOD,
     /// The paper's baseline "stochastic ray tracing": BRDF sampling with fixed absorption,
     /// next-event estimation at every vertex (`--nee every`) or only at the path's end
     /// (`--nee end`, the paper's).
-    Srt => mixture::prepare_srt,
+    Srt => mixture::SRT,
     /// A mixture of path generators read from `--generators FILE` (eq. 7–8).
-    Mixture => mixture::prepare,
+    Mixture => mixture::METHOD,
     /// Genetic path generation: per GA pixel, a mixture evolved to minimise the variance
     /// on test paths (paper §4–5); every pixel renders with its neighbours' mixtures.
-    Ga => ga::prepare,
+    Ga => ga::METHOD,
     /// Beyond the paper: path tracing (`pt`) whose direction sampling is guided by the GA's
     /// evolved anchor samplers, and past them by `pg`'s spatial guide (`--spatial-guide`),
     /// with next-event estimation at every vertex.
-    GaPt => ga_pt::prepare,
+    GaPt => ga_pt::METHOD,
     /// Beyond the paper: path tracing guided by a spatial guide learned from path-traced
     /// training passes whose samples stay in the image (`guiding::field`), without the GA:
     /// the baseline that shows what the GA adds.
-    Pg => pg::prepare,
+    Pg => pg::METHOD,
     /// Test-only (feature `testing`): path tracing with next-event estimation alone (no
     /// MIS); shows that a method is one file and one line.
     #[cfg(feature = "testing")]
-    NeeOnly => test_method::prepare,
+    NeeOnly => test_method::METHOD,
+    /// Test-only (feature `testing`): `pt`'s samples splatted onto the pixel mirrored left
+    /// to right; shows that the film takes splats.
+    #[cfg(feature = "testing")]
+    SplatMirror => test_splat::METHOD,
+}
+
+/// What a method is, as every command sees it: how it is prepared and what it learns. Each
+/// method's file declares one (`pub const METHOD: MethodInfo`), named in [`methods!`]'s list.
+pub struct MethodInfo {
+    /// Builds and trains what it renders with.
+    pub prepare: Prepare,
+    /// For a method that learns: prepares it again from what an earlier preparation learned
+    /// ([`Learned`], kept in a plan file by `genpath learn`) instead of training.
+    pub prepare_learned: Option<PrepareLearned>,
+    /// Whether `genpath learn --shard K/N` splits its learning over jobs.
+    pub splits_learning: bool,
+    /// Whether `render --explain FILE.svg` draws why its image is what it is.
+    pub explains: bool,
+    /// Whether its image is the scene's, so that `check` compares it with `pt`'s.
+    pub renders_the_scene: bool,
+}
+
+/// How a method is prepared ([`MethodInfo::prepare`]).
+pub type Prepare = fn(&Context) -> Result<Box<dyn Integrator>, PrepareError>;
+/// How a method is prepared from what it learned ([`MethodInfo::prepare_learned`]).
+pub type PrepareLearned = fn(&Context, Learned) -> Result<Box<dyn Integrator>, PrepareError>;
+
+impl MethodInfo {
+    /// A method that learns nothing and renders the scene's image.
+    pub const fn plain(prepare: Prepare) -> Self {
+        Self {
+            prepare,
+            prepare_learned: None,
+            splits_learning: false,
+            explains: false,
+            renders_the_scene: true,
+        }
+    }
+}
+
+/// Prepares `settings.method`: builds and trains what it renders with.
+pub fn prepare(
+    view: &SceneView,
+    config: &Settings,
+    settings: &RenderSettings,
+) -> Result<Box<dyn Integrator>, PrepareError> {
+    let context = Context {
+        view,
+        config,
+        settings,
+    };
+    if !settings.shard.is_whole() && settings.method.learns() {
+        return Err(PrepareError::ShardLearns(settings.method));
+    }
+    (settings.method.info().prepare)(&context)
 }
 
 impl Method {
     /// Whether preparing the method learns from the scene (a GA plan, a spatial guide), so
     /// that two renders of it with different sample shares would learn differently.
     pub fn learns(self) -> bool {
-        matches!(self, Method::Ga | Method::GaPt | Method::Pg)
+        self.info().prepare_learned.is_some()
+    }
+
+    /// The method named `name` (its `--method` name).
+    pub fn named(name: &str) -> Option<Method> {
+        use clap::ValueEnum;
+        Method::value_variants()
+            .iter()
+            .copied()
+            .find(|m| m.name() == name)
     }
 
     /// The method's `--method` name.
@@ -161,8 +222,8 @@ pub enum PrepareError {
         .0.name()
     )]
     ShardLearns(Method),
-    #[error("the learned state is not one --method {} learns: {what}", method.name())]
-    Learned { method: Method, what: String },
+    #[error("the learned state is not one --method {method} learns: {what}")]
+    Learned { method: String, what: String },
     #[error(
         "--spatial-passes {passes} trains on {needs} samples per pixel, more than --spp {spp} \
          (pass i takes 2^i)"
@@ -198,19 +259,57 @@ pub trait PixelIntegrator: Send + Sync {
     fn learned(&self) -> Option<Learned> {
         None
     }
-    /// The GA plan it renders with.
-    fn plan(&self) -> Option<&Plan> {
+    /// What it tells of itself ([`Integrator::describe`]).
+    fn describe(&self, _config: &Settings) -> Description {
+        Description::default()
+    }
+    /// `render --explain`'s picture of `image` (methods whose [`MethodInfo::explains`]).
+    fn explain(&self, _camera: &Camera, _image: &Image) -> Option<Result<String, ExplainError>> {
         None
     }
-    /// The spatial guide it renders with.
-    fn spatial(&self) -> Option<&SpatialField> {
-        None
-    }
-    /// The one mixture it renders every pixel with.
-    fn mixture(&self) -> Option<&Mixture> {
-        None
+    /// What `check` verifies of it besides its image.
+    fn self_check(&self) -> SelfCheck<'_> {
+        SelfCheck::default()
     }
 }
+
+/// What `check` verifies of a prepared method besides its image: the densities of the
+/// mixtures it samples with at the pixels it chose (each must be finite and positive), and
+/// the numbers it computed while learning (each must be finite).
+#[derive(Debug, Default)]
+pub struct SelfCheck<'a> {
+    pub mixtures: Vec<((u32, u32), &'a Mixture)>,
+    pub numbers: Vec<f64>,
+}
+
+/// What a prepared method tells of itself, so that commands need not know its insides.
+#[derive(Debug, Default)]
+pub struct Description {
+    /// Its entries in a render's JSON statistics (the GA's, the spatial guide's, its
+    /// mixture's), by key.
+    pub stats: serde_json::Map<String, serde_json::Value>,
+    /// The seconds of each phase of its preparation, by name (`ga`, `spatial`, …), for the
+    /// JSON's `times_s` and the sweep's time budgets.
+    pub phases: Vec<(&'static str, f64)>,
+    /// What it tells on stderr after a render (what it learned), a line each.
+    pub lines: Vec<String>,
+}
+
+impl Description {
+    /// The seconds of phase `name` (0 if it has none).
+    pub fn seconds(&self, name: &str) -> f64 {
+        self.phases
+            .iter()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, s)| s)
+            .sum()
+    }
+}
+
+/// Why `render --explain` drew no picture.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct ExplainError(pub String);
 
 /// A prepared method, as every command renders it.
 pub trait Integrator: Send + Sync {
@@ -227,9 +326,13 @@ pub trait Integrator: Send + Sync {
     fn samples_taken(&self) -> u32;
     /// What preparing learned, for a plan file (methods that learn).
     fn learned(&self) -> Option<Learned>;
-    fn plan(&self) -> Option<&Plan>;
-    fn spatial(&self) -> Option<&SpatialField>;
-    fn mixture(&self) -> Option<&Mixture>;
+    /// What it tells of itself: its JSON statistics, its phases' seconds, its report
+    /// (`config`: the settings it was prepared with).
+    fn describe(&self, config: &Settings) -> Description;
+    /// `render --explain`'s picture of `image` (methods whose [`MethodInfo::explains`]).
+    fn explain(&self, camera: &Camera, image: &Image) -> Option<Result<String, ExplainError>>;
+    /// What `check` verifies of it besides its image.
+    fn self_check(&self) -> SelfCheck<'_>;
 }
 
 impl<I: PixelIntegrator> Integrator for I {
@@ -242,13 +345,13 @@ impl<I: PixelIntegrator> Integrator for I {
     fn learned(&self) -> Option<Learned> {
         PixelIntegrator::learned(self)
     }
-    fn plan(&self) -> Option<&Plan> {
-        PixelIntegrator::plan(self)
+    fn describe(&self, config: &Settings) -> Description {
+        PixelIntegrator::describe(self, config)
     }
-    fn spatial(&self) -> Option<&SpatialField> {
-        PixelIntegrator::spatial(self)
+    fn explain(&self, camera: &Camera, image: &Image) -> Option<Result<String, ExplainError>> {
+        PixelIntegrator::explain(self, camera, image)
     }
-    fn mixture(&self) -> Option<&Mixture> {
-        PixelIntegrator::mixture(self)
+    fn self_check(&self) -> SelfCheck<'_> {
+        PixelIntegrator::self_check(self)
     }
 }

@@ -6,25 +6,44 @@
 //! `2^i` samples per pixel, rendered by the shared image loop with an estimator that
 //! records, and the next pass samples with the guide learned from it.
 
+use super::ga::{check_plan_size, describe_plan, explain_plan, plan_check, plan_summary};
 use super::ga_pt::GuideEstimator;
 use super::settings::SpatialConfig;
-use super::{Context, Control, Integrator, PixelIntegrator, PrepareError, RenderSettings};
+use super::{
+    Context, Control, Description, ExplainError, Integrator, Learned, Method, MethodInfo,
+    PixelIntegrator, PrepareError, RenderSettings, SelfCheck, Settings,
+};
 use crate::accel::Ray;
 use crate::film::{self, render_tile, Pass, PixelEstimator, PixelResult, PixelSums, Splats};
 use crate::genetic::plan::{LearnStore, Plan};
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
+use crate::image::Image;
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
 use crate::progress::progress_bar;
 use crate::sampling::{derive_seed, Rng, Stream};
+use crate::scene::Camera;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
-pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+/// `pg` learns a spatial guide (its training passes run in one job).
+pub const METHOD: MethodInfo = MethodInfo {
+    prepare_learned: Some(prepare_learned),
+    ..MethodInfo::plain(prepare)
+};
+
+fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     check_schedule(context)?;
     Ok(Box::new(train(context, None)?))
+}
+
+fn prepare_learned(
+    context: &Context,
+    learned: Learned,
+) -> Result<Box<dyn Integrator>, PrepareError> {
+    Ok(Box::new(SpatialIntegrator::learned(context, learned)?))
 }
 
 /// Refuses `--spatial-passes` whose training would take more samples than `--spp`.
@@ -48,7 +67,17 @@ pub fn train(context: &Context, plan: Option<Plan>) -> Result<SpatialIntegrator,
         training,
         max_bounces: context.settings.max_bounces,
         keeps_taken: true,
+        from_plan_file: false,
     })
+}
+
+/// What a spatial guide's training leaves to a plan file beside its samples: the guide, the
+/// GA plan it trained beside (`ga-pt`), and where that plan's guides sample.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SpatialState {
+    plan: Option<Plan>,
+    guide: SpatialField,
+    plan_guides: PlanGuides,
 }
 
 /// Path tracing guided by a trained spatial guide, beside a GA plan's per-pixel guides
@@ -60,6 +89,41 @@ pub struct SpatialIntegrator {
     /// Whether the image keeps the training's samples: not in a shard rendered with a
     /// saved learned state ([`super::learned`]), whose training shard holds them.
     pub keeps_taken: bool,
+    /// Whether the guide (and plan) were read from a plan file rather than trained.
+    pub from_plan_file: bool,
+}
+
+impl SpatialIntegrator {
+    /// The integrator of `learned`, a spatial training's state (`pg`'s, or `ga-pt`'s with
+    /// its GA plan).
+    pub fn learned(context: &Context, learned: Learned) -> Result<Self, PrepareError> {
+        let mismatch = |what: String| PrepareError::Learned {
+            method: context.settings.method.name(),
+            what,
+        };
+        let state: SpatialState = learned.state()?;
+        if let Some(plan) = &state.plan {
+            check_plan_size(plan, context)?;
+        }
+        state.guide.check().map_err(mismatch)?;
+        let Some(samples) = learned.samples else {
+            return Err(mismatch(
+                "a spatial guide without its training's samples".into(),
+            ));
+        };
+        let settings = context.settings;
+        Ok(Self {
+            plan: state.plan,
+            training: SpatialTraining {
+                guide: Arc::new(state.guide),
+                samples,
+                plan_guides: state.plan_guides,
+            },
+            max_bounces: settings.max_bounces,
+            keeps_taken: settings.shard.is_whole(),
+            from_plan_file: true,
+        })
+    }
 }
 
 impl PixelIntegrator for SpatialIntegrator {
@@ -73,17 +137,50 @@ impl PixelIntegrator for SpatialIntegrator {
     fn taken_spp(&self) -> u32 {
         self.training.samples.spp
     }
-    fn learned(&self) -> Option<super::Learned> {
-        Some(super::Learned {
+    fn learned(&self) -> Option<Learned> {
+        let training = &self.training;
+        let summary = serde_json::json!({
+            "plan": self.plan.as_ref().map(plan_summary),
+            "spatial": { "stats": training.guide.stats, "plan_guides": training.plan_guides },
+        });
+        let state = SpatialState {
             plan: self.plan.clone(),
-            spatial: Some((&self.training).into()),
-        })
+            guide: training.guide.as_ref().clone(),
+            plan_guides: training.plan_guides,
+        };
+        let method = if self.plan.is_some() {
+            Method::GaPt
+        } else {
+            Method::Pg
+        };
+        Some(Learned::new(
+            method,
+            Some(training.samples.clone()),
+            &state,
+            &summary,
+        ))
     }
-    fn plan(&self) -> Option<&Plan> {
-        self.plan.as_ref()
+    fn describe(&self, config: &Settings) -> Description {
+        let mut description = match &self.plan {
+            Some(plan) => describe_plan(plan, config, self.from_plan_file),
+            None => Description::default(),
+        };
+        let s = &self.training.guide.stats;
+        (description.stats).insert("spatial".into(), serde_json::json!(s));
+        description.phases.push(("spatial", s.seconds));
+        description.lines.push(format!(
+            "genpath: spatial guide: {} of {} regions trained on {} records from {} passes ({} spp of the image) in {:.2} s",
+            s.trained_cells, s.cells, s.records, s.passes, s.spp, s.seconds
+        ));
+        description
     }
-    fn spatial(&self) -> Option<&SpatialField> {
-        Some(&self.training.guide)
+    fn explain(&self, camera: &Camera, image: &Image) -> Option<Result<String, ExplainError>> {
+        (self.plan.as_ref()).map(|plan| explain_plan(camera, image, plan))
+    }
+    fn self_check(&self) -> SelfCheck<'_> {
+        self.plan
+            .as_ref()
+            .map_or_else(SelfCheck::default, plan_check)
     }
 }
 

@@ -1,6 +1,6 @@
 //! `pt`: path tracing with next-event estimation at every vertex ([`crate::path::pt`]).
 
-use super::{Context, Integrator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, MethodInfo, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::path::{pt, RayCounts, SceneView};
@@ -13,7 +13,9 @@ pub struct PathTracing {
     pub max_bounces: u32,
 }
 
-pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+pub const METHOD: MethodInfo = MethodInfo::plain(prepare);
+
+fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(PathTracing {
         max_bounces: context.settings.max_bounces,
     }))

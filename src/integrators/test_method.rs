@@ -6,7 +6,7 @@
 //! show that a method is this one file and one line in the list of [`super::Method`]s, and
 //! that every command renders it.
 
-use super::{Context, Integrator, PixelIntegrator, PrepareError};
+use super::{Context, Integrator, MethodInfo, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::path::pt::LightCandidate;
@@ -22,7 +22,9 @@ pub struct NeeOnly {
     max_bounces: u32,
 }
 
-pub fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
+pub const METHOD: MethodInfo = MethodInfo::plain(prepare);
+
+fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(NeeOnly {
         max_bounces: context.settings.max_bounces,
     }))

@@ -313,7 +313,8 @@ impl Sweep<'_> {
                     let t0 = Instant::now();
                     let integrator = prepare(view, &config, &settings)?;
                     let prepare_s = t0.elapsed().as_secs_f64();
-                    let ga_seconds = integrator.plan().map_or(0.0, |p| p.elapsed().as_secs_f64());
+                    let phases = integrator.describe(&config);
+                    let ga_seconds = phases.seconds("baseline") + phases.seconds("ga");
                     let (budget, film) = match seconds {
                         None => (f64::from(spp), integrator.render(view, &settings)),
                         Some(t) => {

@@ -16,6 +16,8 @@ mod methods;
 mod plan;
 mod resume;
 mod shards;
+#[cfg(feature = "testing")]
+mod splats;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

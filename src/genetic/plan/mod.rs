@@ -55,6 +55,7 @@ mod config;
 mod gate;
 mod interpolation;
 mod pixel;
+pub mod report;
 mod stages;
 mod waves;
 
