@@ -36,9 +36,9 @@ use genpath::film::Film;
 use genpath::genetic::plan::{GateConfig, Plan, PlanConfig, PlanFor, PlanInputs};
 use genpath::genetic::GaConfig;
 use genpath::integrators::ga::Ga;
-use genpath::integrators::ga_pt::GaPt;
+use genpath::integrators::ga_pt::{GaPt, GuidesTrialPolicy};
 use genpath::integrators::mixture::MixtureIntegrator;
-use genpath::integrators::pg::{train_spatial, SpatialIntegrator, TrainingSchedule};
+use genpath::integrators::pg::{train_spatial, Beside, SpatialIntegrator, TrainingSchedule};
 use genpath::integrators::pt::PathTracing;
 use genpath::integrators::settings::SpatialConfig;
 use genpath::integrators::{Integrator, Method, RenderSettings};
@@ -239,7 +239,11 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     // The guide trains on half the samples (the default), which stay in the image.
     let train = |plan: Option<&Plan>| {
         let schedule = TrainingSchedule::new(&SpatialConfig::default(), spp);
-        let t = train_spatial(&view, &settings, schedule, plan).unwrap();
+        let beside = plan.map(|plan| Beside {
+            plan,
+            trial: &GuidesTrialPolicy,
+        });
+        let t = train_spatial(&view, &settings, schedule, beside).unwrap();
         assert!(
             t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
             "{name}: the spatial guide did not train"

@@ -7,7 +7,6 @@
 //! records, and the next pass samples with the guide learned from it.
 
 use super::ga::{check_plan_size, describe_plan, explain_plan, plan_check, plan_summary};
-use super::ga_pt::GuideEstimator;
 use super::settings::SpatialConfig;
 use super::{
     Context, Control, Description, ExplainError, Integrator, Learned, Method, MethodInfo,
@@ -19,7 +18,8 @@ use crate::genetic::plan::{LearnStore, Plan};
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::image::Image;
 use crate::path::mixture::Mixture;
-use crate::path::{RayCounts, SceneView};
+use crate::path::pt::Unguided;
+use crate::path::{pt, RayCounts, SceneView};
 use crate::progress::progress_bar;
 use crate::sampling::{derive_seed, Rng, Stream};
 use crate::scene::Camera;
@@ -58,10 +58,19 @@ pub fn check_schedule(context: &Context) -> Result<(), PrepareError> {
     Ok(())
 }
 
-/// Trains the spatial guide with `context`'s settings, beside `plan`'s per-pixel guides.
-pub fn train(context: &Context, plan: Option<Plan>) -> Result<SpatialIntegrator, PrepareError> {
+/// Trains the spatial guide with `context`'s settings, beside a GA plan's per-pixel guides
+/// and their trial where given (`ga-pt`).
+pub fn train(
+    context: &Context,
+    beside: Option<(Plan, &dyn PlanTrial)>,
+) -> Result<SpatialIntegrator, PrepareError> {
     let schedule = TrainingSchedule::new(&context.config.spatial, context.settings.spp);
-    let training = train_spatial(context.view, context.settings, schedule, plan.as_ref())?;
+    let trained_beside = beside.as_ref().map(|(plan, trial)| Beside {
+        plan,
+        trial: *trial,
+    });
+    let training = train_spatial(context.view, context.settings, schedule, trained_beside)?;
+    let plan = beside.map(|(plan, _)| plan);
     Ok(SpatialIntegrator {
         plan,
         training,
@@ -184,6 +193,80 @@ impl PixelIntegrator for SpatialIntegrator {
     }
 }
 
+/// A pixel's guide, rebuilt in the same storage at every pixel.
+pub struct GuideEstimator<'a> {
+    plan: Option<&'a Plan>,
+    max_bounces: u32,
+    guide: Guide,
+    guided: bool,
+    weights: Vec<(f64, usize)>,
+    parts: Vec<(f64, &'a Mixture)>,
+}
+
+impl<'a> GuideEstimator<'a> {
+    pub fn new(plan: Option<&'a Plan>, max_bounces: u32, guide: Guide) -> Self {
+        Self {
+            plan,
+            max_bounces,
+            guide,
+            guided: false,
+            weights: Vec::new(),
+            parts: Vec::new(),
+        }
+    }
+
+    /// Rebuilds the guide for pixel `(x, y)` from the plan's levels there, unless
+    /// `levels_off`; whether they guide it. Where they do not, a plan's guide is remade
+    /// with no levels when `clear`.
+    pub fn start_levels(&mut self, (x, y): (u32, u32), levels_off: bool, clear: bool) -> bool {
+        let Some(plan) = self.plan else {
+            return false;
+        };
+        let guided =
+            !levels_off && plan.neighbour_mixtures(x, y, &mut self.weights, &mut self.parts);
+        if guided {
+            self.guide.rebuild(&self.parts);
+        } else if clear {
+            self.guide.rebuild(&[]);
+        }
+        guided
+    }
+
+    /// Path tracing guided by the guide as set for the pixel (`guided`), recording into
+    /// `recorder` when given.
+    pub fn radiance(
+        &self,
+        (view, ray): (&SceneView, &Ray),
+        guided: bool,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        recorder: Option<&mut PathSegmentStorage>,
+    ) -> DVec3 {
+        let max_bounces = self.max_bounces;
+        let radiance = match guided {
+            true => pt::radiance_guided(view, ray, max_bounces, rng, counts, &self.guide, recorder),
+            false => pt::radiance_guided(view, ray, max_bounces, rng, counts, &Unguided, recorder),
+        };
+        radiance.as_dvec3()
+    }
+}
+
+impl PixelEstimator for GuideEstimator<'_> {
+    fn start(&mut self, x: u32, y: u32) {
+        self.guided = self.start_levels((x, y), false, false);
+    }
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        _splats: &mut Splats,
+    ) -> DVec3 {
+        self.radiance((view, ray), self.guided, rng, counts, None)
+    }
+}
+
 /// A pixel's guide: the plan's levels where they sample, the spatial guide everywhere
 /// else. In a training pass it records its pixel's first samples.
 pub struct SpatialEstimator<'a> {
@@ -270,7 +353,7 @@ pub enum PlanGuides {
 
 impl PlanGuides {
     /// Whether pixel `(x, y)` renders without the plan's guides.
-    fn off_at(self, x: u32, y: u32) -> bool {
+    pub fn off_at(self, x: u32, y: u32) -> bool {
         match self {
             PlanGuides::Everywhere => false,
             PlanGuides::OutsideControl => x % 4 == 3 && y % 4 == 3,
@@ -278,34 +361,6 @@ impl PlanGuides {
         }
     }
 }
-
-/// A training pass's trial of the plan's per-pixel guides decides when the pixels they
-/// guide have more than this many times the control arm's mean relative variance times mean
-/// cost per sample (then the guides go), or less than its inverse (then they stay and
-/// trials stop); in between, they stay for the next pass, which tries again. (2 s budgets,
-/// seeds 401–406: glossy's pilot passes on seeds 404 and 405 only, and the trial of pass 2
-/// gives 2.11 and 1.91 there by variance alone, where the guides doubled `ga-pt`'s error
-/// against `pg`; fig5 0.28–0.44. With the cost, which the guides' cones and patches raise
-/// by 1.6–1.65 × per sample on fig5 and 1.4 × on glossy, 48 spp, seeds 401, 404, 405: fig5
-/// 0.54–0.71, glossy 3.26 and 2.60, the same decisions.)
-pub const LEVELS_KEEP_RATIO: f64 = 1.15;
-
-/// The first training pass that tries the plan's guides: the guide that pass 1 samples with
-/// has learned from one sample per pixel, too little to judge against.
-pub const FIRST_TRIAL_PASS: u32 = 2;
-
-/// A trial with fewer control pixels decides nothing: the plan's guides stay.
-pub const MIN_TRIAL_PIXELS: usize = 256;
-
-/// A trial weighs a pixel's variance by its mean over the passes before in the
-/// `(2r + 1)²` pixels around it (`r` this radius), not at the pixel alone: at pass 2 a
-/// pixel's own mean is that of 3 samples, and the pixels where it happens to be near 0 gave
-/// the relative variances that decided the trial. cbox with the gate off (seeds 401–403,
-/// 64 spp): the trial kept the GA's guides at ratios 0.33–0.42 with the pixel's own mean,
-/// while `ga-pt --no-gate` has 1.07 × `pg`'s relMSE at 2 s; with 3 × 3 pixels 1.09–1.10, as
-/// with 5 × 5. fig5 0.51–0.73 → 0.72–0.73, fig1 1.15–1.22 → 1.17–1.20, glossy 5.4–13.6 →
-/// 2.8–7.3: the same decisions there.
-pub const TRIAL_MEAN_RADIUS: u32 = 1;
 
 /// How long the spatial guide trains: pass `i` takes `2^i` samples per pixel, and the guide
 /// the next pass samples with is learned from that pass's records alone (as in "practical
@@ -363,27 +418,53 @@ fn training_pass(settings: &RenderSettings, pass: u32) -> Pass {
     }
 }
 
+/// Per-pixel guides that sample beside the spatial guide (a GA plan's, `ga-pt`'s), and the
+/// trial of them that the training passes run.
+#[derive(Clone, Copy)]
+pub struct Beside<'a> {
+    pub plan: &'a Plan,
+    pub trial: &'a dyn PlanTrial,
+}
+
+/// A trial of a plan's per-pixel guides against the spatial guide alone, run by the
+/// training passes (`ga-pt`'s, [`super::ga_pt`]): a pass that tries leaves the control
+/// pixels ([`PlanGuides::OutsideControl`]) to the spatial guide alone, and its arms decide
+/// after the pass whether the guides stay ([`PlanGuides::Everywhere`]) or go
+/// ([`PlanGuides::Nowhere`]).
+pub trait PlanTrial: Sync {
+    /// Whether pass `pass` tries the guides (while no trial has decided).
+    fn tries(&self, pass: u32) -> bool;
+    /// The arms of one pass over an image `width` pixels wide, after passes whose sums are
+    /// `before`.
+    fn arms<'a>(&self, plan: &'a Plan, before: &PixelSums, width: u32) -> Box<dyn TrialArms + 'a>;
+}
+
+/// The arms of one training pass's trial ([`PlanTrial`]).
+pub trait TrialArms {
+    /// Adds pixel `i`'s new samples of the pass: their sum, sum of squares and count, taken
+    /// at a cost of `cost` rays.
+    fn add(&mut self, i: usize, pass: (DVec3, DVec3, u32), cost: f64);
+    /// The trial's outcome in pass `pass`, and whether the next pass tries again.
+    fn decide(&self, pass: u32) -> (GuidesTrial, bool);
+}
+
 /// A spatial guide trained by passes of path tracing (`schedule`): the first unguided
-/// beyond `plan`'s levels (`ga-pt --spatial-guide`; `None` for `pg`), each later one guided
-/// by the guide learned from the pass before it, every pass rendered as the final image is
-/// (with `plan`'s per-pixel guides). Records and samples are gathered per tile and merged in
-/// tile order, so the guide does not depend on the thread count.
+/// beyond `beside`'s plan's levels (`ga-pt --spatial-guide`; `None` for `pg`), each later
+/// one guided by the guide learned from the pass before it, every pass rendered as the
+/// final image is (with the plan's per-pixel guides). Records and samples are gathered per
+/// tile and merged in tile order, so the guide does not depend on the thread count.
 ///
-/// With a plan that guides, the passes from [`FIRST_TRIAL_PASS`] on also try its guides:
-/// each leaves one pixel in sixteen to the spatial guide alone ([`PlanGuides::OutsideControl`]) and
-/// compares the two arms' relative variance times cost per sample (the inverse of their
-/// efficiency, as the gate compares estimators), until the ratio leaves
-/// `[1 / LEVELS_KEEP_RATIO, LEVELS_KEEP_RATIO]`; above it, the plan's guides sample nowhere
-/// from then on ([`PlanGuides::Nowhere`]). The gate's pilot could only compare them with `pt`, since
-/// the spatial guide learns after the plan (with the plan's guides: fig5 needs that). Which
-/// estimator a later pass or the render uses depends on the samples of the passes before, as
-/// the spatial guide itself does, never on its own samples: every sample stays unbiased.
+/// With a plan that guides, the passes that its [`PlanTrial`] tries compare the guides with
+/// the spatial guide alone. Which estimator a later pass or the render uses depends on the
+/// samples of the passes before, as the spatial guide itself does, never on its own
+/// samples: every sample stays unbiased.
 pub fn train_spatial(
     view: &SceneView,
     settings: &RenderSettings,
     schedule: TrainingSchedule,
-    plan: Option<&Plan>,
+    beside: Option<Beside>,
 ) -> Result<SpatialTraining, PrepareError> {
+    let plan = beside.map(|b| b.plan);
     let start = Instant::now();
     let camera = &view.scene.camera;
     let tiles = film::tiles(camera.width, camera.height);
@@ -400,9 +481,9 @@ pub fn train_spatial(
         let t0 = Instant::now();
         let pass = at.passes;
         let training = &mut at.training;
-        // From pass `FIRST_TRIAL_PASS` on, each pass tries the plan's guides against the
-        // spatial guide alone until a trial decides (the guides stay where it does not).
-        let trial = at.trialling && pass >= FIRST_TRIAL_PASS;
+        // Until a trial decides, the passes the trial tries leave the control pixels to the
+        // spatial guide alone (the guides stay where it does not decide).
+        let trial = at.trialling && beside.is_some_and(|b| b.trial.tries(pass));
         if trial {
             training.plan_guides = PlanGuides::OutsideControl;
         }
@@ -435,18 +516,16 @@ pub fn train_spatial(
             break;
         }
         records.clear();
-        let mut arms = TrialArms::new();
-        let trial_plan = open_plan.filter(|_| trial);
+        let mut arms = (beside.filter(|_| trial))
+            .map(|b| b.trial.arms(b.plan, &training.samples, camera.width));
         merge_pass(
             per_tile,
             &mut records,
             training,
-            &mut arms,
-            trial_plan,
-            camera.width,
+            arms.as_deref_mut(),
             pass_settings.spp,
         );
-        if trial {
+        if let Some(arms) = arms {
             let outcome;
             (outcome, at.trialling) = arms.decide(pass);
             training.plan_guides = if outcome.kept {
@@ -557,175 +636,25 @@ impl Between {
 }
 
 /// Merges a training pass of `spp` samples per pixel, tile by tile in tile order: its
-/// records into `records`, its pixel sums into `training`'s, and, with a `trial` plan, each
-/// pixel's new samples into the trial's `arms` (an image `width` pixels wide).
-fn merge_pass<'a>(
+/// records into `records`, its pixel sums into `training`'s, and, in a pass that tries a
+/// plan's guides, each pixel's new samples into the trial's `arms`.
+fn merge_pass(
     per_tile: Vec<(PathSegmentStorage, Vec<PixelResult>)>,
     records: &mut SampleStorage,
     training: &mut SpatialTraining,
-    arms: &mut TrialArms<'a>,
-    trial: Option<&'a Plan>,
-    width: u32,
+    mut arms: Option<&mut (dyn TrialArms + '_)>,
     spp: u32,
 ) {
-    // The means of the passes before, independent of this pass's samples: a rare large
-    // sample must not lower its own pixel's relative variance.
-    let means = match trial {
-        Some(_) => box_means(&training.samples, width, TRIAL_MEAN_RADIUS),
-        None => Vec::new(),
-    };
     for (recorder, sums) in per_tile {
         records.add_recorded(recorder);
         for pixel in sums {
             let (i, sum, sum_sq) = (pixel.index, pixel.sum, pixel.sum_sq);
-            if let Some(plan) = trial {
+            if let Some(arms) = arms.as_deref_mut() {
                 let before = training.samples.at(i);
-                arms.add(
-                    plan,
-                    (i, width),
-                    (sum - before.0, sum_sq - before.1, spp),
-                    means[i],
-                    pixel.cost,
-                );
+                arms.add(i, (sum - before.0, sum_sq - before.1, spp), pixel.cost);
             }
             training.samples.sum[i] = sum;
             training.samples.sum_sq[i] = sum_sq;
         }
-    }
-}
-
-/// Per pixel of an image `width` pixels wide, the mean of `samples` over the pixels at most
-/// `radius` away in x and in y (fewer at the image's edges).
-fn box_means(samples: &PixelSums, width: u32, radius: u32) -> Vec<DVec3> {
-    let spp = f64::from(samples.spp.max(1));
-    let (w, r) = (width as usize, radius as usize);
-    let h = samples.sum.len() / w.max(1);
-    let mut means = Vec::with_capacity(samples.sum.len());
-    for y in 0..h {
-        let rows = y.saturating_sub(r)..(y + r + 1).min(h);
-        for x in 0..w {
-            let columns = x.saturating_sub(r)..(x + r + 1).min(w);
-            let n = (rows.len() * columns.len()) as f64;
-            let total: DVec3 = (rows.clone())
-                .flat_map(|yy| samples.sum[yy * w..][columns.clone()].iter())
-                .sum();
-            means.push(total / (n * spp));
-        }
-    }
-    means
-}
-
-/// The two arms of a training pass's trial of a plan's per-pixel guides: per arm, the sums
-/// over its pixels of a sample's relative variance and of a sample's cost in rays
-/// ([`RayCounts::cost`]: the guides' cones and patches cost densities at every vertex), and
-/// its pixels. `weights` and `parts` are [`Plan::neighbour_mixtures`]'s buffers, reused for
-/// every pixel.
-struct TrialArms<'a> {
-    guided: Arm,
-    control: Arm,
-    weights: Vec<(f64, usize)>,
-    parts: Vec<(f64, &'a Mixture)>,
-}
-
-/// One arm of a trial: sums over its pixels of a sample's relative variance and cost, and
-/// its pixels.
-#[derive(Clone, Copy, Default)]
-struct Arm {
-    relative_variance: f64,
-    cost: f64,
-    pixels: usize,
-}
-
-impl Arm {
-    /// The mean relative variance of a sample times its mean cost: the inverse of the
-    /// arm's efficiency.
-    fn work_variance(&self) -> f64 {
-        let n = self.pixels.max(1) as f64;
-        (self.relative_variance / n) * (self.cost / n)
-    }
-}
-
-impl<'a> TrialArms<'a> {
-    fn new() -> Self {
-        Self {
-            guided: Arm::default(),
-            control: Arm::default(),
-            weights: Vec::new(),
-            parts: Vec::new(),
-        }
-    }
-
-    /// Adds pixel `i` of an image `width` wide, whose pass took `n` samples with sum and
-    /// sum of squares `pass` at a cost of `cost` rays, and around which the mean over the
-    /// passes before is `mean` ([`TRIAL_MEAN_RADIUS`]). Pixels the plan does not guide
-    /// (`pt`'s points, a closed plan) are in neither arm.
-    fn add(
-        &mut self,
-        plan: &'a Plan,
-        (i, width): (usize, u32),
-        pass: (DVec3, DVec3, u32),
-        mean: DVec3,
-        cost: f64,
-    ) {
-        let (x, y) = ((i % width as usize) as u32, (i / width as usize) as u32);
-        if !plan.neighbour_mixtures(x, y, &mut self.weights, &mut self.parts) {
-            return;
-        }
-        let (sum, sum_sq, n) = (pass.0, pass.1, f64::from(pass.2));
-        // Unbiased sample variance of one sample, per channel, weighed as relMSE weighs.
-        let variance = (sum_sq - sum * sum / n) / (n - 1.0);
-        let relative = variance / (mean * mean + DVec3::splat(1e-2));
-        let arm = if PlanGuides::OutsideControl.off_at(x, y) {
-            &mut self.control
-        } else {
-            &mut self.guided
-        };
-        arm.relative_variance += relative.max(DVec3::ZERO).element_sum() / 3.0;
-        arm.cost += cost / n;
-        arm.pixels += 1;
-    }
-
-    /// The trial's outcome in pass `pass`, and whether the next pass tries again: the
-    /// guides stayed, but without a clear win (or with too few control pixels to tell).
-    fn decide(&self, pass: u32) -> (GuidesTrial, bool) {
-        let ratio = self.guided.work_variance() / self.control.work_variance();
-        // A ratio that is not a number (no variance in either arm) decides nothing.
-        let undecided = self.control.pixels < MIN_TRIAL_PIXELS || ratio.is_nan();
-        let kept = undecided || ratio <= LEVELS_KEEP_RATIO;
-        let trial = GuidesTrial {
-            pass,
-            guided_pixels: self.guided.pixels,
-            control_pixels: self.control.pixels,
-            ratio,
-            kept,
-        };
-        (
-            trial,
-            kept && (undecided || ratio >= 1.0 / LEVELS_KEEP_RATIO),
-        )
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{box_means, PixelSums};
-    use glam::DVec3;
-
-    #[test]
-    fn box_means_average_the_neighbourhood_within_the_image() {
-        // A 3 × 2 image of 2 samples per pixel whose sums are 2, 4, …, 12 (means 1 … 6).
-        let mut samples = PixelSums::zero(6);
-        samples.spp = 2;
-        for (i, s) in samples.sum.iter_mut().enumerate() {
-            *s = DVec3::splat(2.0 * (i + 1) as f64);
-        }
-        let means = box_means(&samples, 3, 1);
-        let want = [3.0, 3.5, 4.0, 3.0, 3.5, 4.0];
-        for (m, w) in means.iter().zip(want) {
-            assert!((m.x - w).abs() < 1e-12 && m.x == m.z, "{means:?}");
-        }
-        // Radius 0: each pixel's own mean, as without the box.
-        let own = box_means(&samples, 3, 0);
-        assert_eq!(own[4], DVec3::splat(5.0));
     }
 }

@@ -11,7 +11,7 @@
 //! | 4 | header length `H`, `u32` (at most [`MAX_HEADER`]) |
 //! | H | the [`PlanHeader`] as JSON (UTF-8): the render's identity, the training's samples per pixel, a summary |
 //! | 8 | payload length `L`, `u64` |
-//! | L | the payload: [`Learned`] in `bincode` 1 (fixed-width integers, `f32`/`f64` as their bits); for a reference (`learn --for-reference`), its two halves' one after the other |
+//! | L | the payload: [`Learned`] in `bincode` 1 (fixed-width integers, `f32`/`f64` as their bits): the method's name, its training's per-pixel sums, its own state (itself `bincode`) and a summary; for a reference (`learn --for-reference`), its two halves' one after the other |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
 //!
 //! The payload round-trips exactly (every float as its bits); caches (a plan's lookup
@@ -24,7 +24,7 @@ use bincode::Options;
 use std::path::{Path, PathBuf};
 
 /// The format version this genpath writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The mark every plan file starts with.
 pub const MAGIC: &[u8; 8] = b"GPPLAN\0\0";
 /// The longest header read.

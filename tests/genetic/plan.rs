@@ -217,7 +217,11 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
     };
     let schedule = TrainingSchedule::Passes(5);
     let trial_of = |plan: &Plan| {
-        let training = train_spatial(&view, &settings, schedule, Some(plan)).unwrap();
+        let beside = Beside {
+            plan,
+            trial: &GuidesTrialPolicy,
+        };
+        let training = train_spatial(&view, &settings, schedule, Some(beside)).unwrap();
         let trial = training.guide.stats.guides_trial.expect("a trial ran");
         eprintln!("{trial:?}");
         assert_eq!(
