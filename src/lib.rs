@@ -9,6 +9,7 @@ pub mod genetic;
 pub mod guiding;
 pub mod image;
 pub mod integrators;
+pub mod math;
 pub mod path;
 pub mod progress;
 pub mod report;

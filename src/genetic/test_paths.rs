@@ -31,10 +31,11 @@ use crate::path::generator::{
     PathGenerator, PathVertices, Query, StepDensity, Walk,
 };
 use crate::path::mixture::Mixture;
-use crate::path::{RayCounts, SceneView, SurfacePoint};
+use crate::path::{RayCounts, SceneView};
 use crate::sampling::light_point::{finest_cell, PointCells};
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
+use crate::scene::SurfacePoint;
 use glam::DVec3;
 use std::sync::OnceLock;
 

@@ -29,12 +29,13 @@
 //! balance-heuristic estimator of a [`Mixture`](super::mixture::Mixture) (paper eq. 7–8) and
 //! the fitness of the genetic algorithm need.
 
-use super::{RayCounts, SceneView, SurfacePoint};
+use super::{RayCounts, SceneView};
 use crate::sampling::anchor::{AnchorSampler, AnchorShape};
 use crate::sampling::brdf;
 use crate::sampling::light_point::{LightDensity, LightPointSampler, PointCells};
 use crate::sampling::patch::{PatchSampler, PatchShape};
 use crate::sampling::Rng;
+use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
 
 pub use super::walk::{Query, Walk};
@@ -54,10 +55,10 @@ pub const SRT_ABSORPTION: f64 = 0.5;
 pub const SRT_ABSORPTION_NEE_EVERY: f64 = 0.1;
 /// With [`Nee::Every`], the `srt` generator's steps before this one do not absorb (their
 /// absorption is [`ABSORPTION_MIN`]), as `pt`'s Russian roulette starts at bounce
-/// [`RR_START`](crate::path::pt::RR_START). Absorbing from the first vertex made `srt` noisier
+/// [`RR_START`](crate::scene::RR_START). Absorbing from the first vertex made `srt` noisier
 /// than `pt` per sample: cbox at 32 spp, relMSE over `pt`'s 1.26 with 0.1 at every vertex,
 /// 1.045 without absorption.
-pub const SRT_ROULETTE_FROM: usize = crate::path::pt::RR_START as usize;
+pub const SRT_ROULETTE_FROM: usize = crate::scene::RR_START as usize;
 
 /// The `srt` generator's absorption: `per_vertex` at each step from step `from` on, and
 /// [`ABSORPTION_MIN`] before it. A plain number is the paper's fixed absorption at every

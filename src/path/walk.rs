@@ -6,12 +6,12 @@ use super::generator::{
     PathVertex, PathVertices,
 };
 use super::pt::Receiver;
-use super::{emitted, EndPoint, SceneView, SurfacePoint};
+use super::{emitted, EndPoint, SceneView};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{LightPick, MaterialAt};
+use crate::scene::{LightPick, MaterialAt, SurfacePoint};
 use glam::{DVec3, Vec3};
 
 /// The ray a [`Walk`] waits on before it can go on.

@@ -6,8 +6,8 @@
 //! vertex (the diffuse lobe's times its probability) as the must-reject twin.
 
 use super::*;
-use genpath::sampling::plastic::SmoothPlastic;
 use genpath::sampling::specular;
+use genpath::scene::SmoothPlastic;
 
 /// A one-sided smooth plastic.
 fn plastic(eta: f32, diffuse: Vec3, specular: Vec3, nonlinear: bool) -> Material {

@@ -13,9 +13,10 @@ use super::spectrum::ColorUse;
 use super::tables::CONDUCTORS;
 use super::textures::{material_textures, Textures};
 use crate::accel::{Analytic, TriangleMesh};
+use crate::math::triangle_area;
 use crate::scene::{
-    triangle_area, Camera, Dielectric, Emitters, Environment, Glossy, Material, MaterialTextures,
-    RenderDefaults, Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    Camera, Dielectric, Emitters, Environment, Glossy, Material, MaterialTextures, RenderDefaults,
+    Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE, RR_START,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -677,8 +678,8 @@ fn integrator(p: &Props, warnings: &mut Vec<String>) -> Result<(u32, bool), Scen
         ));
     }
     let rr = p.int("rr_depth", 5)?;
-    if rr != i64::from(crate::path::pt::RR_START) {
-        warnings.push(format!("{}: rr_depth {rr}: genpath's Russian roulette starts at bounce {} (the noise differs, the image's expectation does not)", p.doc.at(p.loc()), crate::path::pt::RR_START));
+    if rr != i64::from(RR_START) {
+        warnings.push(format!("{}: rr_depth {rr}: genpath's Russian roulette starts at bounce {} (the noise differs, the image's expectation does not)", p.doc.at(p.loc()), RR_START));
     }
     let hide_emitters = p.bool("hide_emitters", false)?;
     p.finish()?;

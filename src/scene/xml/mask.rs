@@ -1,7 +1,7 @@
 //! Mitsuba's `mask` BSDF adapter: the nested BSDF as a material with an [`Opacity`] (a
 //! `<float>`, 0.5 by default, or a grey `checkerboard` or `bitmap` texture, read as
 //! Mitsuba's `eval_1` reads it), through which rays pass with probability `1 − opacity`
-//! ([`crate::path::SceneView::trace_through`]). Any nested BSDF genpath implements may be
+//! (the path layer's `SceneView::trace_through`). Any nested BSDF genpath implements may be
 //! masked (a `twosided`, a `normalmap` or `bumpmap` too); refused: a mask inside a mask, a
 //! `twosided` around a mask (as Mitsuba refuses it: a mask transmits), a mask on an area
 //! emitter (refused where the shape is built), and an opacity outside [0, 1] or not finite.

@@ -6,11 +6,10 @@
 use super::build::complex_ior;
 use super::props::Props;
 use super::textures::{material_textures, Textures};
-use crate::sampling::microfacet::{
+use crate::scene::microfacet::{
     Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
 };
-use crate::sampling::plastic::SmoothPlastic;
-use crate::scene::{Glossy, Material, MaterialTextures, SceneError};
+use crate::scene::{Glossy, Material, MaterialTextures, SceneError, SmoothPlastic};
 use glam::Vec3;
 
 /// The microfacet distribution of `p`: `distribution` (`beckmann`, Mitsuba's default, or
@@ -165,7 +164,7 @@ fn coating(
 /// Mitsuba's smooth `plastic`: `int_ior` (polypropylene) over `ext_ior` (air),
 /// `diffuse_reflectance` (0.5) and `specular_reflectance` (1), each a constant or a texture
 /// (whose mean weighs the choice of lobe, as in Mitsuba), and `nonlinear`
-/// ([`crate::sampling::plastic`]).
+/// ([`SmoothPlastic`]).
 pub(super) fn smooth_plastic(
     p: &Props,
     name: String,
