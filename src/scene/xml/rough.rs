@@ -3,7 +3,6 @@
 //! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
 //! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
 
-use super::build::complex_ior;
 use super::props::Props;
 use super::textures::{material_textures, Textures};
 use crate::scene::microfacet::{
@@ -88,7 +87,7 @@ pub(super) fn rough_conductor(
 ) -> Result<Material, SceneError> {
     let microfacet = microfacet(p)?;
     let ks = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
-    let (eta, k) = complex_ior(p, warnings)?;
+    let (eta, k) = super::ior::complex_ior(p, warnings)?;
     let lobe = RoughConductor {
         microfacet,
         eta: eta.as_vec3(),
