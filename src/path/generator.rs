@@ -1,7 +1,7 @@
 //! Path generators and their weighted sets (paper §5.1–5.3, design §5 and §13).
 //!
 //! A [`PathGenerator`] is a sequence of (directional sampler, absorption) pairs plus a
-//! light-point sampler. It samples an eye path vertex by vertex, as a [`Walk`] (a state
+//! light-point sampler. It samples an eye path vertex by vertex, as a `Walk` (`walk.rs`: a state
 //! machine that stops at each ray it needs traced, so that one implementation serves single
 //! rays, [`PathGenerator::sample_path`], and packets). Delta vertices (mirrors, glass:
 //! [`crate::sampling::specular`]) consume no sampler and never absorb; glass's choice
@@ -29,16 +29,13 @@
 //! balance-heuristic estimator of a [`Mixture`](super::mixture::Mixture) (paper eq. 7–8) and
 //! the fitness of the genetic algorithm need.
 
-use super::{RayCounts, SceneView};
+use super::SceneView;
 use crate::sampling::anchor::{AnchorSampler, AnchorShape};
 use crate::sampling::brdf;
 use crate::sampling::light_point::{LightDensity, LightPointSampler, PointCells};
 use crate::sampling::patch::{PatchSampler, PatchShape};
-use crate::sampling::Rng;
 use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
-
-pub use super::walk::{Query, Walk};
 
 /// Smallest and largest absorption before the last sampler: keeps every path length
 /// reachable (unbiasedness) and every generator able to continue.
@@ -788,37 +785,6 @@ impl PathGenerator {
                 let (dir, light) = self.pdf_techniques(view, path, c, max_bounces);
                 dir + light
             }
-        }
-    }
-
-    /// Samples an eye path starting at the first hit `x1` (reached from `camera`) for the
-    /// estimator `nee`, traces it one ray at a time, and appends every light-carrying
-    /// sub-path to `contributions`: the single-lane driver of a [`Walk`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn sample_path(
-        &self,
-        view: &SceneView,
-        camera: Vec3,
-        x1: SurfacePoint,
-        (max_bounces, nee): (u32, Nee),
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-        path: &mut PathVertices,
-        contributions: &mut Vec<Contribution>,
-    ) {
-        let (mut walk, mut query) =
-            Walk::start(self, view, camera, x1, (max_bounces, nee), rng, path);
-        while let Some(q) = query {
-            query = match q {
-                Query::Closest(ray) => {
-                    let y = view.trace_through(&ray, rng, counts);
-                    walk.hit(self, view, rng, path, contributions, y)
-                }
-                Query::Shadow(ray) => {
-                    let free = view.unblocked_through(&ray, rng, counts);
-                    walk.shadow(free, contributions)
-                }
-            };
         }
     }
 }
