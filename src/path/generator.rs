@@ -417,7 +417,7 @@ impl StepDensity {
 /// ([`StepDensity`]) and its light-point sampler's ([`LightDensity`]), the same values as
 /// the samplers' own `pdf`s. Both the render's mixture densities
 /// ([`PathGenerator::pdf_techniques_after`]) and the fitness
-/// ([`crate::genetic::test_paths::TestPaths::generator_pdfs`]) evaluate through it.
+/// (`genetic::test_paths::TestPaths::generator_pdfs`) evaluate through it.
 #[derive(Clone, Debug)]
 pub struct GeneratorDensity {
     steps: Vec<StepDensity>,

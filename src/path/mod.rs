@@ -1,5 +1,5 @@
 //! Light transport: the scene as the estimators see it, path generators and mixtures, and the
-//! path tracer (the methods built on them are in `crate::integrators`).
+//! path tracer (the methods built on them are in `integrators`).
 
 pub mod generator;
 pub mod mixture;
