@@ -65,6 +65,7 @@
 //! [`MIN_NODE_RECORDS`]: super::field_build::MIN_NODE_RECORDS
 //! [`DARK_AFTER_TRIES`]: super::storage::DARK_AFTER_TRIES
 //! [`PathSegmentStorage`]: super::PathSegmentStorage
+//! [`SampleStorage`]: super::SampleStorage
 
 use super::lattice::Lattice;
 use super::square::{from_square, quadrant, square_jacobian, to_square};

@@ -63,7 +63,7 @@ pub struct Material {
     /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
     /// `sampling::specular`).
     pub dielectric: Option<Dielectric>,
-    /// The textured parameters, if any (see [`texture`]): they override the fields above
+    /// The textured parameters, if any (see [`super::texture`]): they override the fields above
     /// at each hit, through [`Material::at`].
     pub textures: Option<std::sync::Arc<MaterialTextures>>,
 }
@@ -257,7 +257,7 @@ pub enum Opacity {
     Constant(f32),
     /// A grey texture (every texel's or colour's channels equal) whose value is the opacity,
     /// within [0, 1], read as Mitsuba's `eval_1` reads it (for a checkerboard, see
-    /// [`Checkerboard::eval_1`]).
+    /// [`Checkerboard::eval_1`](super::texture::Checkerboard::eval_1)).
     Texture(Texture),
 }
 

@@ -1,5 +1,5 @@
 //! Textures (Mitsuba 3's `checkerboard` and `bitmap`): what varies a material's parameters
-//! over a surface (how a textured material is evaluated at a hit: [`super::material`]).
+//! over a surface (how a textured material is evaluated at a hit: [`super::MaterialAt`]).
 
 use crate::image::srgb;
 use glam::{Affine2, Vec2, Vec3};
