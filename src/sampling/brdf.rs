@@ -240,7 +240,7 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
             let (wo, wi) = (Frame::to_local(&b, wo), Frame::to_local(&b, wi));
             f + p.eval_with((ks, diffuse), wo, wi)
         }
-        // A smooth plastic's diffuse choice (see `crate::sampling::plastic`).
+        // A smooth plastic's diffuse choice (see `crate::scene::SmoothPlastic`).
         Glossy::Plastic(p) => {
             let (cos_o, cos_i) = (f64::from(n.dot(wo)), f64::from(n.dot(wi)));
             f + p.eval_chosen(diffuse, cos_o, cos_i)

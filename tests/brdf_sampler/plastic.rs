@@ -1,4 +1,4 @@
-//! Mitsuba's smooth `plastic` (`genpath::sampling::plastic`): its lobe choice and diffuse
+//! Mitsuba's smooth `plastic` (`genpath::scene::SmoothPlastic`): its lobe choice and diffuse
 //! lobe against values printed by Mitsuba 3.9.1 itself (`plastic_mitsuba.txt`, by
 //! `scripts/mitsuba_plastic_table.py`), through the choice a hit makes
 //! (`Material::scattering_at`) and the one BSDF interface (`brdf`, `specular`); and χ² of
