@@ -16,7 +16,8 @@ mod chi2;
 use chi2::{chi2, chi2_test, Family, SphereBins};
 use genpath::accel::{self, AccelKind, Analytic, Ray, TriangleMesh};
 use genpath::integrators::{Method, RenderSettings};
-use genpath::path::{SceneView, SurfacePoint};
+use genpath::path::SceneView;
+use genpath::scene::SurfacePoint;
 use genpath::scene::{Emitters, Scene};
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use rand::{Rng, SeedableRng};
@@ -210,9 +211,9 @@ fn rays_leave_a_sphere_without_meeting_it_again_where_they_leave() {
         let mut rng = Pcg64::seed_from_u64(7);
         let mut counts = Default::default();
         for _ in 0..20_000 {
-            let n = genpath::sampling::uniform_sphere(rng.random(), rng.random()).as_dvec3();
+            let n = genpath::math::uniform_sphere(rng.random(), rng.random()).as_dvec3();
             let x = SurfacePoint::flat((c + n * radius).as_vec3(), n.as_vec3(), 0);
-            let mut d = genpath::sampling::uniform_sphere(rng.random(), rng.random());
+            let mut d = genpath::math::uniform_sphere(rng.random(), rng.random());
             if d.dot(x.ng).abs() < 1e-3 {
                 continue;
             }
@@ -372,7 +373,7 @@ fn embree_and_obvhs_agree_on_spheres_and_disks() {
         );
         // Half aimed at a shape's centre, so that many rays meet a sphere or a disk.
         let dir = if i % 2 == 0 {
-            genpath::sampling::uniform_sphere(rng.random(), rng.random())
+            genpath::math::uniform_sphere(rng.random(), rng.random())
         } else {
             let target = [
                 Vec3::ZERO,
@@ -380,7 +381,7 @@ fn embree_and_obvhs_agree_on_spheres_and_disks() {
                 Vec3::new(0.5, 0.3, -0.4),
             ][i % 3];
             (target - origin).normalize()
-                + 0.3 * genpath::sampling::uniform_sphere(rng.random(), rng.random())
+                + 0.3 * genpath::math::uniform_sphere(rng.random(), rng.random())
         };
         let tmax = if i % 5 == 0 {
             rng.random_range(0.1..3.0)

@@ -309,7 +309,7 @@ fn plastic_chooses_its_delta_reflection_with_mitsubas_probability_and_a_3_percen
                 // The diffuse choice at one `wi`, 40° off the normal.
                 let wi = wo_at(f64::to_radians(40.0), true) * Vec3::new(-1.0, 1.0, 1.0);
                 let value = brdf::eval(m, Frame::facing(&x, wo), wo, wi).x;
-                let fdr = genpath::sampling::plastic::fresnel_diffuse_reflectance(1.0 / eta);
+                let fdr = genpath::scene::fresnel::fresnel_diffuse_reflectance(1.0 / eta);
                 let t = |th: f64| 1.0 - fresnel_by_angles(th, 1.0, eta);
                 let expected = 0.6 / (1.0 - fdr) * t(theta) * t(f64::to_radians(40.0))
                     / (std::f64::consts::PI * eta * eta)

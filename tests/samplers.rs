@@ -9,8 +9,8 @@ mod chi2;
 
 use chi2::{chi2, chi2_test, Binning, Chi2, Family, Histogram, SphereBins, TriangleBins};
 use genpath::accel::TriangleMesh;
+use genpath::math::gauss_legendre;
 use genpath::sampling::anchor::{cone_solid_angle, AnchorSampler};
-use genpath::sampling::gauss_legendre;
 use genpath::sampling::light_point::{solid_angle_pdf, LightPointSampler, LightRegion};
 use genpath::sampling::patch::PatchSampler;
 use genpath::scene::Emitters;

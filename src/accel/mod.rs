@@ -145,7 +145,7 @@ impl TriangleMesh {
     pub fn area(&self, prim: u32) -> f64 {
         match self.analytic(prim) {
             Some(shape) => shape.area(),
-            None => crate::scene::triangle_area(self.vertices(prim)),
+            None => crate::math::triangle_area(self.vertices(prim)),
         }
     }
 

@@ -231,7 +231,7 @@ impl<'a> GenePool<'a> {
             true => log_uniform(rng, PATCH_LOCAL_RADIUS) * extent,
             false => f64::INFINITY,
         };
-        let (e1, e2) = crate::sampling::basis(normal);
+        let (e1, e2) = crate::math::basis(normal);
         // In-plane coordinates about `point` of the arrivals on the plane.
         let plane_tolerance = 1e-4 * extent;
         let near: Vec<(f64, f64, f64)> = arrivals

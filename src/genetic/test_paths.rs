@@ -14,7 +14,7 @@
 //! the same for every generator that uses a BRDF sampler there, so it is computed once here.
 //!
 //! Paths are traced in waves of up to [`WAVE_SIZE`] ([`TestPaths::sample`]): each path is a
-//! [`crate::path::generator::Walk`] with its own random stream, and the walks of a wave
+//! [`crate::path::walk::Walk`] with its own random stream, and the walks of a wave
 //! advance in lockstep, their pending rays regrouped at every step into packets of 16 (one
 //! packet query: Embree's `rtcIntersect16`/`rtcOccluded16`, or the `8` variants twice on a
 //! CPU without AVX-512; a loop on obvhs), a last partial one going as a packet when it holds
@@ -29,13 +29,15 @@ use crate::accel::{Coherence, Ray, PACKET_SIZE};
 use crate::film::{pixel_sample, sample_stream};
 use crate::path::generator::{
     absorbs_at, fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
-    PathGenerator, PathVertices, Query, StepDensity, Walk,
+    PathGenerator, PathVertices, StepDensity,
 };
 use crate::path::mixture::Mixture;
-use crate::path::{RayCounts, SceneView, SurfacePoint};
+use crate::path::walk::{Query, Walk};
+use crate::path::{RayCounts, SceneView};
 use crate::sampling::light_point::{finest_cell, PointCells};
 use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
+use crate::scene::SurfacePoint;
 use glam::DVec3;
 use std::sync::OnceLock;
 

@@ -7,7 +7,7 @@ use super::field::guide_share;
 use super::guide::Guide;
 use super::vertex::Vertex;
 use crate::path::pt::{Bsdf, GuidedVertex, PathGuide, VertexBsdf};
-use crate::sampling::brdf::BrdfSample;
+use crate::sampling::BrdfSample;
 use crate::sampling::{uniform, Rng};
 use glam::Vec3;
 

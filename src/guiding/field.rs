@@ -65,11 +65,11 @@
 //! [`MIN_NODE_RECORDS`]: super::field_build::MIN_NODE_RECORDS
 //! [`DARK_AFTER_TRIES`]: super::storage::DARK_AFTER_TRIES
 //! [`PathSegmentStorage`]: super::PathSegmentStorage
+//! [`SampleStorage`]: super::SampleStorage
 
 use super::lattice::Lattice;
 use super::square::{from_square, quadrant, square_jacobian, to_square};
 use super::stats::FieldStats;
-use super::storage::{Record, SampleStorage};
 use crate::scene::Material;
 use glam::Vec3;
 
@@ -139,13 +139,6 @@ pub struct SpatialField {
 }
 
 impl SpatialField {
-    /// The guide trained on `records` alone, over the box `[lo, hi]`.
-    pub fn train(lo: Vec3, hi: Vec3, records: impl IntoIterator<Item = Record>) -> Self {
-        let mut all = SampleStorage::new(lo, hi);
-        all.add(records);
-        all.field()
-    }
-
     /// Checks what a lookup relies on, for a guide read from a file: a region per lattice
     /// cell and facing, and every quadtree root and child a node.
     pub fn check(&self) -> Result<(), String> {
@@ -259,6 +252,7 @@ impl SpatialField {
 pub(crate) mod tests {
     use super::*;
     use crate::guiding::field_build::SPLIT_RECORDS;
+    use crate::guiding::storage::Record;
     use crate::sampling::{sample_rng, uniform};
     use std::f64::consts::PI;
 

@@ -40,6 +40,7 @@ pub mod field;
 pub mod field_build;
 pub mod guide;
 pub mod lattice;
+mod level;
 pub mod recorder;
 pub mod square;
 pub mod stats;

@@ -7,7 +7,7 @@
 
 use super::lattice::{facing, Lattice};
 use super::square::to_square;
-use super::storage::{Record, SampleStorage};
+use super::storage::{Record, SampleStorage, REACHED};
 use crate::path::pt::PathRecorder;
 use glam::Vec3;
 
@@ -23,9 +23,6 @@ pub struct PathSegmentStorage {
     /// it reached a light.
     pub light_tries: Vec<u32>,
 }
-
-/// The bit of a light try that says it reached a light.
-pub(super) const REACHED: u32 = 1 << 31;
 
 #[derive(Debug)]
 struct Pending {
@@ -52,6 +49,15 @@ impl PathSegmentStorage {
             lattice: records.lattice().clone(),
             light_tries: Vec::new(),
         }
+    }
+}
+
+/// Kept here, beside the recorder it takes, so that the storage need not import it.
+impl SampleStorage {
+    /// Adds a recorder's records and light tries.
+    pub fn add_recorded(&mut self, recorder: PathSegmentStorage) {
+        self.records.extend(recorder.records);
+        self.light_tries.extend(recorder.light_tries);
     }
 }
 

@@ -4,7 +4,6 @@
 
 use super::field::SpatialField;
 use super::lattice::{Lattice, FACINGS};
-use super::recorder::{PathSegmentStorage, REACHED};
 use crate::accel::TriangleMesh;
 use glam::Vec3;
 
@@ -12,6 +11,10 @@ use glam::Vec3;
 /// reached a light (had the light been visible to one in ten of them, the chance of that
 /// would be 0.9^32 = 3 %).
 pub const DARK_AFTER_TRIES: u32 = 32;
+
+/// The bit of a light try that says it reached a light (set by the recorder, read where
+/// the cells' darkness is updated).
+pub(super) const REACHED: u32 = 1 << 31;
 
 /// One training record: where, which way the surface there faces (see
 /// [`facing`](super::lattice::facing)), the direction on the square
@@ -32,9 +35,10 @@ pub struct SampleStorage {
     lo: Vec3,
     hi: Vec3,
     lattice: Lattice,
-    records: Vec<Record>,
-    /// The light tries added (see [`PathSegmentStorage::light_try`]).
-    light_tries: Vec<u32>,
+    /// (Visible to the recorder, which adds its records and light tries: `add_recorded`.)
+    pub(super) records: Vec<Record>,
+    /// The light tries added (see `PathSegmentStorage::light_try`).
+    pub(super) light_tries: Vec<u32>,
     /// Per facing and lattice cell, whether it is dark: kept from guide to guide.
     dark: Vec<bool>,
 }
@@ -65,12 +69,6 @@ impl SampleStorage {
 
     pub fn add(&mut self, records: impl IntoIterator<Item = Record>) {
         self.records.extend(records);
-    }
-
-    /// Adds a recorder's records and light tries.
-    pub fn add_recorded(&mut self, recorder: PathSegmentStorage) {
-        self.records.extend(recorder.records);
-        self.light_tries.extend(recorder.light_tries);
     }
 
     pub fn len(&self) -> usize {
@@ -143,10 +141,22 @@ impl SampleStorage {
     }
 }
 
+/// A field from records alone, kept here beside the storage it goes through so that
+/// `field` need not import the storage that builds it.
+impl SpatialField {
+    /// The guide trained on `records` alone, over the box `[lo, hi]`.
+    pub fn train(lo: Vec3, hi: Vec3, records: impl IntoIterator<Item = Record>) -> Self {
+        let mut all = SampleStorage::new(lo, hi);
+        all.add(records);
+        all.field()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::guiding::field::DARK_LIGHT_SHARE;
+    use crate::guiding::recorder::PathSegmentStorage;
     use crate::path::pt::PathRecorder;
 
     /// A cell turns dark after enough light tries of which none reached a light, stays

@@ -4,7 +4,7 @@
 //! with the BRDF (see [`super::guide`]).
 
 use super::field::{guide_share, SpatialField};
-use super::guide::Level;
+use super::level::Level;
 #[cfg(doc)]
 use super::Guide;
 use crate::sampling::brdf::{self, Frame};

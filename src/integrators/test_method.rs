@@ -10,10 +10,11 @@ use super::{Context, Integrator, MethodInfo, PixelIntegrator, PrepareError};
 use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::path::pt::LightCandidate;
-use crate::path::{emitted, RayCounts, SceneView, SurfacePoint};
+use crate::path::{emitted, RayCounts, SceneView};
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::{specular, uniform, Rng};
 use crate::scene::MaterialAt;
+use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
 
 /// Next-event estimation alone, to at most `max_bounces` scattering events.

@@ -1,7 +1,7 @@
 //! Path generators and their weighted sets (paper §5.1–5.3, design §5 and §13).
 //!
 //! A [`PathGenerator`] is a sequence of (directional sampler, absorption) pairs plus a
-//! light-point sampler. It samples an eye path vertex by vertex, as a [`Walk`] (a state
+//! light-point sampler. It samples an eye path vertex by vertex, as a `Walk` (`walk.rs`: a state
 //! machine that stops at each ray it needs traced, so that one implementation serves single
 //! rays, [`PathGenerator::sample_path`], and packets). Delta vertices (mirrors, glass:
 //! [`crate::sampling::specular`]) consume no sampler and never absorb; glass's choice
@@ -29,15 +29,13 @@
 //! balance-heuristic estimator of a [`Mixture`](super::mixture::Mixture) (paper eq. 7–8) and
 //! the fitness of the genetic algorithm need.
 
-use super::{RayCounts, SceneView, SurfacePoint};
+use super::SceneView;
 use crate::sampling::anchor::{AnchorSampler, AnchorShape};
 use crate::sampling::brdf;
 use crate::sampling::light_point::{LightDensity, LightPointSampler, PointCells};
 use crate::sampling::patch::{PatchSampler, PatchShape};
-use crate::sampling::Rng;
+use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
-
-pub use super::walk::{Query, Walk};
 
 /// Smallest and largest absorption before the last sampler: keeps every path length
 /// reachable (unbiasedness) and every generator able to continue.
@@ -54,10 +52,10 @@ pub const SRT_ABSORPTION: f64 = 0.5;
 pub const SRT_ABSORPTION_NEE_EVERY: f64 = 0.1;
 /// With [`Nee::Every`], the `srt` generator's steps before this one do not absorb (their
 /// absorption is [`ABSORPTION_MIN`]), as `pt`'s Russian roulette starts at bounce
-/// [`RR_START`](crate::path::pt::RR_START). Absorbing from the first vertex made `srt` noisier
+/// [`RR_START`](crate::scene::RR_START). Absorbing from the first vertex made `srt` noisier
 /// than `pt` per sample: cbox at 32 spp, relMSE over `pt`'s 1.26 with 0.1 at every vertex,
 /// 1.045 without absorption.
-pub const SRT_ROULETTE_FROM: usize = crate::path::pt::RR_START as usize;
+pub const SRT_ROULETTE_FROM: usize = crate::scene::RR_START as usize;
 
 /// The `srt` generator's absorption: `per_vertex` at each step from step `from` on, and
 /// [`ABSORPTION_MIN`] before it. A plain number is the paper's fixed absorption at every
@@ -419,7 +417,7 @@ impl StepDensity {
 /// ([`StepDensity`]) and its light-point sampler's ([`LightDensity`]), the same values as
 /// the samplers' own `pdf`s. Both the render's mixture densities
 /// ([`PathGenerator::pdf_techniques_after`]) and the fitness
-/// ([`crate::genetic::test_paths::TestPaths::generator_pdfs`]) evaluate through it.
+/// (`genetic::test_paths::TestPaths::generator_pdfs`) evaluate through it.
 #[derive(Clone, Debug)]
 pub struct GeneratorDensity {
     steps: Vec<StepDensity>,
@@ -787,37 +785,6 @@ impl PathGenerator {
                 let (dir, light) = self.pdf_techniques(view, path, c, max_bounces);
                 dir + light
             }
-        }
-    }
-
-    /// Samples an eye path starting at the first hit `x1` (reached from `camera`) for the
-    /// estimator `nee`, traces it one ray at a time, and appends every light-carrying
-    /// sub-path to `contributions`: the single-lane driver of a [`Walk`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn sample_path(
-        &self,
-        view: &SceneView,
-        camera: Vec3,
-        x1: SurfacePoint,
-        (max_bounces, nee): (u32, Nee),
-        rng: &mut Rng,
-        counts: &mut RayCounts,
-        path: &mut PathVertices,
-        contributions: &mut Vec<Contribution>,
-    ) {
-        let (mut walk, mut query) =
-            Walk::start(self, view, camera, x1, (max_bounces, nee), rng, path);
-        while let Some(q) = query {
-            query = match q {
-                Query::Closest(ray) => {
-                    let y = view.trace_through(&ray, rng, counts);
-                    walk.hit(self, view, rng, path, contributions, y)
-                }
-                Query::Shadow(ray) => {
-                    let free = view.unblocked_through(&ray, rng, counts);
-                    walk.shadow(free, contributions)
-                }
-            };
         }
     }
 }

@@ -5,10 +5,10 @@ use super::generator::{
     Contribution, GeneratorDensity, LightEnd, Nee, PathDensities, PathGenerator, PathVertices,
     Prefix,
 };
-use super::{RayCounts, SceneView, SurfacePoint};
+use super::{RayCounts, SceneView};
 use crate::sampling::brdf::Frame;
 use crate::sampling::{uniform, Rng};
-use crate::scene::Glossy;
+use crate::scene::{Glossy, SurfacePoint};
 use glam::{DVec3, Vec3};
 use std::borrow::Cow;
 use std::sync::OnceLock;

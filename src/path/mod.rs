@@ -1,5 +1,5 @@
 //! Light transport: the scene as the estimators see it, path generators and mixtures, and the
-//! path tracer (the methods built on them are in `crate::integrators`).
+//! path tracer (the methods built on them are in `integrators`).
 
 pub mod generator;
 pub mod mixture;
@@ -9,57 +9,11 @@ pub mod walk;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::{uniform, Rng};
-use crate::scene::{normals, Material, MaterialAt, Opacity, Scene};
+use crate::scene::{normals, Material, MaterialAt, Opacity, Scene, SurfacePoint};
 use glam::DVec3;
 use glam::{Vec2, Vec3};
 use mixture::{Mixture, MixtureScratch};
 use pt::{PathGuide, NO_RECORDER};
-
-/// A surface point reached by a ray.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct SurfacePoint {
-    pub p: Vec3,
-    /// Unit geometric normal as stored (`cross(v1 − v0, v2 − v0)`): emission leaves on its
-    /// side, and rays leave off it.
-    pub ng: Vec3,
-    /// Unit shading normal (Mitsuba's `sh_frame.n`): the interpolated vertex normals, or
-    /// `ng`. BSDFs scatter in its frame, and one-sided ones on its side.
-    pub ns: Vec3,
-    /// Unit shading tangent (Mitsuba's `sh_frame.s`, orthogonal to `ns`) where the material
-    /// has an anisotropic lobe, which alone reads it; zero elsewhere.
-    pub ts: Vec3,
-    /// Texture coordinates (Mitsuba's `si.uv`) where the material is textured, which alone
-    /// reads them; zero elsewhere.
-    pub uv: Vec2,
-    /// The unit shading normal of a normal or bump map (Mitsuba's `normalmap`, `bumpmap`),
-    /// before it is turned towards any `wo` ([`crate::scene::normals`]); zero where the
-    /// material has none (the BSDF then scatters about `ns`).
-    pub np: Vec3,
-    /// Whether a `twosided` wraps that map (see [`crate::scene::normals::resolve`]).
-    pub np_twosided_outside: bool,
-    /// On a smooth plastic, the uniform number that chooses its lobe at this hit
-    /// ([`crate::sampling::plastic`]; drawn by [`SceneView::trace_through`], 0 where
-    /// [`SceneView::trace`] made the point); 0 elsewhere.
-    pub lobe_u: f32,
-    pub prim: u32,
-}
-
-impl SurfacePoint {
-    /// A point on a surface that shades flat (a light point: emitters shade flat).
-    pub fn flat(p: Vec3, ng: Vec3, prim: u32) -> Self {
-        Self {
-            p,
-            ng,
-            ns: ng,
-            ts: Vec3::ZERO,
-            uv: Vec2::ZERO,
-            np: Vec3::ZERO,
-            np_twosided_outside: false,
-            lobe_u: 0.0,
-            prim,
-        }
-    }
-}
 
 /// Where a shadow ray ends: a point and the unit normal of its surface there (zero for a
 /// point light), all that [`SceneView::shadow_ray`] reads of it. Light samples carry this

@@ -24,16 +24,14 @@
 //! material's own ([`Bsdf`]), is plain path tracing, and [`NoRecorder`] records nothing:
 //! [`radiance`] is the loop with those two.
 
-use super::{emitted, EndPoint, RayCounts, SceneView, SurfacePoint};
+use super::{emitted, EndPoint, RayCounts, SceneView};
 use crate::accel::Ray;
-use crate::sampling::brdf::{self, BrdfSample, Frame};
+use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
+use crate::sampling::BrdfSample;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{LightPick, Material, MaterialAt};
+use crate::scene::{LightPick, Material, MaterialAt, SurfacePoint, RR_START};
 use glam::Vec3;
-
-/// First bounce at which Russian roulette may end a path.
-pub const RR_START: u32 = 5;
 
 /// The BSDF at one path vertex, as the path tracer uses it: its value for next-event
 /// estimation, and a direction to continue along with the density multiple importance

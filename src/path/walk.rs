@@ -6,12 +6,12 @@ use super::generator::{
     PathVertex, PathVertices,
 };
 use super::pt::Receiver;
-use super::{emitted, EndPoint, SceneView, SurfacePoint};
+use super::{emitted, EndPoint, RayCounts, SceneView};
 use crate::accel::Ray;
 use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{LightPick, MaterialAt};
+use crate::scene::{LightPick, MaterialAt, SurfacePoint};
 use glam::{DVec3, Vec3};
 
 /// The ray a [`Walk`] waits on before it can go on.
@@ -59,6 +59,41 @@ pub struct Walk {
     /// unblocked, and the closest-hit query that follows it.
     pending: Option<Contribution>,
     then: Option<Ray>,
+}
+
+/// The single-lane driver of a [`Walk`], kept here beside it so that `generator` need not
+/// import the walk that is built on its types.
+impl PathGenerator {
+    /// Samples an eye path starting at the first hit `x1` (reached from `camera`) for the
+    /// estimator `nee`, traces it one ray at a time, and appends every light-carrying
+    /// sub-path to `contributions`: the single-lane driver of a [`Walk`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_path(
+        &self,
+        view: &SceneView,
+        camera: Vec3,
+        x1: SurfacePoint,
+        (max_bounces, nee): (u32, Nee),
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        path: &mut PathVertices,
+        contributions: &mut Vec<Contribution>,
+    ) {
+        let (mut walk, mut query) =
+            Walk::start(self, view, camera, x1, (max_bounces, nee), rng, path);
+        while let Some(q) = query {
+            query = match q {
+                Query::Closest(ray) => {
+                    let y = view.trace_through(&ray, rng, counts);
+                    walk.hit(self, view, rng, path, contributions, y)
+                }
+                Query::Shadow(ray) => {
+                    let free = view.unblocked_through(&ray, rng, counts);
+                    walk.shadow(free, contributions)
+                }
+            };
+        }
+    }
 }
 
 impl Walk {

@@ -8,7 +8,7 @@
 //! Directions are parameterised by `h = 1−cos θ` (the cap of height `h` has solid angle
 //! `2πh`), sampled directly rather than through `cos θ`, for the same reason.
 
-use super::basis;
+use crate::math::basis;
 use glam::DVec3;
 use std::f64::consts::PI;
 

@@ -1,7 +1,7 @@
 //! The BSDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
 //! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor, rough
-//! plastic or rough dielectric, [`super::microfacet`], or a smooth plastic's diffuse choice,
-//! [`super::plastic`]), the Lambertian one chosen by albedo;
+//! plastic or rough dielectric, [`crate::scene::microfacet`], or a smooth plastic's diffuse choice,
+//! [`crate::scene::SmoothPlastic`]), the Lambertian one chosen by albedo;
 //! or a delta BSDF (an ideal mirror or conductor here; smooth dielectrics, which tell their
 //! sides apart, in [`super::specular`]). This is the one BSDF interface of every method:
 //! `pt`, `pg`, `srt`, `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta
@@ -21,25 +21,10 @@
 //! cosine, for every caller (the samplers here, the path tracer's and the generators'
 //! next-event estimation, the guide's samples).
 
-use super::specular;
-use crate::path::SurfacePoint;
-use crate::scene::{normals, Glossy, Material, MaterialAt};
+use super::{facing_normal, reflect, specular, BrdfSample};
+use crate::scene::{normals, Glossy, Material, MaterialAt, SurfacePoint};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
-
-/// The (shading) normal `ns` turned towards `wo`: the side a two-sided surface scatters on.
-pub fn facing_normal(ns: Vec3, wo: Vec3) -> Vec3 {
-    if ns.dot(wo) >= 0.0 {
-        ns
-    } else {
-        -ns
-    }
-}
-
-/// Mirror reflection of `wo` about `n`.
-pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
-    2.0 * n.dot(wo) * n - wo
-}
 
 /// The shading frame a BSDF scatters in at one vertex.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,7 +102,7 @@ impl Frame {
         let s = self.s.as_dvec3();
         let s = (s - n * n.dot(s)).normalize_or_zero();
         let s = if s == DVec3::ZERO {
-            crate::sampling::basis(n).0
+            crate::math::basis(n).0
         } else {
             s
         };
@@ -255,7 +240,7 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
             let (wo, wi) = (Frame::to_local(&b, wo), Frame::to_local(&b, wi));
             f + p.eval_with((ks, diffuse), wo, wi)
         }
-        // A smooth plastic's diffuse choice (see `crate::sampling::plastic`).
+        // A smooth plastic's diffuse choice (see `crate::scene::SmoothPlastic`).
         Glossy::Plastic(p) => {
             let (cos_o, cos_i) = (f64::from(n.dot(wo)), f64::from(n.dot(wi)));
             f + p.eval_chosen(diffuse, cos_o, cos_i)
@@ -322,21 +307,10 @@ pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -
     diffuse + glossy
 }
 
-/// A sampled direction.
-#[derive(Clone, Copy, Debug)]
-pub struct BrdfSample {
-    pub wi: Vec3,
-    /// Solid-angle density; 1 for a delta (it then cancels in `weight`).
-    pub pdf: f64,
-    /// `f · |cos| / pdf` (for a mirror: its reflectance).
-    pub weight: Vec3,
-    pub delta: bool,
-}
-
 /// A unit direction around unit `axis` with `cos θ = c` and azimuth `phi`.
 fn around(axis: DVec3, c: f64, phi: f64) -> DVec3 {
     let s = (1.0 - c * c).max(0.0).sqrt();
-    let (t, b) = crate::sampling::basis(axis);
+    let (t, b) = crate::math::basis(axis);
     (t * (s * phi.cos()) + b * (s * phi.sin()) + axis * c).normalize()
 }
 

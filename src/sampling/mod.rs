@@ -7,15 +7,12 @@
 pub mod anchor;
 pub mod brdf;
 pub mod light_point;
-pub mod microfacet;
 pub mod patch;
-pub mod plastic;
 pub mod specular;
-pub mod trig;
 
 use crate::accel::Ray;
 use crate::scene::Camera;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;
 
@@ -123,55 +120,39 @@ pub fn camera_ray(camera: &Camera, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
     camera.ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
 }
 
-/// A direction uniform over the unit sphere from two uniform numbers in [0, 1) (Mitsuba's
-/// `square_to_uniform_sphere`: `z = 1 − 2 u1`, azimuth `2π u2`).
-pub fn uniform_sphere(u1: f32, u2: f32) -> Vec3 {
-    let z = 1.0 - 2.0 * u1;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
-    Vec3::new(r * c, r * s, z)
+// The vector helpers and the sample type that both the non-delta BSDF (`brdf`) and the
+// delta one (`specular`) use: here, so that `brdf` may call `specular` without a circle.
+
+/// The (shading) normal `ns` turned towards `wo`: the side a two-sided surface scatters on.
+pub fn facing_normal(ns: Vec3, wo: Vec3) -> Vec3 {
+    if ns.dot(wo) >= 0.0 {
+        ns
+    } else {
+        -ns
+    }
 }
 
-/// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal
-/// Basis, Revisited").
-pub fn basis(n: DVec3) -> (DVec3, DVec3) {
-    let sign = 1.0f64.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        DVec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
+/// Mirror reflection of `wo` about `n`.
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * n.dot(wo) * n - wo
 }
 
-/// Gauss–Legendre nodes and weights on [-1, 1] (Newton on the Legendre recurrence):
-/// the microfacet tables' quadrature, and the sampler tests'.
-pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let k = k as f64;
-                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            (x, 2.0 / ((1.0 - x * x) * dp * dp))
-        })
-        .collect()
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BrdfSample {
+    pub wi: Vec3,
+    /// Solid-angle density; 1 for a delta (it then cancels in `weight`).
+    pub pdf: f64,
+    /// `f · |cos| / pdf` (for a mirror: its reflectance).
+    pub weight: Vec3,
+    pub delta: bool,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::basis;
+    use glam::DVec3;
 
     #[test]
     fn basis_is_orthonormal() {

@@ -20,37 +20,10 @@
 //! ratios that multiple importance sampling and the genetic algorithm's fitness take are
 //! those of the full densities.
 
-use super::brdf::{facing_normal, reflect, BrdfSample};
+use super::{facing_normal, reflect, BrdfSample};
+use crate::scene::fresnel::fresnel_dielectric;
 use crate::scene::{Dielectric, Material, MaterialAt};
 use glam::{DVec3, Vec3};
-
-/// The dielectric Fresnel reflectance for `cos_theta_i` (against the normal on the
-/// exterior's side; negative from inside) at an interface of relative index `eta`
-/// (interior / exterior): `(r, cos_theta_t, eta_it, eta_ti)`, Mitsuba's `fresnel`. `r` is 1
-/// under total internal reflection; `cos_theta_t` has the sign opposite to `cos_theta_i`;
-/// `eta_it` is the transmitted side's index over the incident side's, `eta_ti` its inverse.
-pub fn fresnel_dielectric(cos_theta_i: f64, eta: f64) -> (f64, f64, f64, f64) {
-    let outside = cos_theta_i >= 0.0;
-    let (eta_it, eta_ti) = if outside {
-        (eta, eta.recip())
-    } else {
-        (eta.recip(), eta)
-    };
-    let cos_t_sqr = 1.0 - (1.0 - cos_theta_i * cos_theta_i) * eta_ti * eta_ti;
-    let cos_i = cos_theta_i.abs();
-    let cos_t = cos_t_sqr.max(0.0).sqrt();
-    let r = if eta == 1.0 {
-        0.0
-    } else if cos_i == 0.0 {
-        1.0
-    } else {
-        let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
-        let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
-        0.5 * (a_s * a_s + a_p * a_p)
-    };
-    let cos_theta_t = if outside { -cos_t } else { cos_t };
-    (r, cos_theta_t, eta_it, eta_ti)
-}
 
 /// The probability that `d` reflects light arriving at `cos_theta_i` against its shading
 /// normal (negative from inside): the Fresnel reflectance, with a thin sheet's internal
@@ -81,7 +54,7 @@ fn transmitted(d: &Dielectric, ns: DVec3, wo: DVec3) -> (DVec3, f64) {
 /// The factor `η_ti²` by which `m`'s weight scales radiance that crossed its interface
 /// from `wi` to `wo` (shading normal `ns`): for a refraction through a smooth dielectric or
 /// a rough one (whose transmission carries the same `1/η²`,
-/// [`crate::sampling::microfacet::RoughDielectric`]), 1 otherwise. A path tracer's Russian
+/// [`crate::scene::microfacet::RoughDielectric`]), 1 otherwise. A path tracer's Russian
 /// roulette undoes it (as Mitsuba's does with its `eta`), so that a path inside glass is
 /// not ended for the compression alone.
 pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
@@ -128,18 +101,6 @@ pub fn sample<'a>(m: impl Into<MaterialAt<'a>>, ns: Vec3, wo: Vec3, u: f64) -> O
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fresnel_at_normal_incidence_and_beyond_the_critical_angle() {
-        let (r, cos_t, eta_it, eta_ti) = fresnel_dielectric(1.0, 1.5);
-        assert!((r - 0.04).abs() < 1e-12, "{r}");
-        assert!((cos_t + 1.0).abs() < 1e-12 && eta_it == 1.5 && eta_ti == 1.0 / 1.5);
-        // From inside, beyond asin(1 / 1.5) ≈ 41.8°: total internal reflection.
-        let c = 45f64.to_radians().cos();
-        assert_eq!(fresnel_dielectric(-c, 1.5).0, 1.0);
-        assert!(fresnel_dielectric(c, 1.5).0 < 0.1);
-        assert_eq!(fresnel_dielectric(0.3, 1.0).0, 0.0);
-    }
 
     #[test]
     fn refraction_obeys_snell_and_crosses_the_surface() {

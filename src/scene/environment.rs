@@ -52,7 +52,7 @@ impl Environment {
     pub fn sample(&self, u1: f32, u2: f32) -> (Vec3, Vec3, f64) {
         match &self.map {
             None => {
-                let wi = crate::sampling::uniform_sphere(u1, u2);
+                let wi = crate::math::uniform_sphere(u1, u2);
                 (
                     wi,
                     self.radiance,

@@ -22,9 +22,9 @@
 //! only where all four corners are, so the density covers every direction the map lights.
 //! Both inversions of the running sums (the row, then the cell in it) start from a guide
 //! table and land in the cells a binary search would; the direction mapping's trigonometry
-//! is [`crate::sampling::trig`]'s, within 2e-15 of libm's.
+//! is [`crate::math::trig`]'s, within 2e-15 of libm's.
 
-use crate::sampling::trig;
+use crate::math::trig;
 use glam::{DMat3, DVec3, Vec3};
 use std::f64::consts::PI;
 

@@ -5,9 +5,13 @@ mod camera;
 mod environment;
 pub mod envmap;
 mod file;
+pub mod fresnel;
 mod lights;
+mod material;
+pub mod microfacet;
 pub mod normals;
 mod shading;
+mod surface;
 pub mod texture;
 mod validate;
 pub mod xml;
@@ -16,12 +20,15 @@ pub use camera::Camera;
 pub use environment::Environment;
 pub use file::{CameraFile, RenderDefaults, SceneFile};
 pub use lights::{DeltaArrival, DeltaLight, LightPick};
+pub use material::{
+    Dielectric, Glossy, Material, MaterialAt, MaterialTextures, Opacity, SmoothPlastic, BLACK,
+};
 pub use shading::Shading;
-pub use texture::{MaterialAt, MaterialTextures, Opacity, Texture};
+pub use surface::SurfacePoint;
+pub use texture::Texture;
 
 use crate::accel::{Analytic, SphereCone, TriangleMesh};
-use crate::sampling::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
-use crate::sampling::plastic::SmoothPlastic;
+use crate::math::triangle_area;
 use glam::{DVec3, Vec3};
 use std::path::{Path, PathBuf};
 
@@ -51,197 +58,6 @@ pub enum SceneError {
     Mesh { path: PathBuf, message: String },
     #[error("{path}: the scene has no emitter (give some material a positive `Ke` and use it on a face)")]
     NoEmitter { path: PathBuf },
-}
-
-/// A surface material (design §3): a two-sided Lambertian lobe plus a glossy lobe
-/// ([`Glossy`]: a normalised modified-Phong lobe, or Mitsuba's rough conductor, rough
-/// plastic or rough dielectric), or a delta BSDF (an ideal mirror, a smooth conductor, a
-/// smooth or thin dielectric); and a one-sided emission.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// Two-sided Lambertian albedo (`Kd`).
-    pub kd: Vec3,
-    /// The delta BSDF's reflectance (a mirror's `Ks`, Mitsuba's `specular_reflectance`).
-    pub ks: Vec3,
-    /// The non-delta lobe beside the Lambertian one.
-    pub glossy: Glossy,
-    /// A delta BSDF: an ideal mirror (`illum 3`) of reflectance `ks`, or, with
-    /// [`Self::dielectric`], a dielectric interface. Transport treats every such vertex
-    /// alike: no next-event estimation there, no sampler of a generator or guide, and the
-    /// emission its direction finds counted in full.
-    pub mirror: bool,
-    /// Radiance emitted on the normal side (`Ke`).
-    pub ke: Vec3,
-    /// Whether the surface scatters on both sides (every TOML material; Mitsuba's
-    /// `twosided`). A one-sided material is black seen from behind its normal.
-    pub two_sided: bool,
-    /// A smooth conductor's complex index of refraction (η, k) per channel: the mirror's
-    /// reflectance is then `ks` times its Fresnel reflectance (Mitsuba's `conductor`).
-    pub conductor: Option<[Vec3; 2]>,
-    /// A smooth (or thin) dielectric (Mitsuba's `dielectric`, `thindielectric`): with
-    /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
-    /// [`crate::sampling::specular`]).
-    pub dielectric: Option<Dielectric>,
-    /// The textured parameters, if any (see [`texture`]): they override the fields above
-    /// at each hit, through [`Material::at`].
-    pub textures: Option<std::sync::Arc<MaterialTextures>>,
-}
-
-/// The glossy (non-delta, non-Lambertian) lobe of a [`Material`], evaluated, weighed and
-/// sampled by [`crate::sampling::brdf`] in the shading frame.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Glossy {
-    None,
-    /// MTL's normalised modified-Phong lobe `ks (ns + 2)/(2π) cos^ns α` about the mirror
-    /// direction (`Ks`, `Ns`).
-    Phong {
-        ks: Vec3,
-        ns: f32,
-    },
-    /// Mitsuba's `roughconductor` (the material's `kd` is zero).
-    RoughConductor(RoughConductor),
-    /// Mitsuba's `roughplastic`, its diffuse base included (the material's `kd` is zero).
-    RoughPlastic(Box<RoughPlastic>),
-    /// Mitsuba's `roughdielectric` (the material's `kd` is zero): the one non-delta lobe
-    /// that transmits, into the whole sphere ([`Material::transmits`]).
-    RoughDielectric(RoughDielectric),
-    /// Mitsuba's smooth `plastic` (the material's `kd` is zero): a vertex that chooses
-    /// between a delta reflection and a diffuse lobe where a ray meets it
-    /// ([`Material::scattering_at`]); as a glossy lobe, the diffuse choice's BSDF
-    /// ([`crate::sampling::plastic`]).
-    Plastic(Box<SmoothPlastic>),
-}
-
-impl Glossy {
-    /// Whether the lobe is present and can reflect anything.
-    pub fn reflects(&self) -> bool {
-        match self {
-            Glossy::None => false,
-            Glossy::Phong { ks, .. } => ks.max_element() > 0.0,
-            Glossy::RoughConductor(c) => c.specular_reflectance.max_element() > 0.0,
-            Glossy::RoughPlastic(p) => {
-                p.specular_reflectance.max_element() > 0.0
-                    || p.diffuse_reflectance.max_element() > 0.0
-            }
-            Glossy::Plastic(p) => {
-                p.specular_reflectance.max_element() > 0.0
-                    || p.diffuse_reflectance.max_element() > 0.0
-            }
-            Glossy::RoughDielectric(d) => {
-                d.specular_reflectance.max_element() > 0.0
-                    || d.specular_transmittance.max_element() > 0.0
-            }
-        }
-    }
-
-    /// The lobe's specular reflectance (Phong's `ks`, a microfacet lobe's
-    /// `specular_reflectance`) and diffuse one (a rough plastic's base); zero where absent.
-    pub fn reflectances(&self) -> (Vec3, Vec3) {
-        match self {
-            Glossy::None => (Vec3::ZERO, Vec3::ZERO),
-            Glossy::Phong { ks, .. } => (*ks, Vec3::ZERO),
-            Glossy::RoughConductor(c) => (c.specular_reflectance, Vec3::ZERO),
-            Glossy::RoughPlastic(p) => (p.specular_reflectance, p.diffuse_reflectance),
-            Glossy::Plastic(p) => (p.specular_reflectance, p.diffuse_reflectance),
-            Glossy::RoughDielectric(d) => (d.specular_reflectance, Vec3::ZERO),
-        }
-    }
-
-    /// Whether the lobe reads the shading frame's tangent (Mitsuba's `sh_frame.s`).
-    pub fn is_anisotropic(&self) -> bool {
-        match self {
-            Glossy::RoughConductor(c) => !c.microfacet.is_isotropic(),
-            Glossy::RoughDielectric(d) => !d.microfacet.is_isotropic(),
-            _ => false,
-        }
-    }
-}
-
-/// A dielectric interface: its relative index of refraction and what it transmits.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Dielectric {
-    /// η = interior / exterior index of refraction; the exterior is on the side of the
-    /// (shading) normal.
-    pub eta: f32,
-    /// What transmission passes (Mitsuba's `specular_transmittance`).
-    pub transmittance: Vec3,
-    /// A thin sheet (`thindielectric`): light passes straight through, and reflection
-    /// includes the sheet's internal reflections.
-    pub thin: bool,
-}
-
-/// What a one-sided material is seen from behind: it neither scatters nor emits.
-pub static BLACK: Material = Material {
-    name: String::new(),
-    kd: Vec3::ZERO,
-    ks: Vec3::ZERO,
-    glossy: Glossy::None,
-    mirror: false,
-    ke: Vec3::ZERO,
-    two_sided: true,
-    conductor: None,
-    dielectric: None,
-    textures: None,
-};
-
-impl Material {
-    pub fn is_emitter(&self) -> bool {
-        self.ke.max_element() > 0.0
-    }
-
-    /// Whether a glossy lobe is present (and the surface is not a mirror). A smooth
-    /// plastic's diffuse choice is no glossy lobe: what it scatters is nearly Lambertian.
-    pub fn is_glossy(&self) -> bool {
-        !self.mirror && self.glossy.reflects() && !self.chooses_lobe()
-    }
-
-    /// Whether the material chooses between a delta and a non-delta lobe where a ray
-    /// meets it (a smooth plastic: [`Material::scattering_at`]).
-    #[inline]
-    pub fn chooses_lobe(&self) -> bool {
-        matches!(self.glossy, Glossy::Plastic(_))
-    }
-
-    /// Whether the non-delta BSDF scatters into the whole sphere (a rough dielectric), not
-    /// only into the hemisphere of the normal that faces `wo`: where it does, a direction
-    /// below that hemisphere carries light (weighed by `|cos θ|`), and next-event
-    /// estimation reaches lights behind the surface.
-    pub fn transmits(&self) -> bool {
-        !self.mirror && matches!(self.glossy, Glossy::RoughDielectric(_))
-    }
-
-    /// The relative index of refraction `η` (interior over exterior, the exterior on the
-    /// side of the shading normal) of an interface that refracts: a smooth dielectric that
-    /// is not thin, or a rough dielectric; `None` for every other material.
-    pub fn interface_eta(&self) -> Option<f32> {
-        match (&self.dielectric, &self.glossy) {
-            (Some(d), _) if self.mirror && !d.thin => Some(d.eta),
-            (None, Glossy::RoughDielectric(d)) if !self.mirror => Some(d.eta),
-            _ => None,
-        }
-    }
-
-    /// The mirror's reflectance for an incident direction at `cos_theta` to the normal:
-    /// `ks`, times the conductor's Fresnel reflectance for a conductor.
-    pub fn mirror_reflectance(&self, cos_theta: f32) -> Vec3 {
-        match self.conductor {
-            None => self.ks,
-            Some([eta, k]) => self.ks * fresnel_conductor(cos_theta, eta, k),
-        }
-    }
-
-    /// Whether light can scatter off the surface at all.
-    pub fn scatters(&self) -> bool {
-        if self.mirror {
-            self.ks.max_element() > 0.0
-                || self
-                    .dielectric
-                    .is_some_and(|d| d.transmittance.max_element() > 0.0)
-        } else {
-            self.kd.max_element() > 0.0 || self.glossy.reflects()
-        }
-    }
 }
 
 /// The emitting primitives (triangles and analytic shapes), picked by area.
@@ -374,31 +190,6 @@ impl Emitters {
         let cos_y = normal_y.dot(d).abs() / dist2.sqrt();
         shape.area() / self.total_area * cone.pdf_solid_angle() * cos_y / dist2
     }
-}
-
-/// The unpolarised Fresnel reflectance of a conductor of complex index `eta + i k` per
-/// channel (Mitsuba's `fresnel_conductor`, after Moeller, "Optics").
-pub fn fresnel_conductor(cos_theta: f32, eta: Vec3, k: Vec3) -> Vec3 {
-    let c2 = cos_theta * cos_theta;
-    let s2 = 1.0 - c2;
-    let s4 = s2 * s2;
-    let t1 = eta * eta - k * k - Vec3::splat(s2);
-    let a2b2 = (t1 * t1 + 4.0 * k * k * eta * eta)
-        .max(Vec3::ZERO)
-        .powf(0.5);
-    let a = (0.5 * (a2b2 + t1)).max(Vec3::ZERO).powf(0.5);
-    let term1 = a2b2 + Vec3::splat(c2);
-    let term2 = 2.0 * cos_theta * a;
-    let r_s = (term1 - term2) / (term1 + term2);
-    let term3 = a2b2 * c2 + Vec3::splat(s4);
-    let term4 = term2 * s2;
-    let r_p = r_s * (term3 - term4) / (term3 + term4);
-    0.5 * (r_s + r_p)
-}
-
-pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f64 {
-    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
-    0.5 * (b - a).cross(c - a).length()
 }
 
 /// A loaded, validated scene.
@@ -625,6 +416,11 @@ impl Scene {
 
 /// Upper bound on `max_bounces`, far above anything useful, so that typos fail fast.
 pub const MAX_BOUNCES_LIMIT: u32 = 1000;
+/// First bounce at which Russian roulette may end a path. A setting of the path tracer
+/// (`path::pt`), kept here beside [`MAX_BOUNCES_LIMIT`] because the Mitsuba loader
+/// warns when a scene's `rr_depth` differs from it, and the scene may not import the path
+/// layer.
+pub const RR_START: u32 = 5;
 /// Upper bound on the image side, so that a typo does not allocate terabytes.
 pub const MAX_IMAGE_SIDE: u32 = 1 << 15;
 

@@ -85,7 +85,7 @@ pub fn dp_duv(p: [Vec3; 3], uvs: Option<[Vec2; 3]>, ng: Vec3) -> (DVec3, DVec3) 
     let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
     let det = duv0.x * duv1.y - duv0.y * duv1.x;
     if det == 0.0 {
-        crate::sampling::basis(ng.as_dvec3())
+        crate::math::basis(ng.as_dvec3())
     } else {
         (
             (duv1.y * dp0 - duv0.y * dp1) / det,
@@ -102,7 +102,7 @@ pub fn tangent(dp_du: DVec3, ns: Vec3) -> Vec3 {
     let s = dp_du - n * n.dot(dp_du);
     let s = s.normalize_or_zero();
     if s == DVec3::ZERO {
-        crate::sampling::basis(n).0.as_vec3()
+        crate::math::basis(n).0.as_vec3()
     } else {
         s.as_vec3()
     }
@@ -194,6 +194,6 @@ mod tests {
         // Degenerate texture coordinates: Mitsuba's coordinate_system(ng).
         let flat = [Vec2::ZERO; 3];
         let d = dp_du(p, Some(flat), Vec3::Z);
-        assert_eq!(d, crate::sampling::basis(DVec3::Z).0);
+        assert_eq!(d, crate::math::basis(DVec3::Z).0);
     }
 }

@@ -1,5 +1,5 @@
 //! The microfacet lobes (Mitsuba's `roughconductor` and `roughplastic`,
-//! `genpath::sampling::microfacet`) through the one BSDF interface (`brdf`): χ² of their
+//! `genpath::scene::microfacet`) through the one BSDF interface (`brdf`): χ² of their
 //! samples, GGX and Beckmann, isotropic and anisotropic, visible normals and the whole
 //! distribution, each with must-reject twins (roughness 3 % off, the other distribution, the
 //! anisotropy along the wrong tangent, the other sampling mode, the rough plastic's lobe
@@ -13,7 +13,7 @@
 //! `1 − Σ(other bins)`.
 
 use super::*;
-use genpath::sampling::microfacet::{Distribution, Microfacet, RoughConductor, RoughPlastic};
+use genpath::scene::microfacet::{Distribution, Microfacet, RoughConductor, RoughPlastic};
 
 /// One-sided material of a single glossy lobe.
 fn lobe(glossy: Glossy) -> Material {

@@ -1,4 +1,4 @@
-//! Mitsuba's smooth `plastic` (`genpath::sampling::plastic`): its lobe choice and diffuse
+//! Mitsuba's smooth `plastic` (`genpath::scene::SmoothPlastic`): its lobe choice and diffuse
 //! lobe against values printed by Mitsuba 3.9.1 itself (`plastic_mitsuba.txt`, by
 //! `scripts/mitsuba_plastic_table.py`), through the choice a hit makes
 //! (`Material::scattering_at`) and the one BSDF interface (`brdf`, `specular`); and χ² of
@@ -6,8 +6,8 @@
 //! vertex (the diffuse lobe's times its probability) as the must-reject twin.
 
 use super::*;
-use genpath::sampling::plastic::SmoothPlastic;
 use genpath::sampling::specular;
+use genpath::scene::SmoothPlastic;
 
 /// A one-sided smooth plastic.
 fn plastic(eta: f32, diffuse: Vec3, specular: Vec3, nonlinear: bool) -> Material {

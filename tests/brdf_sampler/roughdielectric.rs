@@ -1,4 +1,4 @@
-//! Mitsuba's `roughdielectric` (`genpath::sampling::microfacet::RoughDielectric`) through the
+//! Mitsuba's `roughdielectric` (`genpath::scene::microfacet::RoughDielectric`) through the
 //! one BSDF interface (`brdf`), the first non-delta lobe that transmits: χ² of its samples
 //! over the whole sphere (reflection and refraction, GGX and Beckmann, seen from outside
 //! (`η > 1`) and from inside (`η < 1`, total internal reflection included), anisotropic,
@@ -19,8 +19,8 @@
 //! ([`Glass::rejected`]), not `1 − Σ(other bins)`.
 
 use super::*;
-use genpath::sampling::microfacet::{Distribution, Microfacet, RoughDielectric};
-use genpath::sampling::specular::fresnel_dielectric;
+use genpath::scene::fresnel::fresnel_dielectric;
+use genpath::scene::microfacet::{Distribution, Microfacet, RoughDielectric};
 
 /// A material of one rough dielectric lobe, white unless told.
 fn glass(distribution: Distribution, alpha: (f64, f64), visible: bool, eta: f32) -> Material {

@@ -78,7 +78,9 @@ impl Vertex {
 
     /// The Phong lobe's axis, the mirror direction of `wo`, as `brdf` computes it.
     pub(crate) fn lobe_axis(&self) -> DVec3 {
-        brdf::reflect(self.wo, self.n).as_dvec3().normalize()
+        genpath::sampling::reflect(self.wo, self.n)
+            .as_dvec3()
+            .normalize()
     }
 
     /// The shading frame.

@@ -10,12 +10,12 @@ use super::parse::Doc;
 use super::props::Props;
 use super::shapes::{self, Placement};
 use super::spectrum::ColorUse;
-use super::tables::CONDUCTORS;
 use super::textures::{material_textures, Textures};
 use crate::accel::{Analytic, TriangleMesh};
+use crate::math::triangle_area;
 use crate::scene::{
-    triangle_area, Camera, Dielectric, Emitters, Environment, Glossy, Material, MaterialTextures,
-    RenderDefaults, Scene, SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE,
+    Camera, Dielectric, Emitters, Glossy, Material, MaterialTextures, RenderDefaults, Scene,
+    SceneError, Shading, MAX_BOUNCES_LIMIT, MAX_IMAGE_SIDE, RR_START,
 };
 use glam::{DMat3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -321,7 +321,7 @@ pub(super) fn bsdf(
             let mut m = match q.object().plugin.as_str() {
                 // The map sees `wo` mirrored where it is behind the surface.
                 "normalmap" | "bumpmap" => {
-                    let m = super::maps::adapter(&q, name.clone(), tex, warnings, true)?;
+                    let m = super::maps::adapter(&q, name.clone(), tex, warnings, true, bsdf)?;
                     q.finish()?;
                     m
                 }
@@ -338,8 +338,8 @@ pub(super) fn bsdf(
         "plastic" => super::rough::smooth_plastic(p, name, tex, warnings)?,
         "dielectric" => dielectric(p, name, false, tex, warnings)?,
         "thindielectric" => dielectric(p, name, true, tex, warnings)?,
-        "normalmap" | "bumpmap" => super::maps::adapter(p, name, tex, warnings, false)?,
-        "mask" => super::mask::mask(p, name, tex, warnings)?,
+        "normalmap" | "bumpmap" => super::maps::adapter(p, name, tex, warnings, false, bsdf)?,
+        "mask" => super::mask::mask(p, name, tex, warnings, bsdf)?,
         other => return Err(p.error(format!("genpath does not implement the `{other}` BSDF (supported: diffuse, twosided, conductor, roughconductor, plastic, roughplastic, dielectric, roughdielectric, thindielectric, normalmap, bumpmap, mask)"))),
     };
     p.finish()?;
@@ -355,7 +355,7 @@ fn conductor(
     warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     let ks = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
-    let (eta, k) = complex_ior(p, warnings)?;
+    let (eta, k) = super::ior::complex_ior(p, warnings)?;
     Ok(Material {
         name,
         kd: Vec3::ZERO,
@@ -371,37 +371,6 @@ fn conductor(
             ..Default::default()
         }),
     })
-}
-
-/// A conductor's complex index of refraction (η, k) as Mitsuba's conductors read it: given
-/// (`eta` 0 and `k` 1 by default) or a `material` preset.
-pub(super) fn complex_ior(
-    p: &Props,
-    warnings: &mut Vec<String>,
-) -> Result<(DVec3, DVec3), SceneError> {
-    let preset = p.string("material")?.unwrap_or("none");
-    let given_eta = p.color("eta", ColorUse::Unbounded, warnings)?;
-    let given_k = p.color("k", ColorUse::Unbounded, warnings)?;
-    if given_eta.is_some() || preset == "none" {
-        if preset != "none" {
-            return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
-        }
-        return Ok((
-            given_eta.unwrap_or(DVec3::ZERO),
-            given_k.unwrap_or(DVec3::ONE),
-        ));
-    }
-    if given_k.is_some() {
-        return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
-    }
-    let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, _, _)| *n == preset) else {
-        let names: Vec<&str> = CONDUCTORS.iter().map(|c| c.0).collect();
-        return Err(p.error(format!(
-            "unknown conductor `material` \"{preset}\" (known: none, {})",
-            names.join(", ")
-        )));
-    };
-    Ok((DVec3::from(*eta), DVec3::from(*k)))
 }
 
 /// Mitsuba's smooth `dielectric` (or, `thin`, its `thindielectric`): a two-sided delta BSDF
@@ -454,21 +423,6 @@ fn area_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Vec3, SceneErro
     }
     p.finish()?;
     Ok(radiance.as_vec3())
-}
-
-/// Mitsuba's `constant` emitter: its `radiance` (given explicitly).
-pub(super) fn constant_emitter(
-    p: &Props,
-    warnings: &mut Vec<String>,
-) -> Result<Environment, SceneError> {
-    let radiance = p
-        .color("radiance", ColorUse::Emission, warnings)?
-        .ok_or_else(|| p.error("needs a `radiance` (genpath does not assume Mitsuba's default)"))?;
-    if radiance.min_element() < 0.0 || radiance.as_vec3().max_element() > 1e30 {
-        return Err(p.error(format!("`radiance` {radiance} is negative or beyond 1e30")));
-    }
-    p.finish()?;
-    Ok(Environment::new(radiance.as_vec3()))
 }
 
 /// The perspective sensor, its film and sampler: the camera and the default spp.
@@ -556,7 +510,7 @@ fn fov_x(p: &Props, aspect: f64) -> Result<f64, SceneError> {
         (p.float("fov", 0.0)?, axis)
     } else {
         let f = p.string("focal_length")?.unwrap_or("50mm");
-        let mm = super::parse::parse_f64(f.strip_suffix("mm").unwrap_or(f))
+        let mm = super::numbers::parse_f64(f.strip_suffix("mm").unwrap_or(f))
             .filter(|v| *v > 0.0)
             .ok_or_else(|| p.error(format!("focal_length \"{f}\" is not of the form <x>mm")))?;
         (
@@ -677,8 +631,8 @@ fn integrator(p: &Props, warnings: &mut Vec<String>) -> Result<(u32, bool), Scen
         ));
     }
     let rr = p.int("rr_depth", 5)?;
-    if rr != i64::from(crate::path::pt::RR_START) {
-        warnings.push(format!("{}: rr_depth {rr}: genpath's Russian roulette starts at bounce {} (the noise differs, the image's expectation does not)", p.doc.at(p.loc()), crate::path::pt::RR_START));
+    if rr != i64::from(RR_START) {
+        warnings.push(format!("{}: rr_depth {rr}: genpath's Russian roulette starts at bounce {} (the noise differs, the image's expectation does not)", p.doc.at(p.loc()), RR_START));
     }
     let hide_emitters = p.bool("hide_emitters", false)?;
     p.finish()?;

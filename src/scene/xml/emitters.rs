@@ -31,7 +31,7 @@ impl SceneLights {
                 "a second environment (`constant` or `envmap`) emitter (genpath takes one)",
             )),
             "constant" => {
-                self.environment = Some(super::build::constant_emitter(p, warnings)?);
+                self.environment = Some(constant_emitter(p, warnings)?);
                 Ok(true)
             }
             "envmap" => {
@@ -159,4 +159,16 @@ pub fn envmap(
     )
     .map_err(|e| p.error(format!("`{}`: {e}", path.display())))?;
     Ok(Environment::map(map, scale as f32))
+}
+
+/// Mitsuba's `constant` emitter: its `radiance` (given explicitly).
+fn constant_emitter(p: &Props, warnings: &mut Vec<String>) -> Result<Environment, SceneError> {
+    let radiance = p
+        .color("radiance", ColorUse::Emission, warnings)?
+        .ok_or_else(|| p.error("needs a `radiance` (genpath does not assume Mitsuba's default)"))?;
+    if radiance.min_element() < 0.0 || radiance.as_vec3().max_element() > 1e30 {
+        return Err(p.error(format!("`radiance` {radiance} is negative or beyond 1e30")));
+    }
+    p.finish()?;
+    Ok(Environment::new(radiance.as_vec3()))
 }

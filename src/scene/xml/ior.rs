@@ -1,10 +1,14 @@
 //! Indices of refraction by name, as Mitsuba 3's dielectrics read `int_ior` and `ext_ior`:
 //! a number, or a name from Mitsuba's table (`include/mitsuba/render/ior.h`, Hecht's
-//! *Optics*, 0–20 °C at ~589 nm), looked up case-insensitively.
+//! *Optics*, 0–20 °C at ~589 nm), looked up case-insensitively; and a conductor's complex
+//! index ([`complex_ior`]), given or from Mitsuba's presets.
 
 use super::parse::Value;
 use super::props::Props;
+use super::spectrum::ColorUse;
+use super::tables::CONDUCTORS;
 use crate::scene::SceneError;
+use glam::DVec3;
 
 /// Mitsuba 3's named indices of refraction (`ior_data` of `ior.h`), in its order.
 pub const IORS: &[(&str, f32)] = &[
@@ -73,6 +77,37 @@ pub fn read(p: &Props, name: &str, default: &str) -> Result<f32, SceneError> {
         ))),
         None => Err(p.error(format!("`{name}`: no index of refraction"))),
     }
+}
+
+/// A conductor's complex index of refraction (η, k) as Mitsuba's conductors read it: given
+/// (`eta` 0 and `k` 1 by default) or a `material` preset.
+pub(super) fn complex_ior(
+    p: &Props,
+    warnings: &mut Vec<String>,
+) -> Result<(DVec3, DVec3), SceneError> {
+    let preset = p.string("material")?.unwrap_or("none");
+    let given_eta = p.color("eta", ColorUse::Unbounded, warnings)?;
+    let given_k = p.color("k", ColorUse::Unbounded, warnings)?;
+    if given_eta.is_some() || preset == "none" {
+        if preset != "none" {
+            return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
+        }
+        return Ok((
+            given_eta.unwrap_or(DVec3::ZERO),
+            given_k.unwrap_or(DVec3::ONE),
+        ));
+    }
+    if given_k.is_some() {
+        return Err(p.error("give either (`eta`, `k`) or `material`, not both"));
+    }
+    let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, _, _)| *n == preset) else {
+        let names: Vec<&str> = CONDUCTORS.iter().map(|c| c.0).collect();
+        return Err(p.error(format!(
+            "unknown conductor `material` \"{preset}\" (known: none, {})",
+            names.join(", ")
+        )));
+    };
+    Ok((DVec3::from(*eta), DVec3::from(*k)))
 }
 
 #[cfg(test)]

@@ -5,7 +5,6 @@
 //! adapter. Mitsuba's `flip_invalid_normals` and `use_shadowing_function` are implemented
 //! at their defaults (true) only.
 
-use super::build::bsdf;
 use super::parse::Value;
 use super::props::Props;
 use super::textures::Textures;
@@ -16,12 +15,16 @@ use std::sync::Arc;
 /// The adapter `p` (`normalmap` or `bumpmap`) around its nested BSDF, as one material named
 /// `name`; `twosided_outside` where a `twosided` wraps it. Leaves `p`'s own unread
 /// properties to the caller's [`Props::finish`].
+/// `nested_bsdf` builds the nested BSDF: the caller's dispatcher (`build::bsdf`), passed in
+/// because it is also what calls this adapter, so that the two files do not import each
+/// other.
 pub(super) fn adapter(
     p: &Props,
     name: String,
     tex: &mut Textures,
     warnings: &mut Vec<String>,
     twosided_outside: bool,
+    nested_bsdf: fn(&Props, &mut Textures, &mut Vec<String>) -> Result<Material, SceneError>,
 ) -> Result<Material, SceneError> {
     let plugin = p.object().plugin.clone();
     let [nested] = p.children_of("bsdf")[..] else {
@@ -40,7 +43,7 @@ pub(super) fn adapter(
         }
         _ => {}
     }
-    let mut m = bsdf(&q, tex, warnings)?;
+    let mut m = nested_bsdf(&q, tex, warnings)?;
     if m.mirror || m.transmits() || m.chooses_lobe() {
         return Err(q.error(format!(
             "genpath's `{plugin}` perturbs non-delta BSDFs that do not transmit only (diffuse, roughplastic, roughconductor; not `{inner}`)"

@@ -1,12 +1,11 @@
 //! Mitsuba's `mask` BSDF adapter: the nested BSDF as a material with an [`Opacity`] (a
 //! `<float>`, 0.5 by default, or a grey `checkerboard` or `bitmap` texture, read as
 //! Mitsuba's `eval_1` reads it), through which rays pass with probability `1 − opacity`
-//! ([`crate::path::SceneView::trace_through`]). Any nested BSDF genpath implements may be
+//! (the path layer's `SceneView::trace_through`). Any nested BSDF genpath implements may be
 //! masked (a `twosided`, a `normalmap` or `bumpmap` too); refused: a mask inside a mask, a
 //! `twosided` around a mask (as Mitsuba refuses it: a mask transmits), a mask on an area
 //! emitter (refused where the shape is built), and an opacity outside [0, 1] or not finite.
 
-use super::build::bsdf;
 use super::parse::Value;
 use super::props::Props;
 use super::textures::Textures;
@@ -15,11 +14,15 @@ use std::sync::Arc;
 
 /// The `mask` `p` around its nested BSDF, as one material named `name`. Leaves `p`'s own
 /// unread properties to the caller's [`Props::finish`].
+/// `nested_bsdf` builds the nested BSDF: the caller's dispatcher (`build::bsdf`), passed in
+/// because it is also what calls this adapter, so that the two files do not import each
+/// other.
 pub(super) fn mask(
     p: &Props,
     name: String,
     tex: &mut Textures,
     warnings: &mut Vec<String>,
+    nested_bsdf: fn(&Props, &mut Textures, &mut Vec<String>) -> Result<Material, SceneError>,
 ) -> Result<Material, SceneError> {
     let [nested] = p.children_of("bsdf")[..] else {
         return Err(p.error("`mask` takes exactly one nested BSDF"));
@@ -31,7 +34,7 @@ pub(super) fn mask(
         ));
     }
     let opacity = opacity(p, tex, warnings)?;
-    let mut m = bsdf(&q, tex, warnings)?;
+    let mut m = nested_bsdf(&q, tex, warnings)?;
     let mut textures = m
         .textures
         .take()

@@ -8,6 +8,8 @@ mod emitters;
 mod ior;
 mod maps;
 mod mask;
+mod mesh;
+mod numbers;
 mod parse;
 mod ply;
 mod props;

@@ -3,7 +3,7 @@
 //! coordinates `u v`, else `texture_u texture_v`, else `s t`), the `face` element's
 //! `vertex_indices` (or `vertex_index`) lists as fans; other elements skipped.
 
-use super::shapes::RawMesh;
+use super::mesh::RawMesh;
 use glam::{DVec3, Vec2};
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{Property, PropertyAccess};

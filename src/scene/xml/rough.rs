@@ -3,14 +3,12 @@
 //! distribution's parameters as Mitsuba's `MicrofacetDistribution` reads them, with
 //! roughness refused where it is not a positive, finite number (Mitsuba clamps 0 to 1e-4).
 
-use super::build::complex_ior;
 use super::props::Props;
 use super::textures::{material_textures, Textures};
-use crate::sampling::microfacet::{
+use crate::scene::microfacet::{
     Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
 };
-use crate::sampling::plastic::SmoothPlastic;
-use crate::scene::{Glossy, Material, MaterialTextures, SceneError};
+use crate::scene::{Glossy, Material, MaterialTextures, SceneError, SmoothPlastic};
 use glam::Vec3;
 
 /// The microfacet distribution of `p`: `distribution` (`beckmann`, Mitsuba's default, or
@@ -89,7 +87,7 @@ pub(super) fn rough_conductor(
 ) -> Result<Material, SceneError> {
     let microfacet = microfacet(p)?;
     let ks = tex.reflectance(p, "specular_reflectance", 1.0, warnings)?;
-    let (eta, k) = complex_ior(p, warnings)?;
+    let (eta, k) = super::ior::complex_ior(p, warnings)?;
     let lobe = RoughConductor {
         microfacet,
         eta: eta.as_vec3(),
@@ -165,7 +163,7 @@ fn coating(
 /// Mitsuba's smooth `plastic`: `int_ior` (polypropylene) over `ext_ior` (air),
 /// `diffuse_reflectance` (0.5) and `specular_reflectance` (1), each a constant or a texture
 /// (whose mean weighs the choice of lobe, as in Mitsuba), and `nonlinear`
-/// ([`crate::sampling::plastic`]).
+/// ([`SmoothPlastic`]).
 pub(super) fn smooth_plastic(
     p: &Props,
     name: String,

@@ -3,7 +3,7 @@
 //! triangle counts, positions, optional normals, UVs and colours, and `u32` triangles;
 //! files with several meshes end with a table of their offsets (`shape_index`).
 
-use super::shapes::RawMesh;
+use super::mesh::RawMesh;
 use flate2::read::ZlibDecoder;
 use glam::{DVec3, Vec2};
 use std::io::{Read, Seek, SeekFrom};

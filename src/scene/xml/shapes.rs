@@ -7,6 +7,7 @@
 //! intersected exactly ([`crate::accel::Analytic`]). `cylinder` is refused: tessellating it
 //! would change the image.
 
+use super::mesh::RawMesh;
 use super::parse::Loc;
 use super::props::Props;
 use super::{ply, serialized};
@@ -16,36 +17,6 @@ use crate::scene::SceneError;
 use glam::{DMat3, DMat4, DVec3, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// A mesh in object space, as a file or a built-in shape gives it.
-#[derive(Debug, Default)]
-pub struct RawMesh {
-    pub positions: Vec<DVec3>,
-    pub triangles: Vec<[u32; 3]>,
-    /// Per-vertex normals, when the mesh has them.
-    pub normals: Option<Vec<DVec3>>,
-    /// Per-vertex texture coordinates, when the mesh has them (`None` for a vertex that has
-    /// none in a mesh whose other vertices do).
-    pub uvs: Option<Vec<Option<Vec2>>>,
-}
-
-impl RawMesh {
-    /// Checks that every index names a vertex.
-    pub fn check_indices(&self, what: &str) -> Result<(), String> {
-        let n = self.positions.len() as u64;
-        match self
-            .triangles
-            .iter()
-            .flatten()
-            .find(|&&i| u64::from(i) >= n)
-        {
-            Some(i) => Err(format!(
-                "{what}: face index {i} is out of range ({n} vertices)"
-            )),
-            None => Ok(()),
-        }
-    }
-}
 
 /// The triangles of shape `p` in object space; the file it reads them from is added to
 /// `files`.
@@ -310,7 +281,7 @@ pub fn obj(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, SceneError> {
             Some(kind @ ("v" | "vn" | "vt")) => {
                 let numbers: Vec<f64> = words
                     .take(if kind == "vt" { 2 } else { 3 })
-                    .map(|w| super::parse::parse_f64(w).ok_or(w))
+                    .map(|w| super::numbers::parse_f64(w).ok_or(w))
                     .collect::<Result<_, _>>()
                     .map_err(|w| err(line, format!("`{kind}`: `{w}` is not a finite number")))?;
                 match (kind, &numbers[..]) {

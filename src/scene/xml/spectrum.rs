@@ -33,9 +33,9 @@ const CIE_Y_NORMALIZATION: f64 = 1.0 / 106.750_259_399_414_06;
 impl Spectrum {
     /// `"0.5"` or `"400:0.1, 500:0.4, …"`.
     pub fn parse(text: &str) -> Result<Spectrum, String> {
-        let tokens: Vec<&str> = super::parse::tokens(text).collect();
+        let tokens: Vec<&str> = super::numbers::tokens(text).collect();
         let number = |t: &str| {
-            super::parse::parse_f64(t)
+            super::numbers::parse_f64(t)
                 .ok_or_else(|| format!("<spectrum>: could not parse \"{t}\" as a finite number"))
         };
         if let [single] = tokens[..] {

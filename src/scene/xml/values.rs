@@ -1,7 +1,8 @@
 //! The values of Mitsuba's typed property tags (`<float>`, `<rgb>`, `<spectrum>`, …) and of
 //! `<transform>` with its operations, for [`super::parse`].
 
-use super::parse::{parse_f64, tokens, Ctx, Element, Parser, Value};
+use super::numbers::{parse_f64, tokens};
+use super::parse::{Ctx, Element, Parser, Value};
 use super::spectrum::Spectrum;
 use super::transform;
 use crate::scene::SceneError;

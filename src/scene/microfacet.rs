@@ -10,9 +10,8 @@
 //! `si.wi`) and `wi` towards the light (Mitsuba's `wo`); values are BSDF values without the
 //! cosine (Mitsuba's `eval` divided by `|cos θ_i|`).
 
-use super::specular::fresnel_dielectric;
-use super::trig;
-use crate::scene::fresnel_conductor;
+use super::fresnel::{fresnel_conductor, fresnel_dielectric};
+use crate::math::trig;
 use glam::{DVec2, DVec3, Vec3};
 use statrs::function::erf::{erf, erf_inv};
 use std::f64::consts::{FRAC_1_PI, PI};
@@ -320,7 +319,7 @@ impl RoughConductor {
 /// `1/eta` from behind, as Mitsuba selects `m_eta` or `m_inv_eta` by the sign of `cos θ_i`;
 /// mirroring Mitsuba's frame so that `wo` lies above changes nothing else, since its
 /// distribution is symmetric. Transmitted radiance is scaled by `1/η²` (Mitsuba's radiance
-/// mode, the smooth `dielectric`'s `η_ti²` of `crate::sampling::specular`), which makes the
+/// mode, the smooth `dielectric`'s `η_ti²` of `sampling::specular`), which makes the
 /// transmission `(1 − F) D G |wo·h| |wi·h| / (|cos θ_o| |cos θ_i| (wo·h + η wi·h)²)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
@@ -607,7 +606,7 @@ enum Coating {
 /// relative index `eta` at `wo`: the Fresnel transmittance (reflectance) of visible normals
 /// times the masking of the refracted (reflected) direction, by Gauss–Legendre quadrature.
 fn coating_integral(distr: &Microfacet, wo: DVec3, eta: f64, what: Coating) -> f64 {
-    let nodes = super::gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+    let nodes = crate::math::gauss_legendre(if eta > 1.0 { 32 } else { 128 });
     let mut sum = 0.0;
     for &(x, wx) in &nodes {
         for &(y, wy) in &nodes {
