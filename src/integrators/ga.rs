@@ -179,9 +179,10 @@ impl PixelIntegrator for Ga {
     }
     fn learned(&self) -> Option<Learned> {
         let mut plan = self.plan.clone();
-        let samples = std::mem::take(&mut plan.baseline);
+        let baseline = std::mem::take(&mut plan.baseline);
+        let samples = (baseline.spp > 0).then_some(baseline);
         let summary = serde_json::json!({ "plan": plan_summary(&self.plan), "spatial": null });
-        Some(Learned::new(Method::Ga, Some(samples), &plan, &summary))
+        Some(Learned::new(Method::Ga, samples, &plan, &summary))
     }
     fn describe(&self, config: &Settings) -> Description {
         describe_plan(&self.plan, config, self.from_plan_file)

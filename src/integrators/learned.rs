@@ -1,6 +1,6 @@
 //! What a method that learns learned while it was prepared ([`Learned`]): the samples its
 //! training took (which the image keeps) and the method's own state, which only the method
-//! reads. Saved in a plan file (`genpath learn`, [`crate::shard::plan_file`]) it prepares
+//! reads. Saved in a plan file (`genpath learn`, the `shard` module's `plan_file`) it prepares
 //! the method again without training ([`prepare_learned`], through the method's
 //! [`super::MethodInfo::prepare_learned`]): the render is the one that trained in-process,
 //! bit for bit, and shards of it render with one learned state.
@@ -85,7 +85,7 @@ pub fn prepare_learned(
     }
     let camera = &view.scene.camera;
     let pixels = (camera.width * camera.height) as usize;
-    if let Some(s) = &learned.samples {
+    if let Some(s) = learned.samples() {
         if s.sum.len() != pixels || s.sum_sq.len() != pixels || s.spp > settings.spp {
             return Err(mismatch(format!(
                 "training sums of {} pixels and {} spp for {pixels} pixels at {} spp",
