@@ -14,4 +14,5 @@ pub mod progress;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod settings_table;
 pub mod shard;
