@@ -4,9 +4,12 @@
 //! the one name serves everywhere: the TOML of `--config FILE` (`[ga] test_paths = 4000`),
 //! `--set test_paths=4000` (or `--set ga.test_paths=4000`), the flag `--test-paths` (the key
 //! with dashes), the sweep's method keys (`ga:test_paths=4000`) and the JSON statistics
-//! (`"ga": { "test_paths": 4000 }`). Defaults are the tables' `Default`s, in one place; a
-//! key that no table has is refused wherever it is written (`deny_unknown_fields` on every
-//! table, and no `flatten`, which would silently defeat it).
+//! (`"ga": { "test_paths": 4000 }`). Each table is declared once, with
+//! [`crate::settings_table!`] beside what it configures: every setting's help, default and
+//! range are written there only, and the flags, the TOML, the range check and
+//! docs/settings.md derive from it. A key that no table has is refused wherever it is
+//! written (`deny_unknown_fields` on every table, and no `flatten`, which would silently
+//! defeat it), and so is a value outside its range, in the same words.
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
