@@ -34,4 +34,5 @@ pub mod progress;
 pub mod report;
 pub mod sampling;
 pub mod scene;
+pub mod settings_table;
 pub mod shard;

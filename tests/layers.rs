@@ -26,7 +26,7 @@ const LAYERS: &[&[&str]] = &[
     &["accel"],
     &["math"],
     &["image"],
-    &["progress"],
+    &["progress", "settings_table"],
 ];
 
 /// A crate's source files: path relative to `src/` (with `/`), and text.

@@ -5,7 +5,7 @@
 use super::args::SettingsArgs;
 use anyhow::Result;
 use clap::Args;
-use genpath::integrators::settings::{table_of, tables};
+use genpath::integrators::settings::declarations;
 use genpath::integrators::Settings;
 use std::fmt::Write as _;
 
@@ -25,10 +25,12 @@ pub fn run_settings(args: SettingsCommandArgs) -> Result<()> {
     Ok(())
 }
 
-/// The settings as Markdown: one table per help heading, a row per flag.
+/// The settings as Markdown: one table per help heading, a row per flag, each setting's
+/// default (as TOML writes it) and range as its table declares them.
 pub fn markdown() -> String {
     let defaults: std::collections::BTreeMap<String, String> =
         Settings::default().values().into_iter().collect();
+    let declared = declarations();
     let command = <SettingsArgs as clap::Args>::augment_args(clap::Command::new("settings"));
     let mut out = String::from(
         "# Settings\n\n\
@@ -37,7 +39,9 @@ pub fn markdown() -> String {
          also the flag (with dashes), the `--set` key (`--set test_paths=4000` or\n\
          `--set ga.test_paths=4000`), the key of `sweep --methods` (`ga:test_paths=4000`)\n\
          and the key in the JSON statistics. They apply in this order: the defaults,\n\
-         `--config`, the flags given, each `--set`. A key no table has is refused.\n\
+         `--config`, the flags given, each `--set`. A key no table has is refused, and a\n\
+         value outside its setting's range is refused with the same words wherever it is\n\
+         written.\n\
          `genpath settings --toml` prints the defaults as a file to start from.\n\n\
          Path tracing (`--method pt`, and the path tracing inside `pg` and `ga-pt`) has no\n\
          table: its settings are the render's, which every method shares and which are\n\
@@ -53,7 +57,7 @@ pub fn markdown() -> String {
             heading = Some(this);
             let _ = write!(
                 out,
-                "\n## {this}\n\n| setting | flag | default | meaning |\n|---|---|---|---|\n"
+                "\n## {this}\n\n| setting | flag | default | range | meaning |\n|---|---|---|---|---|\n"
             );
         }
         let help = arg
@@ -62,34 +66,18 @@ pub fn markdown() -> String {
             .map(|h| h.to_string().replace('\n', " "))
             .unwrap_or_default();
         let flag = format!("`--{}`", arg.get_long().unwrap_or(id));
-        let (key, default) = match table_of(id) {
-            Some(table) => {
-                let key = format!("{table}.{id}");
+        let (key, default, range) = match declared.iter().find(|s| s.key == id) {
+            Some(setting) => {
+                let key = format!("{}.{id}", setting.table);
                 let default = defaults
                     .get(&key)
                     .map_or("unset".to_string(), |d| format!("`{d}`"));
-                (format!("`{key}`"), default)
+                let range = setting.range.map_or("–".to_string(), |r| r.to_string());
+                (format!("`{key}`"), default, range)
             }
-            None => ("–".to_string(), "–".to_string()),
+            None => ("–".to_string(), "–".to_string(), "–".to_string()),
         };
-        let _ = writeln!(out, "| {key} | {flag} | {default} | {help} |");
-    }
-    let flagged: Vec<&str> = command
-        .get_arguments()
-        .map(|a| a.get_id().as_str())
-        .collect();
-    let unflagged: Vec<String> = tables()
-        .into_iter()
-        .flat_map(|(t, keys)| keys.iter().map(move |k| (t, *k)))
-        .filter(|(_, k)| !flagged.contains(k))
-        .map(|(t, k)| format!("`{t}.{k}`"))
-        .collect();
-    if !unflagged.is_empty() {
-        let _ = writeln!(
-            out,
-            "\nSettings without a flag (`--config` and `--set` only): {}.",
-            unflagged.join(", ")
-        );
+        let _ = writeln!(out, "| {key} | {flag} | {default} | {range} | {help} |");
     }
     let aliases: Vec<String> = genpath::report::KEY_ALIASES
         .iter()

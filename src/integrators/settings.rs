@@ -4,15 +4,21 @@
 //! the one name serves everywhere: the TOML of `--config FILE` (`[ga] test_paths = 4000`),
 //! `--set test_paths=4000` (or `--set ga.test_paths=4000`), the flag `--test-paths` (the key
 //! with dashes), the sweep's method keys (`ga:test_paths=4000`) and the JSON statistics
-//! (`"ga": { "test_paths": 4000 }`). Defaults are the tables' `Default`s, in one place; a
-//! key that no table has is refused wherever it is written (`deny_unknown_fields` on every
-//! table, and no `flatten`, which would silently defeat it).
+//! (`"ga": { "test_paths": 4000 }`). Each table is declared once, with
+//! [`crate::settings_table!`] beside what it configures: every setting's help, default and
+//! range are written there only, and the flags, the TOML, the range check and
+//! docs/settings.md derive from it. A key that no table has is refused wherever it is
+//! written (`deny_unknown_fields` on every table, and no `flatten`, which would silently
+//! defeat it), and so is a value outside its range, in the same words.
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
+use crate::integrators::pg::MAX_SPATIAL_PASSES;
 use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
-use serde::de::{self, Visitor};
+use crate::settings_table::{Interval, Kind, OutOfRange, Setting, Table};
+use clap::builder::ValueParser;
+use clap::ArgMatches;
 use std::path::PathBuf;
 
 /// The settings of every method, one table per concern.
@@ -30,20 +36,26 @@ pub struct Settings {
     pub loaded_mixture: Option<Mixture>,
 }
 
-/// `srt`, the paper's stochastic ray tracing (and the defensive generator of every evolved
-/// mixture).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SrtConfig {
-    /// Absorption (Russian-roulette probability) of the `srt` generator at each vertex; by
-    /// default (unset) with next-event estimation at every vertex none before the fifth
-    /// vertex and 0.1 from it (as `pt`'s roulette), with `nee = end` the paper's 0.5 at
-    /// every vertex (also for `ga-pt`'s GA, whose test paths are end-only).
-    pub srt_absorption: Option<f64>,
-    /// Where the mixture estimators (`srt`, `mixture`, `ga`) do next-event estimation:
-    /// `every` non-delta vertex, with the balance heuristic over each generator's direction
-    /// and light-point techniques, or only at the path's `end` (the paper's, for its Fig. 7).
-    pub nee: Nee,
+crate::settings_table! {
+    /// `srt`, the paper's stochastic ray tracing (and the defensive generator of every
+    /// evolved mixture), table `[srt]`.
+    #[derive(Clone, Debug, PartialEq)]
+    pub struct SrtConfig {
+        table: "srt",
+        heading: "srt (--method srt, and the defensive generator of ga)",
+        settings: {
+            /// Absorption (Russian-roulette probability) of the `srt` generator at each
+            /// vertex. Default: with next-event estimation at every vertex none before the
+            /// fifth vertex and 0.1 from it (as pt's roulette), the paper's 0.5 at every vertex
+            /// with `--nee end` (and for ga-pt's GA, whose test paths are end-only)
+            #[range = ABSORPTION_MIN..=ABSORPTION_MAX]
+            pub srt_absorption: Option<f64> = None,
+            /// Where srt, mixture and ga do next-event estimation: at every non-delta vertex
+            /// (balance heuristic over each generator's direction and light-point
+            /// techniques), or only at the path's end (the paper's, for its Fig. 7).
+            pub nee: Nee = Nee::default(),
+        },
+    }
 }
 
 impl SrtConfig {
@@ -56,53 +68,69 @@ impl SrtConfig {
     }
 }
 
-/// `mixture`: a mixture of path generators from a file.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MixtureConfig {
-    /// The file (TOML or JSON) of `--method mixture`.
-    pub generators: Option<PathBuf>,
+/// `--nee every|end`, its values named as [`Nee`]'s `clap::ValueEnum` names them.
+impl Kind for Nee {
+    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
+        clap::builder::EnumValueParser::<Nee>::new().into()
+    }
+    fn default_text(&self) -> Option<String> {
+        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
+    }
+    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
+        matches
+            .get_one::<Nee>(id)
+            .copied()
+            .expect("a flag given on the command line has its parsed value")
+    }
 }
 
-/// The spatial guide: `pg`'s, and `ga-pt`'s past the vertices its GA steers.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SpatialConfig {
-    /// `ga-pt`: guide the vertices past the GA's with a spatial guide (`guiding::field`), as
-    /// `pg` guides every vertex. On by default: at equal time (reports at e5f1d58, 2 / 8 /
-    /// 30 s) `ga-pt` had 0.32 / 0.27 / 0.27 of `pt`'s relMSE on fig5 with it and 0.33 /
-    /// 0.30 / 0.31 without, fig1 0.48 / 0.43 / 0.40 against 1.00 / 1.01 / 0.99, glossy
-    /// 0.33 / 0.33 / 0.43 against 1.04 / 1.03 / 1.02 and cbox 0.92 / 0.92 / 0.82 against
-    /// 1.01 / 1.01 / 0.99.
-    pub spatial_guide: bool,
-    /// `pg`, and `ga-pt` with `spatial_guide`: passes of path tracing that train the spatial
-    /// guide, pass `i` with `2^i` samples per pixel (they stay in the image). `None`: as
-    /// many as `spatial_time_limit` allows if set, else as many as fit in half the samples
-    /// per pixel.
-    pub spatial_passes: Option<u32>,
-    /// Seconds the spatial guide's training may take (see `spatial_passes`; set by the
-    /// equal-time sweep, not a setting).
-    #[serde(skip)]
-    pub spatial_time_limit: Option<f64>,
+crate::settings_table! {
+    /// `mixture`: a mixture of path generators from a file, table `[mixture]`.
+    #[derive(Clone, Debug, PartialEq)]
+    pub struct MixtureConfig {
+        table: "mixture",
+        heading: "Mixture (--method mixture)",
+        settings: {
+            /// Mixture of path generators for `--method mixture` (TOML or JSON; see
+            /// docs/scenes.md).
+            #[value_name = "FILE"]
+            pub generators: Option<PathBuf> = None,
+        },
+    }
 }
 
-impl Default for SpatialConfig {
-    fn default() -> Self {
-        Self {
-            spatial_guide: true,
-            spatial_passes: None,
-            spatial_time_limit: None,
-        }
+crate::settings_table! {
+    /// The spatial guide: `pg`'s, and `ga-pt`'s past the vertices its GA steers, table
+    /// `[spatial]`.
+    #[derive(Clone, Debug, PartialEq)]
+    pub struct SpatialConfig {
+        table: "spatial",
+        heading: "Spatial guide (--method pg, ga-pt)",
+        settings: {
+            // On by default: at equal time `ga-pt` with it has less error than without on
+            // every tuning scene (reports/README.md).
+            /// ga-pt: guide the vertices the GA does not steer with a spatial guide learned
+            /// from path-traced training passes (see --spatial-passes), as --method pg does
+            /// everywhere (beyond the paper). `false`: path tracing's own sampling there.
+            pub spatial_guide: bool = true,
+            /// pg, and ga-pt with the spatial guide: passes of path tracing that train the
+            /// spatial guide, pass i with 2^i samples per pixel; their samples count in --spp
+            /// and stay in the image. Default: as many as fit in half of --spp.
+            #[range = 1..=i64::from(MAX_SPATIAL_PASSES)]
+            pub spatial_passes: Option<u32> = None,
+        },
+        internal: {
+            /// Seconds the spatial guide's training may take (see `spatial_passes`; set by the
+            /// equal-time sweep, not a setting): unset, as many passes as fit in half the
+            /// samples per pixel.
+            pub spatial_time_limit: Option<f64> = None,
+        },
     }
 }
 
 impl SpatialConfig {
+    /// What the declared ranges do not say: the training's time limit.
     fn validate(&self) -> Result<(), SettingsError> {
-        if let Some(p) = self.spatial_passes.filter(|p| !(1..=12).contains(p)) {
-            return Err(SettingsError::Spatial(format!(
-                "spatial_passes {p} is not in [1, 12]"
-            )));
-        }
         if let Some(t) = self
             .spatial_time_limit
             .filter(|t| !(t.is_finite() && *t >= 0.0))
@@ -126,22 +154,40 @@ pub enum SettingsError {
     NotAssignment(String),
     #[error(transparent)]
     Invalid(#[from] GaConfigError),
-    #[error("srt_absorption {0} is not in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]")]
-    SrtAbsorption(f64),
+    #[error(transparent)]
+    OutOfRange(#[from] OutOfRange),
     #[error("invalid spatial guide setting: {0}")]
     Spatial(String),
 }
 
 /// The tables and their keys, in the order documentation lists them.
-pub fn tables() -> Vec<(&'static str, &'static [&'static str])> {
+pub fn tables() -> Vec<(&'static str, Vec<&'static str>)> {
+    fn table<T: Table>() -> (&'static str, Vec<&'static str>) {
+        (T::NAME, T::keys())
+    }
     vec![
-        ("srt", fields::<SrtConfig>()),
-        ("mixture", fields::<MixtureConfig>()),
-        ("ga", fields::<GaConfig>()),
-        ("plan", fields::<PlanConfig>()),
-        ("gate", fields::<GateConfig>()),
-        ("spatial", fields::<SpatialConfig>()),
+        table::<SrtConfig>(),
+        table::<MixtureConfig>(),
+        table::<GaConfig>(),
+        table::<PlanConfig>(),
+        table::<GateConfig>(),
+        table::<SpatialConfig>(),
     ]
+}
+
+/// Every setting as its table declares it, in the order of the flags (which the help
+/// shows): the mixture's file first, then `srt`'s, the GA's, its plan's, the gate's and the
+/// spatial guide's.
+pub fn declarations() -> Vec<Setting> {
+    [
+        MixtureConfig::settings(),
+        SrtConfig::settings(),
+        GaConfig::settings(),
+        PlanConfig::settings(),
+        GateConfig::settings(),
+        SpatialConfig::settings(),
+    ]
+    .concat()
 }
 
 /// The table holding `key`.
@@ -155,7 +201,7 @@ pub fn table_of(key: &str) -> Option<&'static str> {
 fn known_keys() -> String {
     let keys: Vec<String> = tables()
         .into_iter()
-        .flat_map(|(t, keys)| keys.iter().map(move |k| format!("{t}.{k}")))
+        .flat_map(|(t, keys)| keys.into_iter().map(move |k| format!("{t}.{k}")))
         .collect();
     keys.join(", ")
 }
@@ -168,7 +214,10 @@ impl Settings {
             origin: origin.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        settings.validate()?;
+        settings.validate().map_err(|e| SettingsError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
         Ok(settings)
     }
 
@@ -238,14 +287,32 @@ impl Settings {
 
     /// Every setting within its range.
     pub fn validate(&self) -> Result<(), SettingsError> {
-        if let Some(a) = self.srt.srt_absorption {
-            if !(ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
-                return Err(SettingsError::SrtAbsorption(a));
-            }
-        }
+        self.srt.check()?;
+        self.mixture.check()?;
+        self.ga.check()?;
+        self.plan.check()?;
+        self.gate.check()?;
+        self.spatial.check()?;
         self.ga.validate()?;
-        self.plan.validate()?;
         self.spatial.validate()
+    }
+
+    /// The flags of every setting ([`declarations`]), for a command that renders.
+    pub fn args() -> Vec<clap::Arg> {
+        declarations().iter().flat_map(Setting::args).collect()
+    }
+
+    /// Sets what the flags of [`Self::args`] given on the command line (`matches`) set, in
+    /// the order of the flags, and checks the result: what ties settings together
+    /// (`--elitism` at most `--population`) is checked once all are read.
+    pub fn read_flags(&mut self, matches: &ArgMatches) -> Result<(), SettingsError> {
+        self.mixture.read_flags(matches);
+        self.srt.read_flags(matches);
+        self.ga.read_flags(matches);
+        self.plan.read_flags(matches);
+        self.gate.read_flags(matches);
+        self.spatial.read_flags(matches);
+        self.validate()
     }
 
     /// Each setting's value as TOML would write it, `table.key` → value (unset options
@@ -257,42 +324,13 @@ impl Settings {
         let mut out = Vec::new();
         for (table, keys) in tables() {
             for key in keys {
-                if let Some(v) = all.get(table).and_then(|t| t.get(*key)) {
+                if let Some(v) = all.get(table).and_then(|t| t.get(key)) {
                     out.push((format!("{table}.{key}"), v.to_string()));
                 }
             }
         }
         out
     }
-}
-
-/// The field names a struct deserialises, as serde's derive lists them (skipped fields
-/// left out): the deserialiser below answers nothing but that list.
-fn fields<'de, T: serde::Deserialize<'de>>() -> &'static [&'static str] {
-    struct Fields(std::cell::Cell<&'static [&'static str]>);
-    impl<'de> de::Deserializer<'de> for &Fields {
-        type Error = de::value::Error;
-        fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
-            Err(de::Error::custom("not a struct"))
-        }
-        fn deserialize_struct<V: Visitor<'de>>(
-            self,
-            _name: &'static str,
-            fields: &'static [&'static str],
-            _visitor: V,
-        ) -> Result<V::Value, Self::Error> {
-            self.0.set(fields);
-            Err(de::Error::custom("fields listed"))
-        }
-        serde::forward_to_deserialize_any! {
-            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes
-            byte_buf option unit unit_struct newtype_struct seq tuple tuple_struct map enum
-            identifier ignored_any
-        }
-    }
-    let fields = Fields(std::cell::Cell::new(&[]));
-    let _ = T::deserialize(&fields);
-    fields.0.get()
 }
 
 #[cfg(test)]
@@ -305,7 +343,7 @@ mod tests {
         for (table, keys) in tables() {
             assert!(!keys.is_empty(), "{table} lists no keys");
             for key in keys {
-                if let Some(other) = seen.insert(*key, table) {
+                if let Some(other) = seen.insert(key, table) {
                     panic!("`{key}` is in both [{other}] and [{table}]");
                 }
             }
@@ -366,6 +404,76 @@ mod tests {
                 e.starts_with("file.toml: ") && e.contains("unknown"),
                 "{bad}: {e}"
             );
+        }
+    }
+
+    #[test]
+    fn flags_come_from_the_declarations_and_set_what_they_name() {
+        let command = clap::Command::new("t").args(Settings::args());
+        command.clone().debug_assert();
+        let flags: Vec<_> = command
+            .get_arguments()
+            .filter_map(|a| a.get_long())
+            .collect();
+        for (table, keys) in tables() {
+            for key in keys {
+                assert!(
+                    flags.contains(&key.replace('_', "-").as_str()),
+                    "{table}.{key}"
+                );
+            }
+        }
+        let matches = command
+            .try_get_matches_from([
+                "t",
+                "--population=7",
+                "--ga-grid=8",
+                "--no-gate",
+                "--nee=end",
+                "--generators=a.toml",
+                "--held-out=true",
+                "--footprint=0.5",
+            ])
+            .unwrap();
+        let mut s = Settings::default();
+        s.read_flags(&matches).unwrap();
+        assert_eq!((s.ga.population, s.plan.grid), (7, Some(8)));
+        assert!(!s.gate.gate);
+        assert_eq!(s.srt.nee, Nee::End);
+        assert_eq!(s.mixture.generators, Some(PathBuf::from("a.toml")));
+        assert_eq!((s.ga.held_out, s.plan.footprint), (Some(true), Some(0.5)));
+        let defaults = Settings::default();
+        assert_eq!(
+            (s.ga.generations, s.plan.prune, s.spatial.spatial_passes),
+            (
+                defaults.ga.generations,
+                defaults.plan.prune,
+                defaults.spatial.spatial_passes
+            ),
+            "flags not given leave their settings alone"
+        );
+    }
+
+    #[test]
+    fn a_range_reads_the_same_from_set_and_toml() {
+        for setting in declarations() {
+            let Some(range) = setting.range else { continue };
+            let value = if range.hi.is_finite() {
+                range.hi + 1.0
+            } else {
+                range.lo - 1.0
+            };
+            let want = format!("{} {value} is not in {range}", setting.key);
+            let set = Settings::default()
+                .set(setting.key, &value.to_string())
+                .unwrap_err()
+                .to_string();
+            let toml = format!("[{}]\n{} = {value}\n", setting.table, setting.key);
+            let file = Settings::from_toml(&toml, "f.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(set.ends_with(&want), "{set}");
+            assert_eq!(file, format!("f.toml: {want}"));
         }
     }
 }

@@ -539,3 +539,62 @@ fn settings_documentation_is_generated_from_the_code() {
         &["--config", file.to_str().unwrap()],
     );
 }
+
+/// Every setting's range is the one its table declares, and it is enforced the same way,
+/// in the same words, through its flag, `--set` and a `--config` file: a value just outside
+/// it is refused by all three with `KEY VALUE is not in RANGE`, and nothing is written.
+#[test]
+fn a_declared_range_is_enforced_by_flag_set_and_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.exr");
+    let config = dir.path().join("settings.toml");
+    let mut ranged = 0;
+    for setting in genpath::integrators::settings::declarations() {
+        let Some(range) = setting.range else {
+            continue;
+        };
+        ranged += 1;
+        // Just above the top where there is one, else just below the bottom.
+        let value = match (range.hi.is_finite(), range.hi_open) {
+            (true, true) => range.hi,
+            (true, false) => range.hi + 1.0,
+            (false, true) => f64::INFINITY,
+            (false, false) => range.lo - 1.0,
+        };
+        assert!(
+            !range.contains(value),
+            "{}: {value} in {range}",
+            setting.key
+        );
+        let message = format!("{} {value} is not in {range}", setting.key);
+        let flag = format!("--{}={value}", setting.key.replace('_', "-"));
+        let set = format!("{}={value}", setting.key);
+        std::fs::write(
+            &config,
+            format!("[{}]\n{} = {value}\n", setting.table, setting.key),
+        )
+        .unwrap();
+        let config = config.to_str().unwrap();
+        for extra in [
+            &[flag.as_str()][..],
+            &["--set", set.as_str()],
+            &["--config", config],
+        ] {
+            assert_fails(&fig5(), extra, &out, &[message.as_str()]);
+        }
+    }
+    assert!(ranged >= 20, "only {ranged} settings declare a range");
+    // Inside the range, the same three ways are accepted: the top of `--population`'s.
+    let population = genpath::integrators::settings::declarations()
+        .into_iter()
+        .find(|s| s.key == "population")
+        .and_then(|s| s.range)
+        .unwrap();
+    let top = population.hi.to_string();
+    let mut settings = genpath::integrators::Settings::default();
+    settings.set("population", &top).unwrap();
+    assert_eq!(settings.ga.population as f64, population.hi);
+    let toml = format!("[ga]\npopulation = {top}\n");
+    let read = genpath::integrators::Settings::from_toml(&toml, "t").unwrap();
+    assert_eq!(read.ga.population as f64, population.hi);
+}

@@ -5,79 +5,80 @@
 use super::super::GaConfigError;
 use super::PlanFor;
 
-/// Where the genetic algorithm runs and how its results spread over the image.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct PlanConfig {
-    /// Distance between grid GA pixels, in pixels, along both axes. `None`: 32 for `ga`, 64
-    /// for `ga-pt` ([`Self::grid`]).
-    #[serde(rename = "ga_grid")]
-    pub grid: Option<u32>,
-    /// Extra GA pixels at high baseline variance, as a fraction of the grid pixels.
-    #[serde(rename = "ga_extra")]
-    pub extra: f64,
-    /// `srt` samples per pixel of the baseline pass.
-    pub baseline_spp: u32,
-    /// `ga` keeps the baseline's samples in the image where its GA pixels' test paths show
-    /// `srt`'s variance at most this many times the evolved mixtures' (median over the GA
-    /// pixels; [`super::Plan::settle_baseline`]): 0 never keeps them, `inf` always.
-    pub baseline_keep_ratio: f64,
-    /// GA pixels whose mixtures each pixel combines (and whose best individuals start a
-    /// warm-started GA pixel's population). `None`: 2 for `ga`, 4 for `ga-pt`. The union of
-    /// `k` mixtures costs `ga` every component's densities on every path it samples, while
-    /// `ga-pt` blends only the guides' first steps: at 2 s, six seeds, `ga --no-gate` with 2
-    /// has 0.87 (fig5), 0.83 (fig1), 0.92 (glossy), 0.83 (cbox) × its relMSE with 4, and
-    /// `ga-pt` with 2 has 1.11, 1.10, 1.22 × its relMSE with 4 (fig5, fig1, glossy; see
-    /// docs/methods.md).
-    #[serde(rename = "ga_neighbours")]
-    pub neighbours: Option<usize>,
-    /// Leave out what the scene does not need: cells whose baseline relative variance is
-    /// below `prune_variance` get no GA pixel, and evolved generators get only the steps the
-    /// test paths need (`TestPaths::steps_needed`; for `ga-pt` also at most `guide_steps`,
-    /// pruning or not), and `ga`'s evolved mixtures only the components that pay for their
-    /// densities (`pixel::COMPONENT_TOLERANCE`).
-    pub prune: bool,
-    pub prune_variance: f64,
-    /// Evolve half the GA pixels first, then the others from their evolved neighbours' best
-    /// individuals, with half the generations (beyond the paper).
-    pub warm_start: bool,
-    /// Wall-clock seconds the plan (baseline included) may take: past them, GA pixels not
-    /// yet evolved are left out (to `pt` with the gate in a plan for the mixture, to their
-    /// neighbours' mixtures otherwise). The GA then runs in chunks and the plan depends on
-    /// timing, not only on the seed. `None`: no limit.
-    #[serde(rename = "ga_time_limit")]
-    pub time_limit: Option<f64>,
-    /// `ga-pt`: vertices the guide steers, i.e. the directional steps the GA evolves (at
-    /// most what the test paths need). Path tracing's next-event estimation already finds
-    /// the light from the vertices after the first, and one step leaves the GA a search
-    /// space it explores in its generations: on fig5 at 64 spp, relMSE 0.391 / 0.376 /
-    /// 0.384 (seeds 7 / 11 / 13) against 0.433 / 0.362 / 0.795 (the pilot closed) with
-    /// every step the test paths need.
-    pub guide_steps: usize,
-    /// A GA pixel's test paths start in the square of `footprint × ga_grid` pixels centred
-    /// on it (at least the pixel itself): the pixels its mixture renders with its
-    /// neighbours', rather than that pixel alone (beyond the paper). 0: the pixel (the
-    /// paper's). `None`: 1 for `ga`, 0 for `ga-pt` (whose guides the footprint let through
-    /// the pilot on glossy, to 1.26 × `pg`'s error at 2 s against 1.15 × without; see
-    /// docs/methods.md).
-    pub footprint: Option<f64>,
-}
-
-impl Default for PlanConfig {
-    fn default() -> Self {
-        Self {
-            grid: None,
-            extra: 0.25,
-            baseline_spp: 4,
-            baseline_keep_ratio: super::BASELINE_KEEP_RATIO,
-            neighbours: None,
-            prune: true,
-            prune_variance: 0.5,
-            warm_start: true,
-            time_limit: None,
-            guide_steps: 1,
-            footprint: None,
-        }
+crate::settings_table! {
+    /// Where the genetic algorithm runs and how its results spread over the image, table
+    /// `[plan]`.
+    #[derive(Clone, Debug, PartialEq)]
+    pub struct PlanConfig {
+        table: "plan",
+        heading: "GA plan (--method ga, ga-pt)",
+        settings: {
+            /// Distance between GA pixels on the grid, in pixels. Default: 32 for ga, 64 for
+            /// ga-pt
+            #[key = "ga_grid"]
+            #[value_name = "PIXELS"]
+            #[range = 1..=i64::from(crate::scene::MAX_IMAGE_SIDE)]
+            pub grid: Option<u32> = None,
+            /// Extra GA pixels where the baseline variance is high, as a fraction of the
+            /// grid's.
+            #[key = "ga_extra"]
+            #[range = 0.0..=16.0]
+            pub extra: f64 = 0.25,
+            /// srt samples per pixel of the baseline pass that places the extra GA pixels.
+            #[range = 1..=65_536]
+            pub baseline_spp: u32 = 4,
+            /// ga: the image keeps the baseline's samples (they count among --spp, which must
+            /// hold them) where the GA pixels' test paths show srt's variance at most this
+            /// many times the evolved mixtures' (median); 0: never, inf: always.
+            #[range = 0.0..=f64::INFINITY]
+            pub baseline_keep_ratio: f64 = super::BASELINE_KEEP_RATIO,
+            // The union of `k` mixtures costs `ga` every component's densities on every path
+            // it samples, while `ga-pt` blends only the guides' first steps; hence the
+            // defaults (measured in docs/methods.md and reports/README.md).
+            /// Nearest GA pixels whose mixtures each pixel combines (and whose best
+            /// individuals start a warm-started GA pixel's population). Default: 2 for ga, 4
+            /// for ga-pt
+            #[key = "ga_neighbours"]
+            #[value_name = "K"]
+            #[range = 1..=64]
+            pub neighbours: Option<usize> = None,
+            /// Grid cells whose pooled baseline relative variance (of one srt sample,
+            /// Var/(mean² + 0.01)) is below this get no GA pixel.
+            #[range = 0.0..]
+            pub prune_variance: f64 = 0.5,
+            /// Leave out of the GA the grid cells of low baseline variance and the generator
+            /// steps past the depth the test paths need, and out of `ga`'s evolved mixtures
+            /// the components that lower the variance on the test paths by less than their
+            /// densities cost; `false` runs it everywhere with every step and component
+            /// (ga-pt: still at most --guide-steps).
+            #[negation = "no_prune"]
+            pub prune: bool = true,
+            /// Evolve half the GA pixels (a checkerboard of grid cells) first and the others
+            /// from their evolved neighbours' best individuals, with half the generations.
+            pub warm_start: bool = true,
+            /// Seconds the GA plan may take (baseline included); GA pixels not evolved by
+            /// then are left out. The plan then depends on timing, not only on the seed.
+            #[key = "ga_time_limit"]
+            #[value_name = "SECONDS"]
+            #[range = 0.0..]
+            pub time_limit: Option<f64> = None,
+            // One step leaves the GA a search space it explores in its generations, and path
+            // tracing's next-event estimation already finds the light from the vertices
+            // after the first (measured in reports/README.md).
+            /// ga-pt: vertices the evolved guide steers (the GA evolves that many directional
+            /// steps, at most as many as the test paths need); path tracing's own sampling
+            /// beyond.
+            #[range = 1..=64]
+            pub guide_steps: usize = 1,
+            // ga-pt's default is 0: the footprint let its guides through the pilot where they
+            // lose (docs/methods.md).
+            /// A GA pixel's test paths start in the square of this many grid spacings
+            /// (--ga-grid) centred on it: the pixels its mixture renders, not that pixel alone
+            /// (0: the pixel, the paper's). Default: 1 for ga, 0 for ga-pt
+            #[value_name = "GRID_SPACINGS"]
+            #[range = 0.0..=16.0]
+            pub footprint: Option<f64> = None,
+        },
     }
 }
 
@@ -113,54 +114,8 @@ impl PlanConfig {
         })
     }
 
+    /// Every setting within its declared range.
     pub fn validate(&self) -> Result<(), GaConfigError> {
-        let fail = |m: String| Err(GaConfigError(m));
-        if self.grid == Some(0) {
-            return fail("the GA grid spacing must be at least 1 pixel".into());
-        }
-        if !(self.extra.is_finite() && (0.0..=16.0).contains(&self.extra)) {
-            return fail(format!("extra GA pixels {} is not in [0, 16]", self.extra));
-        }
-        if self.baseline_spp == 0 {
-            return fail("the baseline needs at least 1 sample per pixel".into());
-        }
-        if self.baseline_keep_ratio.is_nan() || self.baseline_keep_ratio < 0.0 {
-            return fail(format!(
-                "baseline keep ratio {} must be ≥ 0 (inf: always keep)",
-                self.baseline_keep_ratio
-            ));
-        }
-        if !(self.prune_variance.is_finite() && self.prune_variance >= 0.0) {
-            return fail(format!(
-                "prune variance {} must be finite and ≥ 0",
-                self.prune_variance
-            ));
-        }
-        // A time limit must be a finite, non-negative number of seconds.
-        let bad_seconds = |limit: Option<f64>| limit.is_some_and(|t| !(t.is_finite() && t >= 0.0));
-        if bad_seconds(self.time_limit) {
-            return fail(format!(
-                "GA time limit {:?} must be finite and ≥ 0 seconds",
-                self.time_limit
-            ));
-        }
-        if let Some(f) = self
-            .footprint
-            .filter(|f| !(f.is_finite() && (0.0..=16.0).contains(f)))
-        {
-            return fail(format!(
-                "test-path footprint {f} is not in [0, 16] grid spacings"
-            ));
-        }
-        if !(1..=64).contains(&self.guide_steps) {
-            return fail(format!(
-                "guide steps {} is not in [1, 64]",
-                self.guide_steps
-            ));
-        }
-        if let Some(k) = self.neighbours.filter(|k| !(1..=64).contains(k)) {
-            return fail(format!("GA neighbours per pixel {k} is not in [1, 64]"));
-        }
-        Ok(())
+        crate::settings_table::Table::check(self).map_err(|e| GaConfigError(e.to_string()))
     }
 }

@@ -18,19 +18,19 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// The gate's settings, table `[gate]`.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct GateConfig {
-    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
-    /// the GA when a pilot predicts no gain anywhere (see the module documentation of
-    /// `genetic::plan`).
-    pub gate: bool,
-}
-
-impl Default for GateConfig {
-    fn default() -> Self {
-        Self { gate: true }
+crate::settings_table! {
+    /// The gate's settings, table `[gate]`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct GateConfig {
+        table: "gate",
+        heading: "Gate (--method ga, ga-pt)",
+        settings: {
+            /// A pilot of the GA predicts whether it pays, and each pixel renders with its
+            /// evolved mixture only where it is predicted to beat pt (see docs/methods.md, "the
+            /// gate"); `false` is the paper's method everywhere.
+            #[negation = "no_gate"]
+            pub gate: bool = true,
+        },
     }
 }
 
