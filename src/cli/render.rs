@@ -81,10 +81,10 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
     let mut config = args.method.settings(matches)?;
     let session = Session::open(&args.scene)?;
     let spp = args.spp.or(session.scene.render.spp).unwrap_or(64);
-    let settings = RenderSettings {
-        shard: args.shard.shard(spp, "--spp")?,
-        ..session.settings(&args.scene, method, spp)
-    };
+    // The render's one `RenderSettings`: its shard now, its control once the continuation
+    // (which the settings identify) is known.
+    let mut settings = session.settings(&args.scene, method, spp);
+    settings.shard = args.shard.shard(spp, "--spp")?;
     load_mixture(&mut config, &session.scene, settings.max_bounces)?;
     let plain = settings.clone();
     let identity = || session.identity("render", &args.scene, &plain, vec![plain.seed], &config);
@@ -108,14 +108,10 @@ pub fn run_render(args: RenderArgs, matches: &ArgMatches) -> Result<()> {
         file,
         identity,
     )?;
-    let control = Control {
+    settings.control = Control {
         stop: continuation.stop.clone(),
         resume: continuation.resumed(0),
         checkpoint: continuation.checkpoint(&session, |sums| vec![sums.clone()]),
-    };
-    let settings = RenderSettings {
-        control,
-        ..settings
     };
     let view = SceneView::new(&session.scene, session.accel.as_ref());
     let learned = saved.as_mut().and_then(|s| s.learned.pop());

@@ -17,13 +17,15 @@ use std::time::Instant;
 /// Side of the square tiles the image is split into for parallel rendering.
 pub const TILE: u32 = 16;
 
-/// One run of the loop: `spp` samples of each pixel (sample indices `0..spp`, of which it
-/// takes `shard`'s), drawn from the random streams of `seed`, after the samples a method
-/// took while preparing.
+/// One run of the loop: `run_spp` samples of each pixel (sample indices `0..run_spp`, of
+/// which it takes `shard`'s), drawn from the random streams of `seed`, after the samples a
+/// method took while preparing.
 #[derive(Clone, Debug)]
 pub struct Pass {
-    /// Samples per pixel of the run, before sharding.
-    pub spp: u32,
+    /// Samples per pixel of this run, before sharding: a render's samples after those its
+    /// method took while preparing, or one training pass's (never the render's total,
+    /// `RenderSettings::spp`).
+    pub run_spp: u32,
     pub seed: u64,
     pub shard: Shard,
     pub control: Control,
@@ -93,7 +95,7 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     tiles
 }
 
-/// Renders `pass.spp` samples of every pixel of the scene's camera with the estimators that
+/// Renders `pass.run_spp` samples of every pixel of the scene's camera with the estimators that
 /// `estimator` makes (one per tile), added to the samples a method took while preparing
 /// (`taken`) and to those of `pass.control`'s resumed render, until `pass.control`'s stop is
 /// requested.
@@ -144,7 +146,7 @@ pub fn render<E: PixelEstimator>(
     } else {
         results
             .last()
-            .map_or_else(|| pass.shard.samples_of(pass.spp), |result| result.spp)
+            .map_or_else(|| pass.shard.samples_of(pass.run_spp), |result| result.spp)
     };
     develop(sums, (width, height), spp, rays, (start, interrupted))
 }
@@ -206,7 +208,7 @@ fn render_splatting<E: PixelEstimator>(
     let taken_spp = taken.map_or(0, |t| t.spp);
     let mut sums = starting_sums(pass, taken, pixels);
     let mut splat_layer = (sums.splats.take()).unwrap_or_else(|| SplatLayer::zero(pixels));
-    let passes = pass.shard.samples_of(pass.spp);
+    let passes = pass.shard.samples_of(pass.run_spp);
     let done = sums.fewest().saturating_sub(taken_spp).min(passes);
     let bar = progress_bar(u64::from(passes - done), "render", pass.progress);
     let mut rays = RayCounts::default();
@@ -274,7 +276,7 @@ fn snapshot(checkpoint: &super::Checkpoint, live: &Mutex<(LayerSums, Instant)>, 
     }
 }
 
-/// Renders `pass.spp` samples of each pixel of `tile` with `estimator` (those of them
+/// Renders `pass.run_spp` samples of each pixel of `tile` with `estimator` (those of them
 /// that are `pass.shard`'s), started at each pixel in turn, onto the sums in `taken`
 /// (none: from zero). Sample `s` of pixel `p` draws from the stream `(pass.seed, p, s)`,
 /// its camera ray first, in increasing `s`. A resumed render (`pass.control.resume`)
@@ -334,7 +336,7 @@ fn tile_samples<E: PixelEstimator>(
             estimator.start(x, y);
             let (mut count, mut sum, mut sum_sq) = from(index);
             let cost_before = rays.cost();
-            let samples = pass.shard.samples(pass.spp).skip(count as usize);
+            let samples = pass.shard.samples(pass.run_spp).skip(count as usize);
             for s in samples.take(take) {
                 if stoppable && stop.requested().is_some() {
                     break;
@@ -356,7 +358,7 @@ fn tile_samples<E: PixelEstimator>(
     }
     TileResult {
         sums,
-        spp: taken_spp + pass.shard.samples_of(pass.spp),
+        spp: taken_spp + pass.shard.samples_of(pass.run_spp),
         rays,
         splats,
     }

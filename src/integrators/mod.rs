@@ -188,10 +188,10 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The film's run of `spp` samples per pixel with these settings.
-    pub fn pass(&self, spp: u32) -> Pass {
+    /// The film's run of `run_spp` samples per pixel with these settings.
+    pub fn pass(&self, run_spp: u32) -> Pass {
         Pass {
-            spp,
+            run_spp,
             seed: self.seed,
             shard: self.shard,
             control: self.control.clone(),

@@ -407,7 +407,7 @@ impl TrainingSchedule {
 /// on a signal) ends it and the training, which the learning then discards.
 fn training_pass(settings: &RenderSettings, pass: u32) -> Pass {
     Pass {
-        spp: 1 << pass,
+        run_spp: 1 << pass,
         seed: derive_seed(settings.seed, Stream::Spatial.tag() ^ u64::from(pass)),
         shard: settings.shard,
         control: Control {
@@ -488,7 +488,7 @@ pub fn train_spatial(
             training.plan_guides = PlanGuides::OutsideControl;
         }
         let pass_settings = training_pass(settings, pass);
-        bar.set_length(u64::from(training.samples.spp + pass_settings.spp));
+        bar.set_length(u64::from(training.samples.spp + pass_settings.run_spp));
         // The pass records its first `recorded` samples per pixel: records take memory.
         let recorded =
             (MAX_PASS_RECORDS / (RECORDS_PER_SAMPLE * pixels)).clamp(1, 1 << pass) as u32;
@@ -523,7 +523,7 @@ pub fn train_spatial(
             &mut records,
             training,
             arms.as_deref_mut(),
-            pass_settings.spp,
+            pass_settings.run_spp,
         );
         if let Some(arms) = arms {
             let outcome;
@@ -535,7 +535,7 @@ pub fn train_spatial(
             };
             at.guides_trial = Some(outcome);
         }
-        training.samples.spp += pass_settings.spp;
+        training.samples.spp += pass_settings.run_spp;
         at.recorded_in_all += records.len();
         training.guide = Arc::new(records.field());
         bar.set_position(u64::from(training.samples.spp));
