@@ -20,6 +20,8 @@ pub mod pg;
 pub mod pt;
 pub mod settings;
 #[cfg(feature = "testing")]
+pub mod test_constant;
+#[cfg(feature = "testing")]
 pub mod test_method;
 #[cfg(feature = "testing")]
 pub mod test_splat;
@@ -86,6 +88,11 @@ methods! {
     /// to right; shows that the film takes splats.
     #[cfg(feature = "testing")]
     SplatMirror => test_splat::METHOD,
+    /// Test-only (feature `testing`): path tracing that learns one number per pixel and
+    /// traces each sample's path with a probability that grows with it; shows that a method
+    /// that learns is one file and one line.
+    #[cfg(feature = "testing")]
+    PixelConstant => test_constant::METHOD,
 }
 
 /// What a method is, as every command sees it: how it is prepared and what it learns. Each

@@ -13,6 +13,8 @@ mod bad_input;
 mod commands;
 mod learning;
 mod methods;
+#[cfg(feature = "testing")]
+mod pixel_constant;
 mod plan;
 mod resume;
 mod shards;
