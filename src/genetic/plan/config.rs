@@ -1,9 +1,25 @@
 //! The plan's settings ([`PlanConfig`]): where the GA runs, how its results spread over the
-//! image, and its time limit (the gate's settings are [`super::gate::GateConfig`], the
+//! image, and its time limit (the gate's settings are [`GateConfig`], the
 //! spatial guide's `integrators::settings::SpatialConfig`).
 
 use super::super::GaConfigError;
-use super::PlanFor;
+use super::types::PlanFor;
+
+/// The gate's settings, table `[gate]`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GateConfig {
+    /// Render with `pt` wherever the evolved estimator is predicted to lose to it, and skip
+    /// the GA when a pilot predicts no gain anywhere (see the module documentation of
+    /// `genetic::plan`).
+    pub gate: bool,
+}
+
+impl Default for GateConfig {
+    fn default() -> Self {
+        Self { gate: true }
+    }
+}
 
 /// Where the genetic algorithm runs and how its results spread over the image.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
