@@ -9,6 +9,7 @@ pub mod merge;
 pub mod reference;
 pub mod render;
 pub mod resume;
+pub mod saved_plan;
 pub mod session;
 pub mod settings;
 pub mod sweep;

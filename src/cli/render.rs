@@ -2,8 +2,8 @@
 
 use super::args::{load_mixture, MethodArgs, SceneArgs, ShardArgs};
 use super::check_output;
-use super::learn::{read_plan, SavedPlan};
 use super::resume::Continuation;
+use super::saved_plan::{read_plan, SavedPlan};
 use super::session::{rays_json, shard_path, write_stats, Session};
 use anyhow::{anyhow, bail, Result};
 use clap::{ArgMatches, Args};

@@ -5,11 +5,11 @@
 //! uninterrupted render makes (docs/shards.md).
 
 use super::args::ShardArgs;
-use super::session::Session;
+use super::session::{header, Session};
 use anyhow::{bail, Context, Result};
 use genpath::film::{Checkpoint, LayerSums, Shard, Stop};
 use genpath::integrators::Method;
-use genpath::shard::{Header, Identity, Part};
+use genpath::shard::{Identity, Part};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicUsize;
 use std::sync::Arc;
@@ -267,16 +267,4 @@ fn read_resume(
         );
     }
     Ok(layers)
-}
-
-/// The header of the shard file that `session`'s render with `identity` writes.
-pub fn header(session: &Session, identity: Identity, (shard, part): (Shard, Part)) -> Header {
-    Header {
-        splats: false,
-        shard,
-        identity,
-        scene_path: session.scene.path.clone(),
-        command_line: std::env::args().collect(),
-        part,
-    }
 }

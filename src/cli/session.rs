@@ -7,6 +7,7 @@ use genpath::film::Shard;
 use genpath::integrators::{Method, RenderSettings, Settings};
 use genpath::path::RayCounts;
 use genpath::scene::Scene;
+use genpath::shard::{Header, Identity, Part};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -122,9 +123,21 @@ impl Session {
         shard: (Shard, genpath::shard::Part),
         layers: &[genpath::shard::LayerSums],
     ) -> Result<()> {
-        let header = super::resume::header(self, identity, shard);
+        let header = header(self, identity, shard);
         genpath::shard::file::write(path, &header, layers)?;
         Ok(())
+    }
+}
+
+/// The header of the shard file that `session`'s render with `identity` writes.
+pub fn header(session: &Session, identity: Identity, (shard, part): (Shard, Part)) -> Header {
+    Header {
+        splats: false,
+        shard,
+        identity,
+        scene_path: session.scene.path.clone(),
+        command_line: std::env::args().collect(),
+        part,
     }
 }
 

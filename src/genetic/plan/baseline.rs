@@ -5,8 +5,8 @@
 
 use super::super::luminance;
 use super::config::PlanConfig;
-use super::pixel::PixelContext;
-use super::PlanStats;
+use super::context::PixelContext;
+use super::types::{Origin, PlanStats};
 use crate::film::pixel_sample;
 use crate::film::PixelSums;
 use crate::path::mixture::{Mixture, MixtureScratch};
@@ -14,15 +14,6 @@ use crate::path::{mixture_sample, RayCounts, SceneView};
 use crate::sampling::{derived_seed, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
-
-/// Why a GA pixel was chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Origin {
-    Grid,
-    /// High baseline variance.
-    Extra,
-}
 
 /// Per-pixel baseline estimate.
 #[derive(Clone, Copy, Default)]

@@ -1,9 +1,25 @@
 //! The plan's settings ([`PlanConfig`]): where the GA runs, how its results spread over the
-//! image, and its time limit (the gate's settings are [`super::gate::GateConfig`], the
+//! image, and its time limit (the gate's settings are [`GateConfig`], the
 //! spatial guide's `integrators::settings::SpatialConfig`).
 
 use super::super::GaConfigError;
-use super::PlanFor;
+use super::types::PlanFor;
+
+crate::settings_table! {
+    /// The gate's settings, table `[gate]`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct GateConfig {
+        table: "gate",
+        heading: "Gate (--method ga, ga-pt)",
+        settings: {
+            /// A pilot of the GA predicts whether it pays, and each pixel renders with its
+            /// evolved mixture only where it is predicted to beat pt (see docs/methods.md, "the
+            /// gate"); `false` is the paper's method everywhere.
+            #[negation = "no_gate"]
+            pub gate: bool = true,
+        },
+    }
+}
 
 crate::settings_table! {
     /// Where the genetic algorithm runs and how its results spread over the image, table

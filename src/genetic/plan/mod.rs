@@ -1,4 +1,4 @@
-//! The pixel plan of `--method ga` (design §7): which pixels run the genetic algorithm, and
+//! The pixel plan of `--method ga`: which pixels run the genetic algorithm, and
 //! which mixture every pixel renders with.
 //!
 //! 1. **Grid.** One ray through each pixel's centre tells whether it sees a scattering
@@ -24,7 +24,8 @@
 //!    (for a guide, each pilot pixel: see below) measures it: `GATE_SAMPLES` samples of
 //!    `pt` and of the evolved estimator (the mixture for `ga`, the guided path tracer for
 //!    `ga-pt`), and the predicted gain `Var_pt · cost_pt / (Var · cost)` with costs counted
-//!    in rays and densities ([`RayCounts::cost`]), so that the plan stays deterministic.
+//!    in rays and densities ([`RayCounts::cost`](crate::path::RayCounts::cost)), so that
+//!    the plan stays deterministic.
 //!    Pixels whose nearest GA pixels mostly predict a loss render with `pt`. The GA runs
 //!    first at `PILOT_PIXELS` grid pixels spread over the image, for `1 / PILOT_SHARE` of
 //!    the generations, before the baseline; unless at least half of them predict a gain,
@@ -51,179 +52,32 @@
 //! the mixtures and choices do not depend on the samples they are used with.
 
 mod baseline;
+mod build;
 mod config;
+mod context;
 mod gate;
 mod interpolation;
+mod pilot;
 mod pixel;
 pub mod report;
 mod stages;
+mod types;
 mod waves;
 
-pub use baseline::Origin;
-pub use config::PlanConfig;
-pub use gate::{
-    gate_margins, GateConfig, Moments, Trial, COST_SAMPLES, GATE_SAMPLES, PILOT_PIXELS, PILOT_SHARE,
-};
-pub use pixel::{GaPixel, COMPONENT_TOLERANCE, CONVEX_STEPS, PRUNE_SHARE};
+pub use build::PlanInputs;
+pub use config::{GateConfig, PlanConfig};
+pub use gate::{COST_SAMPLES, GATE_SAMPLES};
+pub use pilot::{PILOT_PIXELS, PILOT_SHARE};
+pub use pixel::{COMPONENT_TOLERANCE, CONVEX_STEPS, PRUNE_SHARE};
 pub use stages::{LearnStore, PlanError, WaveEntry};
+pub use types::{gate_margins, GaPixel, Moments, Origin, PlanFor, PlanStats, Trial};
 
 use super::nearest::PointGrid;
-use super::{GaConfig, GaConfigError};
 use crate::film::PixelSums;
-use crate::path::generator::{Nee, SrtAbsorption};
 use crate::path::mixture::Mixture;
-use crate::path::{mixture_file, RayCounts, SceneView};
 use crate::scene::SceneAnalysis;
-use baseline::scattering_cells;
-use gate::{pilot_gain, pilot_pays, pilot_pixels, scout_pilot};
-use pixel::{Evolved, PixelContext};
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
-use waves::Waves;
-
-/// The estimator a plan is built for, which its GA pixels evolve and its gate compares with
-/// `pt`: the plan's mixtures are either what the pixels sample from, or what guides their path
-/// tracer. (`PlanInputs { plan_for: PlanFor::Guide, … }` reads "a plan for a guide".)
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PlanFor {
-    /// `ga`: the mixture estimator (eq. 8).
-    Mixture,
-    /// `ga-pt`: path tracing guided by the mixture.
-    Guide,
-}
-
-impl PlanFor {
-    /// The estimator of the GA's test paths, fitness and mixtures for the estimators' `nee`:
-    /// a guide's GA keeps the end-only one, with which `ga-pt` was tuned (the guided path
-    /// tracer does its own next-event estimation).
-    pub fn test_path_nee(self, nee: Nee) -> Nee {
-        match self {
-            PlanFor::Mixture => nee,
-            PlanFor::Guide => Nee::End,
-        }
-    }
-}
-
-/// What a plan is built from: the settings of the GA, of the plan and of the gate, the
-/// estimator it is for, and what the scene's paths are.
-#[derive(Clone, Copy, Debug)]
-pub struct PlanInputs<'a> {
-    pub ga: &'a GaConfig,
-    pub plan: &'a PlanConfig,
-    pub gate: GateConfig,
-    pub plan_for: PlanFor,
-    pub max_bounces: u32,
-    /// Absorption of the defensive `srt` generator.
-    pub srt_absorption: SrtAbsorption,
-    /// The estimator a mixture plan's test paths, fitness and mixtures are those of (a
-    /// guide's GA keeps the end-only one).
-    pub nee: Nee,
-    /// A spatial guide takes over where the plan's guides do not (`ga-pt` with
-    /// `spatial_guide`), so a failed pilot leaves every pixel to it.
-    pub spatial_guide: bool,
-    /// Where the GA pixels' waves are kept between processes (`genpath learn`), if they
-    /// are ([`stages`]).
-    pub store: Option<&'a dyn LearnStore>,
-}
-
-impl<'a> PlanInputs<'a> {
-    /// A plan for `plan_for` with `ga` and `plan`, and the defaults of the other settings:
-    /// the gate on, the default `srt` absorption, and for a guide the spatial guide.
-    pub fn new(
-        ga: &'a GaConfig,
-        plan: &'a PlanConfig,
-        plan_for: PlanFor,
-        max_bounces: u32,
-    ) -> Self {
-        Self {
-            ga,
-            plan,
-            gate: GateConfig::default(),
-            plan_for,
-            max_bounces,
-            srt_absorption: plan_for
-                .test_path_nee(Nee::default())
-                .default_srt_absorption(),
-            nee: Nee::default(),
-            spatial_guide: plan_for == PlanFor::Guide,
-            store: None,
-        }
-    }
-}
-
-/// Per-phase totals of a plan.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-pub struct PlanStats {
-    /// Wall-clock seconds of the grid rays and the baseline pass (none where the gate's
-    /// pilot closes the GA), and of the GA phase (test paths included).
-    pub baseline_seconds: f64,
-    pub ga_seconds: f64,
-    /// Summed over GA pixels (CPU seconds): tracing test paths, and evolving.
-    pub test_path_cpu_seconds: f64,
-    pub evolve_cpu_seconds: f64,
-    /// Pixels whose centre ray sees no scattering surface (background or emitters only).
-    pub skipped_pixels: usize,
-    /// Grid cells without a scattering pixel, hence without a GA pixel.
-    pub empty_cells: usize,
-    /// Grid cells left without a GA pixel because their baseline variance is low (pruning;
-    /// 0 where the pilot closed the GA and no baseline ran).
-    pub low_variance_cells: usize,
-    /// Grid pixels not evolved because fewer than half the pilot pixels predicted a gain
-    /// over `pt` (gate).
-    pub gated_pixels: usize,
-    /// The geometric mean of the scouted pilot pixels' predicted gains over `pt` (0 without
-    /// a pilot).
-    #[serde(default)]
-    pub pilot_gain: f64,
-    /// GA pixels whose evolved estimator is predicted to lose to `pt` (or that kept `srt`).
-    pub pt_pixels: usize,
-    /// GA pixels not evolved because the plan reached `PlanConfig::time_limit`.
-    pub time_limited_pixels: usize,
-    /// Whether the baseline ran: not where the gate's pilot closed the GA.
-    pub baseline_ran: bool,
-    /// Samples per pixel of the baseline that the image keeps ([`Plan::settle_baseline`]).
-    pub baseline_kept_spp: u32,
-    /// Pooled baseline relative variance (one srt sample, `Var/(mean² + 0.01)` over the
-    /// cell's samples) of the cells with a scattering pixel: smallest, median, largest.
-    pub cell_variance: [f64; 3],
-    pub individual_evaluations: u64,
-    pub generator_evaluations: u64,
-    pub rays: RayCounts,
-}
-
-impl PlanStats {
-    /// Adds the GA pixels' work to the totals, that of the pilot's `scouted` runs (which the
-    /// pixels that went on replaced) included, and counts the pixels that prefer `pt` with
-    /// the gate; returns the pixels.
-    fn count_pixels(
-        &mut self,
-        scouted: &[Evolved],
-        results: Vec<Evolved>,
-        gate: bool,
-        plan_for: PlanFor,
-    ) -> Vec<GaPixel> {
-        for (p, counts) in scouted
-            .iter()
-            .map(|(p, c)| (p, *c))
-            .chain(results.iter().map(|(p, c)| (p, *c)))
-        {
-            self.rays.add(counts);
-            self.test_path_cpu_seconds += p.test_path_seconds;
-            self.evolve_cpu_seconds += p.ga_seconds;
-            self.individual_evaluations += p.individual_evaluations;
-            self.generator_evaluations += p.generator_evaluations;
-        }
-        let mut pixels = Vec::with_capacity(results.len());
-        for (p, _) in results {
-            if gate && p.prefers_pt(plan_for) {
-                self.pt_pixels += 1;
-            }
-            pixels.push(p);
-        }
-        pixels
-    }
-}
+use std::time::Duration;
 
 /// The default of `PlanConfig::baseline_keep_ratio`. Averaged with equal weights, `b`
 /// samples of variance `r σ²` beside `n` of variance `σ²` lower the variance of the mean
@@ -269,106 +123,6 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Picks the GA pixels (the grid's, then, after the baseline, the extras) and evolves
-    /// each of them (in parallel on the current rayon pool), with progress bars on stderr
-    /// when `progress`; with the gate, runs the pilot first and compares the evolved
-    /// estimator for `plan_for` with `pt` at each pixel that runs a trial.
-    pub fn build(
-        view: &SceneView,
-        inputs: &PlanInputs,
-        seed: u64,
-        progress: bool,
-    ) -> Result<Self, PlanError> {
-        let PlanInputs {
-            plan: config,
-            max_bounces,
-            plan_for,
-            ..
-        } = *inputs;
-        let gate = inputs.gate.gate;
-        let ga = &GaConfig {
-            srt_absorption: inputs.srt_absorption,
-            nee: inputs.nee,
-            ..inputs.ga.clone()
-        };
-        ga.validate()?;
-        config.validate()?;
-        if let (Some(_), Some(limit)) = (inputs.store, config.time_limit) {
-            // Which pixels a time limit leaves out depends on the machine and its load.
-            return Err(GaConfigError(format!(
-                "ga_time_limit {limit}: a plan learned by `genpath learn` must not depend on \
-                 time (its waves are kept and may be split over jobs); leave it out"
-            ))
-            .into());
-        }
-        let scene = view.scene;
-        let (width, height) = (scene.camera.width, scene.camera.height);
-        let nee = plan_for.test_path_nee(ga.nee);
-        let srt = mixture_file::srt(scene, max_bounces, ga.srt_absorption).with_nee(nee);
-        let mut stats = PlanStats::default();
-
-        let t0 = Instant::now();
-        let cells = scattering_cells(view, config.grid(plan_for), &mut stats);
-        let grid: Vec<(u32, u32)> = cells.iter().flatten().copied().collect();
-        let grid_seconds = t0.elapsed().as_secs_f64();
-
-        let t1 = Instant::now();
-        let context = PixelContext {
-            view,
-            srt: &srt,
-            ga,
-            config,
-            max_bounces,
-            plan_for,
-            gate,
-            seed,
-            store: inputs.store,
-        };
-        let mut waves = Waves::new(&context, pilot_pixels(&grid, gate), progress, t0);
-        let scout = ga.generations.div_ceil(PILOT_SHARE);
-        // Whether a pilot that fails leaves every pixel to `pt` or the spatial guide.
-        let closes = plan_for == PlanFor::Mixture || inputs.spatial_guide;
-        scout_pilot(&mut waves, scout, closes)?;
-        stats.pilot_gain = pilot_gain(&waves);
-        let pilot_pays = pilot_pays(&waves);
-        let closed = gate && !pilot_pays && closes;
-        let mut fallback_points = Vec::new();
-        // Seconds of the baseline, which runs between GA waves.
-        let (baseline_part, baseline) = if !gate || pilot_pays {
-            waves.past_pilot(&cells, scout, &mut stats, &mut fallback_points)?
-        } else {
-            waves.leave_to_pt(&grid, &mut stats, &mut fallback_points);
-            (0.0, PixelSums::default())
-        };
-        if inputs.store.is_some_and(|s| s.split()) {
-            return Err(PlanError::ShareDone {
-                wave: None,
-                evolved: 0,
-                missing: 0,
-            });
-        }
-        let (results, scouted) = waves.finish();
-        stats.baseline_seconds = grid_seconds + baseline_part;
-        stats.ga_seconds = t1.elapsed().as_secs_f64() - baseline_part;
-        let pixels = stats.count_pixels(&scouted, results, gate, plan_for);
-        Ok(Self {
-            width,
-            height,
-            pixels,
-            fallback_points,
-            gate,
-            closed,
-            plan_for,
-            srt,
-            neighbours: config.neighbours(plan_for),
-            analysis: scene.analysis(),
-            unnormalised: false,
-            stats,
-            baseline,
-            index: OnceLock::new(),
-        })
-    }
-
     #[cfg(any(test, feature = "testing"))]
     /// This plan with its interpolation weights deliberately left unnormalised: a wrong input
     /// that the unbiasedness test must reject.

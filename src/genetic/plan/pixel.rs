@@ -5,11 +5,9 @@ use super::super::individual::Individual;
 use super::super::population::{evolve_from, Evolution, GenerationStats};
 use super::super::test_paths::TestPaths;
 use super::super::{fitness, GaConfig};
-use super::baseline::Origin;
-use super::config::PlanConfig;
-use super::gate::{gate_margins, run_trial, Trial};
-use super::stages::LearnStore;
-use super::PlanFor;
+use super::context::{GaRun, PixelContext};
+use super::gate::run_trial;
+use super::types::{Evolved, GaPixel, Origin, PlanFor};
 use crate::path::generator::Nee;
 use crate::path::mixture::Mixture;
 use crate::path::{RayCounts, SceneView};
@@ -50,102 +48,6 @@ pub const COMPONENT_TOLERANCE: f64 = 0.02;
 /// light and this costs a few hundred paths; `ga-pt`'s end-only test paths seldom do (fig5:
 /// 1 %), so that there a held-out set costs as much as the first (see `GaConfig::held_out`).
 pub const PLACEMENT_SHARE: usize = 4;
-
-/// The outcome of the genetic algorithm at one pixel.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct GaPixel {
-    pub x: u32,
-    pub y: u32,
-    pub origin: Origin,
-    /// The mixture this pixel renders with and lends its neighbours.
-    pub mixture: Mixture,
-    /// Eq. 10 on the test paths: the defensive `srt` density alone, and the best individual.
-    pub v_srt: f64,
-    pub v_best: f64,
-    /// Eq. 10 of the best individual with its evolved weights, before
-    /// `GaConfig::convex_weights` replaced them (equal to `v_best` without).
-    pub v_evolved: f64,
-    /// The GA's best individual was no better than `srt`, which is kept instead.
-    pub kept_srt: bool,
-    /// With the gate (and an evolved mixture): the evolved estimator against `pt` here.
-    pub trial: Option<Trial>,
-    /// The GA's best individual (before the comparison with `srt`), which warm-starts
-    /// neighbouring GA pixels.
-    #[serde(skip)]
-    pub best: Option<Individual>,
-    /// Whether this pixel's GA started from evolved individuals: its neighbours' best, or
-    /// (a pilot pixel) its own scouting run's.
-    pub warm: bool,
-    /// Test paths sampled (`M`) and those that carry light (stored).
-    pub test_paths: usize,
-    pub light_paths: usize,
-    /// Steps of the evolved generators (fewer than `max_bounces − 1` when pruned).
-    pub steps: usize,
-    /// Best and mean `V` per generation.
-    pub history: Vec<GenerationStats>,
-    pub individual_evaluations: u64,
-    pub generator_evaluations: u64,
-    pub test_path_seconds: f64,
-    pub ga_seconds: f64,
-}
-
-impl GaPixel {
-    /// Whether the gate's trial predicts the evolved estimator for `plan_for` to beat `pt`
-    /// here by the winning margin ([`gate_margins`]): a guide's gain one standard error below
-    /// its estimate ([`Trial::cautious_gain`]); a mixture's as estimated, whose margin of 2
-    /// already allows for its prediction's uncertainty.
-    pub fn pays(&self, plan_for: PlanFor) -> bool {
-        let win = gate_margins(plan_for).1;
-        self.trial.is_some_and(|t| match plan_for {
-            PlanFor::Guide => t.cautious_gain() > win,
-            PlanFor::Mixture => t.gain > win,
-        })
-    }
-
-    /// Whether this pixel's estimator should be `pt`: it kept `srt`, or its trial predicts
-    /// a loss below the losing margin ([`gate_margins`]) (a NaN gain counts as a loss). A
-    /// pixel without a trial (a guide's pixel outside the pilot) keeps its estimator.
-    pub fn prefers_pt(&self, plan_for: PlanFor) -> bool {
-        self.kept_srt
-            || self
-                .trial
-                .is_some_and(|t| t.gain.is_nan() || t.gain < gate_margins(plan_for).0)
-    }
-}
-
-/// An evolved GA pixel and the rays its test paths, GA and trial traced.
-pub(super) type Evolved = (GaPixel, RayCounts);
-
-/// What every GA pixel of a plan shares: the scene, the defensive `srt` mixture, the
-/// settings, the estimator the plan is for and the user's seed, from which each pixel's
-/// random streams are derived.
-pub(super) struct PixelContext<'a> {
-    pub(super) view: &'a SceneView<'a>,
-    pub(super) srt: &'a Mixture,
-    pub(super) ga: &'a GaConfig,
-    pub(super) config: &'a PlanConfig,
-    pub(super) max_bounces: u32,
-    pub(super) plan_for: PlanFor,
-    /// Whether the gate runs (`GateConfig::gate`).
-    pub(super) gate: bool,
-    pub(super) seed: u64,
-    /// Where the waves are kept between processes, if they are.
-    pub(super) store: Option<&'a dyn LearnStore>,
-}
-
-/// How the GA starts at a pixel, and whether the pixel then runs the gate's trial.
-#[derive(Debug)]
-pub(super) struct GaRun {
-    /// The first generation's evolved individuals (none: a cold start).
-    pub(super) seeds: Vec<Individual>,
-    pub(super) generations: usize,
-    /// The pixel's GA random stream (a pilot pixel that goes on takes a fresh one: its
-    /// scouting run's would replay the same random individuals and breeding).
-    pub(super) stream: u64,
-    /// Whether the pixel runs the gate's trial (with the gate, where the GA did not keep
-    /// `srt`).
-    pub(super) trial: bool,
-}
 
 /// What a pixel keeps of its GA: its best individual's mixture, or `srt` where that was
 /// no better on the test paths.

@@ -1,4 +1,4 @@
-//! A plan's GA pixels evolved outside one process: the waves ([`super::waves::Waves`]:
+//! A plan's GA pixels evolved outside one process: the waves (`Waves`:
 //! the pilot's scouting, the pilot going on, the cold first wave, the warm-started second)
 //! kept in a [`LearnStore`] as they finish (and, beyond the GA, the spatial guide's training
 //! after each pass: `crate::integrators::pg`), so that learning stopped by a signal goes on
@@ -12,7 +12,7 @@
 //! plan built in one process (docs/shards.md).
 
 use super::super::individual::Individual;
-use super::pixel::GaPixel;
+use super::types::GaPixel;
 use crate::genetic::GaConfigError;
 use crate::path::RayCounts;
 

@@ -2,10 +2,11 @@
 //! pilot going on, then cold and warm-started waves, in chunks under a time limit).
 
 use super::super::individual::Individual;
-use super::baseline::{baseline_choice, Origin};
-use super::pixel::{run_pixel, Evolved, GaRun, PixelContext};
+use super::baseline::baseline_choice;
+use super::context::{GaRun, PixelContext};
+use super::pixel::run_pixel;
 use super::stages::{LearnStore, PlanError, WaveEntry};
-use super::{PlanFor, PlanStats};
+use super::types::{Evolved, Origin, PlanFor, PlanStats};
 use crate::film::PixelSums;
 use crate::progress::progress_bar;
 use indicatif::ProgressBar;
