@@ -7,7 +7,7 @@
 //! records, and the next pass samples with the guide learned from it.
 
 use super::ga::{check_plan_size, describe_plan, explain_plan, plan_check, plan_summary};
-use super::settings::SpatialConfig;
+use super::settings::{SpatialConfig, MAX_SPATIAL_PASSES};
 use super::{
     Context, Control, Description, ExplainError, Integrator, Learned, Method, MethodInfo,
     PixelIntegrator, PrepareError, RenderSettings, SelfCheck, Settings,
@@ -319,9 +319,6 @@ impl PixelEstimator for SpatialEstimator<'_> {
     }
 }
 
-/// Most training passes (the last one of 2048 samples per pixel).
-pub const MAX_SPATIAL_PASSES: u32 = 12;
-
 /// Records one training pass may keep (24 bytes each), at about [`RECORDS_PER_SAMPLE`]
 /// records per path: a pass records that many of its samples per pixel and no more (at
 /// 256², 61 samples per pixel).
@@ -427,7 +424,7 @@ pub struct Beside<'a> {
 }
 
 /// A trial of a plan's per-pixel guides against the spatial guide alone, run by the
-/// training passes (`ga-pt`'s, [`super::ga_pt`]): a pass that tries leaves the control
+/// training passes (`ga-pt`'s, in `integrators::ga_pt`): a pass that tries leaves the control
 /// pixels ([`PlanGuides::OutsideControl`]) to the spatial guide alone, and its arms decide
 /// after the pass whether the guides stay ([`PlanGuides::Everywhere`]) or go
 /// ([`PlanGuides::Nowhere`]).

@@ -13,7 +13,6 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
-use crate::integrators::pg::MAX_SPATIAL_PASSES;
 use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
 use crate::settings_table::{Interval, Kind, OutOfRange, Setting, Table};
@@ -35,6 +34,9 @@ pub struct Settings {
     #[serde(skip)]
     pub loaded_mixture: Option<Mixture>,
 }
+
+/// Most training passes of the spatial guide (the last one of 2048 samples per pixel).
+pub const MAX_SPATIAL_PASSES: u32 = 12;
 
 crate::settings_table! {
     /// `srt`, the paper's stochastic ray tracing (and the defensive generator of every

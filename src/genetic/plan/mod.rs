@@ -35,7 +35,7 @@
 //!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
 //!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`); where it passes, the
 //!    spatial guide's training passes try the guides against that guide alone
-//!    ([`crate::integrators::pg::train_spatial`]). (A pilot that closes the
+//!    (`integrators::pg::train_spatial`). (A pilot that closes the
 //!    plan when it fails — a mixture's, or a guide's beside the spatial guide — stops
 //!    starting pixels once it cannot pay, so there it is `pt` or the spatial guide
 //!    everywhere. cbox, `ga`, 64

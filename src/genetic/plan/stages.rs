@@ -1,7 +1,7 @@
 //! A plan's GA pixels evolved outside one process: the waves (`Waves`:
 //! the pilot's scouting, the pilot going on, the cold first wave, the warm-started second)
 //! kept in a [`LearnStore`] as they finish (and, beyond the GA, the spatial guide's training
-//! after each pass: `crate::integrators::pg`), so that learning stopped by a signal goes on
+//! after each pass: `integrators::pg`), so that learning stopped by a signal goes on
 //! where it stopped, and so that the GA splits over jobs (`genpath learn --shard K/N`):
 //! each job evolves its share of the first wave not yet complete, the waves being barriers
 //! between the steps of a job array, and a last job builds the plan from every share.
