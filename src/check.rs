@@ -13,7 +13,7 @@
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
 //!   count can tell).
 
-use crate::film::pixel_sample;
+use crate::film::sample_pixel;
 use crate::film::Film;
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::GaConfig;
@@ -22,6 +22,7 @@ use crate::path::generator::{Contribution, Nee, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
 use statrs::distribution::{ContinuousCDF, Normal};
+use std::ops::ControlFlow;
 
 /// What `check` renders and samples.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -156,10 +157,9 @@ impl PdfSurvey {
         let mut path = PathVertices::default();
         let mut contributions: Vec<Contribution> = Vec::new();
         let mut counts = RayCounts::default();
-        for j in 0..n {
-            let (ray, mut rng) = pixel_sample(camera, seed, (x, y), j as u64);
-            let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) else {
-                continue;
+        sample_pixel(camera, seed, (x, y), 0..n as u64, |ray, rng| {
+            let Some(x1) = view.trace_through(ray, rng, &mut counts) else {
+                return ControlFlow::Continue(());
             };
             contributions.clear();
             g.sample_path(
@@ -167,7 +167,7 @@ impl PdfSurvey {
                 ray.origin,
                 x1,
                 (max_bounces, mixture.nee),
-                &mut rng,
+                rng,
                 &mut counts,
                 &mut path,
                 &mut contributions,
@@ -188,7 +188,8 @@ impl PdfSurvey {
                 }
                 self.see(mixture.pdf_path(view, &path, c, max_bounces));
             }
-        }
+            ControlFlow::Continue(())
+        });
     }
 }
 

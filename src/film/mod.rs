@@ -22,8 +22,8 @@ mod shard;
 
 pub use control::{Checkpoint, Control, Stop};
 pub use render::{
-    pixel_sample, render, render_tile, sample_stream, tiles, Pass, PixelResult, Tile, TileResult,
-    TILE,
+    pixel_sample, render, render_tile, sample_pixel, sample_stream, tiles, Pass, PixelResult, Tile,
+    TileResult, TILE,
 };
 pub use shard::{Shard, MAX_SHARDS};
 

@@ -11,6 +11,7 @@ use crate::sampling::{camera_ray, sample_rng, Rng};
 use crate::scene::Camera;
 use glam::DVec3;
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -40,6 +41,25 @@ pub fn pixel_sample(camera: &Camera, seed: u64, (x, y): (u32, u32), s: u64) -> (
     let mut rng = sample_stream(camera, seed, (x, y), s);
     let ray = camera_ray(camera, (x, y), &mut rng);
     (ray, rng)
+}
+
+/// Takes samples `samples` of pixel `(x, y)` of `camera`'s image under `seed`: each draws
+/// its stream and camera ray ([`pixel_sample`]) and is handed to `sample`, which may end the
+/// pixel's samples early (`ControlFlow::Break`). Every loop over a pixel's samples is this
+/// one: the film's tiles, a GA plan's baseline and gate, `check`, the GA's test paths.
+pub fn sample_pixel(
+    camera: &Camera,
+    seed: u64,
+    (x, y): (u32, u32),
+    samples: impl IntoIterator<Item = u64>,
+    mut sample: impl FnMut(&Ray, &mut Rng) -> ControlFlow<()>,
+) {
+    for s in samples {
+        let (ray, mut rng) = pixel_sample(camera, seed, (x, y), s);
+        if sample(&ray, &mut rng).is_break() {
+            break;
+        }
+    }
 }
 
 /// The random stream of sample `s` of pixel `(x, y)` of `camera`'s image under `seed`
@@ -337,16 +357,17 @@ fn tile_samples<E: PixelEstimator>(
             let (mut count, mut sum, mut sum_sq) = from(index);
             let cost_before = rays.cost();
             let samples = pass.shard.samples(pass.run_spp).skip(count as usize);
-            for s in samples.take(take) {
+            let samples = samples.take(take).map(u64::from);
+            sample_pixel(camera, pass.seed, (x, y), samples, |ray, rng| {
                 if stoppable && stop.requested().is_some() {
-                    break;
+                    return ControlFlow::Break(());
                 }
-                let (ray, mut rng) = pixel_sample(camera, pass.seed, (x, y), s as u64);
-                let value = estimator.sample(view, &ray, &mut rng, &mut rays, &mut splats);
+                let value = estimator.sample(view, ray, rng, &mut rays, &mut splats);
                 sum += value;
                 sum_sq += value * value;
                 count += 1;
-            }
+                ControlFlow::Continue(())
+            });
             sums.push(PixelResult {
                 index,
                 sum,

@@ -26,7 +26,7 @@
 
 use super::ChannelWeights;
 use crate::accel::{Coherence, Ray, PACKET_SIZE};
-use crate::film::{pixel_sample, sample_stream};
+use crate::film::{sample_pixel, sample_stream};
 use crate::path::generator::{
     absorbs_at, fixed_light_pdf, Contribution, DirectionSampler, GeneratorDensity, LightEnd, Nee,
     PathGenerator, PathVertices, StepDensity,
@@ -39,6 +39,7 @@ use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
 use crate::scene::Camera;
 use crate::scene::SurfacePoint;
 use glam::DVec3;
+use std::ops::ControlFlow;
 use std::sync::OnceLock;
 
 /// Test paths of one pixel.
@@ -534,24 +535,25 @@ impl TestPaths {
         let mut counts = RayCounts::default();
         let mut path = PathVertices::default();
         let mut contributions = Vec::new();
-        for j in 0..m {
-            let (ray, mut rng) = pixel_sample(&view.scene.camera, seed, (x, y), j as u64);
+        let camera = &view.scene.camera;
+        sample_pixel(camera, seed, (x, y), 0..m as u64, |ray, rng| {
             contributions.clear();
-            if let Some(x1) = view.trace_through(&ray, &mut rng, &mut counts) {
-                let g = q.choose(uniform(&mut rng) as f64);
+            if let Some(x1) = view.trace_through(ray, rng, &mut counts) {
+                let g = q.choose(uniform(rng) as f64);
                 q.generators[g].sample_path(
                     view,
                     ray.origin,
                     x1,
                     (max_bounces, q.nee),
-                    &mut rng,
+                    rng,
                     &mut counts,
                     &mut path,
                     &mut contributions,
                 );
             }
             paths.store(view, q, &path, &contributions);
-        }
+            ControlFlow::Continue(())
+        });
         paths.weigh(ChannelWeights::relative(paths.value()));
         (paths, counts)
     }

@@ -7,13 +7,14 @@ use super::super::luminance;
 use super::config::PlanConfig;
 use super::context::PixelContext;
 use super::types::{Origin, PlanStats};
-use crate::film::pixel_sample;
+use crate::film::sample_pixel;
 use crate::film::PixelSums;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{mixture_sample, RayCounts, SceneView};
 use crate::sampling::{derived_seed, sample_variance, Stream};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 
 /// Per-pixel baseline estimate.
 #[derive(Clone, Copy, Default)]
@@ -163,16 +164,16 @@ fn baseline(
                 .map(|x| {
                     let (mut sum, mut sum_sq, mut scatters) = (0.0, 0.0, false);
                     let (mut rgb_sum, mut rgb_sum_sq) = (DVec3::ZERO, DVec3::ZERO);
-                    for s in 0..config.baseline_spp {
-                        let (ray, mut rng) = pixel_sample(camera, seed, (x, y), s as u64);
-                        let hit = view.trace_through(&ray, &mut rng, &mut counts);
+                    let samples = 0..u64::from(config.baseline_spp);
+                    sample_pixel(camera, seed, (x, y), samples, |ray, rng| {
+                        let hit = view.trace_through(ray, rng, &mut counts);
                         scatters |= hit.is_some_and(|x1| view.material(x1.prim).scatters());
                         let value = mixture_sample(
                             view,
-                            (&ray, hit),
+                            (ray, hit),
                             max_bounces,
                             srt,
-                            &mut rng,
+                            rng,
                             &mut counts,
                             &mut scratch,
                         );
@@ -181,7 +182,8 @@ fn baseline(
                         let l = luminance(value);
                         sum += l;
                         sum_sq += l * l;
-                    }
+                        ControlFlow::Continue(())
+                    });
                     let n = config.baseline_spp as f64;
                     let mean = sum / n;
                     let var = if n > 1.0 {

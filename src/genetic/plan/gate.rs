@@ -6,13 +6,14 @@ use super::super::test_paths::TestPaths;
 use super::super::{fitness, ChannelWeights};
 use super::context::PixelContext;
 use super::types::{Moments, PlanFor, Trial};
-use crate::film::pixel_sample;
+use crate::film::sample_pixel;
 use crate::guiding::Guide;
 use crate::path::generator::Nee;
 use crate::path::mixture::{Mixture, MixtureScratch};
 use crate::path::{camera_sample, RayCounts, SceneView};
 use crate::sampling::{derived_seed, sample_variance, Stream};
 use glam::DVec3;
+use std::ops::ControlFlow;
 
 /// Samples of `pt` (and of the guided path tracer) with which the gate measures their
 /// variance at a GA pixel.
@@ -51,21 +52,21 @@ fn sample_moments(
     let mut c = RayCounts::default();
     let (mut sum, mut sum_sq) = (DVec3::ZERO, DVec3::ZERO);
     let mut values = Vec::with_capacity(n as usize);
-    for s in 0..n {
-        let (ray, mut rng) = pixel_sample(camera, seed, (x, y), s as u64);
+    sample_pixel(camera, seed, (x, y), 0..u64::from(n), |ray, rng| {
         let value = camera_sample(
             view,
-            &ray,
+            ray,
             max_bounces,
             (mixture, guide),
-            &mut rng,
+            rng,
             &mut c,
             &mut scratch,
         );
         sum += value;
         sum_sq += value * value;
         values.push(value);
-    }
+        ControlFlow::Continue(())
+    });
     counts.add(c);
     let n = n as f64;
     let mean = sum / n;
