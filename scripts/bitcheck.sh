@@ -7,7 +7,8 @@
 # BASE (and NEW, when given) are built from git worktrees under target/bitcheck/, with a
 # target directory of their own there (kept between runs, so a second run only rebuilds
 # genpath itself). Without NEW the working tree is built as it is, uncommitted changes
-# included. SCENES, SPP (16), SEED (7) and FEATURES (the default features) may be set in
+# included. SCENES (names or scene files), SPP (16), SEED (7), SIZE (the image's width and
+# height; default the scene's) and FEATURES (the default features) may be set in
 # the environment, and BASE_BIN (NEW_BIN), a binary already built from BASE (NEW or the working
 # tree), saves building it. NEW_ARGS are given to the new build's renders only (a setting
 # that selects what BASE did where a later default differs, e.g. `--nee end`).
@@ -78,7 +79,7 @@ for scene in $scenes; do
             extra=()
             [[ $side == new ]] && read -ra extra <<<"${NEW_ARGS:-}"
             "$bin" render "$file" --method "${margs[@]}" --spp "$spp" --seed "$seed" --quiet \
-                -o "$work/out/$side/$tag.exr" "${extra[@]}"
+                ${SIZE:+--width "$SIZE" --height "$SIZE"} -o "$work/out/$side/$tag.exr" "${extra[@]}"
         done
         count=$((count + 1))
         if ((${TIMES:-0} > 0)); then
