@@ -1,7 +1,7 @@
 //! Which of every pixel's samples a render takes.
 
 /// Which of every pixel's samples a render takes: sample `s` belongs to shard `s mod count`
-/// (design §13), so the shards of one render share no random stream, together are that
+/// (docs/shards.md), so the shards of one render share no random stream, together are that
 /// render, and any subset of them is an unbiased render with fewer samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Shard {

@@ -1,5 +1,6 @@
-//! Error against run time (design §11): `genpath sweep` renders each method at increasing
-//! budgets, measures relMSE and MSE against a reference, and writes a CSV and an SVG plot.
+//! Error against run time (reports/README.md): `genpath sweep` renders each method at
+//! increasing budgets, measures relMSE and MSE against a reference, and writes a CSV and an
+//! SVG plot.
 //!
 //! The time of a row is everything the method spends on the image: for `ga` the baseline,
 //! test paths and evolution plus the render. Within one repetition the GA runs once and its
@@ -221,8 +222,9 @@ pub enum SweepError {
 }
 
 /// Samples per pixel of the two renders that calibrate a time budget: long enough that
-/// their difference is not lost in timing noise (with 1 and 4, fig5 `ga-pt` budgeted for
-/// half its real cost per sample and ran 66 s for a 30 s budget).
+/// their difference is not lost in timing noise, which with fewer samples made a budgeted
+/// render run far past its budget (reports/README.md, "Measurements formerly in code
+/// comments (2026-12-07)").
 const CALIBRATION_SPP: [u32; 2] = [2, 16];
 
 /// With budgets in seconds, a GA plan may take this share of each budget
