@@ -166,7 +166,7 @@ impl GaConfig {
 /// up to a constant factor, the pixel's share of the relMSE that `genpath compare` reports,
 /// `mean_c (x_c − ref_c)² / (ref_c² + 0.01)`. The luminance the paper's fitness could take
 /// instead weights blue by 0.07: the mixture then neglects mostly blue light, and the
-/// image's blue channel stays noisier than the others (reports/README.md, "Measurements
+/// image's blue channel stays noisier than its red one (reports/README.md, "Measurements
 /// formerly in code comments (2026-12-07)").
 ///
 /// Eq. 10's second moment becomes `Σ_c w_c E[(f_c/p)²] = E[F²/p²]` with
