@@ -1,5 +1,5 @@
-//! `genpath check SCENE`: the numerical invariants of design §8 on any scene, at a small
-//! size.
+//! `genpath check SCENE`: the numerical invariants every method must keep on any scene, at
+//! a small size.
 //!
 //! * Every method ([`Method`]'s list, `ga-pt` with and without the spatial guide, `srt`
 //!   and `ga` with either estimator (`nee`), and `mixture` when given one) renders without a

@@ -21,8 +21,8 @@ pub struct EmbreeAccel {
     analytic: AnalyticShapes,
     /// Lanes per Embree packet call: 16 where the CPU traces 16-wide packets natively
     /// (AVX-512), else 8. Embree takes a 16-ray packet on an AVX2 CPU too, but splits it
-    /// internally at a cost: cbox camera rays, one thread, AVX2, `genpath bench`: 19.6–20.2
-    /// Mray/s in `rtcIntersect16` calls against 21.9–22.3 in pairs of `rtcIntersect8` calls.
+    /// internally at a cost that makes pairs of `rtcIntersect8` calls faster there
+    /// (reports/README.md, "Measurements formerly in code comments (2026-12-07)").
     lanes: usize,
     /// The instruction set the device was created for (`None` where Embree chose).
     isa: Option<EmbreeIsa>,
@@ -205,8 +205,9 @@ impl Drop for EmbreeAccel {
 }
 
 /// Embree's query flags for `coherence`: the coherent flag selects its packet (frustum)
-/// traversal for `rtcIntersect16`, twice as fast as the default on camera rays (cbox, one
-/// thread: 16–19 against 10 Mray/s) and half as fast on incoherent rays.
+/// traversal for `rtcIntersect16`, faster than the default on camera rays and slower on
+/// incoherent rays (reports/README.md, "Measurements formerly in code comments
+/// (2026-12-07)").
 fn query_flags(coherence: Coherence) -> sys::RTCRayQueryFlags {
     match coherence {
         Coherence::Coherent => sys::RTC_RAY_QUERY_FLAG_COHERENT,
@@ -398,9 +399,9 @@ impl Accel for EmbreeAccel {
         }
     }
 
-    /// Any-hit packets always take Embree's default (hybrid) traversal: with 16-ray calls its
-    /// coherent one is slower for them (cbox camera rays, one thread: 26–28 against 38–40
-    /// Mray/s); with 8-ray calls the two are alike (19.8–21.1 against 20.0–20.7).
+    /// Any-hit packets always take Embree's default (hybrid) traversal: with 16-ray calls
+    /// its coherent one is slower for them, and with 8-ray calls the two are alike
+    /// (reports/README.md, "Measurements formerly in code comments (2026-12-07)").
     fn occluded_packet(&self, rays: &[Ray], blocked: &mut [bool], _: Coherence) {
         assert_eq!(rays.len(), blocked.len());
         assert!(

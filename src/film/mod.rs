@@ -25,7 +25,7 @@ pub use render::{
     pixel_sample, render, render_tile, sample_pixel, sample_stream, tiles, Pass, PixelResult, Tile,
     TileResult, TILE,
 };
-pub use shard::{Shard, MAX_SHARDS};
+pub use shard::{Shard, ShardParseError, MAX_SHARDS};
 
 use crate::accel::Ray;
 use crate::image::Image;

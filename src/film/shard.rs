@@ -1,7 +1,7 @@
 //! Which of every pixel's samples a render takes.
 
 /// Which of every pixel's samples a render takes: sample `s` belongs to shard `s mod count`
-/// (design §13), so the shards of one render share no random stream, together are that
+/// (docs/shards.md), so the shards of one render share no random stream, together are that
 /// render, and any subset of them is an unbiased render with fewer samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Shard {
@@ -42,27 +42,36 @@ impl std::fmt::Display for Shard {
     }
 }
 
+/// Why a text is not a shard `K/N`; each names the text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ShardParseError {
+    #[error("`{0}` is not K/N (shard K of N, 0 ≤ K < N, e.g. 0/4)")]
+    NotKOfN(String),
+    #[error("`{0}`: the number of shards N must be at least 1")]
+    NoShards(String),
+    #[error("`{0}`: at most {MAX_SHARDS} shards")]
+    TooMany(String),
+    #[error("`{0}`: shard K must be below N (shards are numbered 0 to N − 1)")]
+    IndexNotBelowCount(String),
+}
+
 impl std::str::FromStr for Shard {
-    type Err = String;
+    type Err = ShardParseError;
 
     /// `K/N` with `0 ≤ K < N`.
-    fn from_str(text: &str) -> Result<Self, String> {
-        let not = || format!("`{text}` is not K/N (shard K of N, 0 ≤ K < N, e.g. 0/4)");
+    fn from_str(text: &str) -> Result<Self, ShardParseError> {
+        let not = || ShardParseError::NotKOfN(text.to_string());
         let (k, n) = text.split_once('/').ok_or_else(not)?;
         let index: u32 = k.trim().parse().map_err(|_| not())?;
         let count: u32 = n.trim().parse().map_err(|_| not())?;
         if count == 0 {
-            return Err(format!(
-                "`{text}`: the number of shards N must be at least 1"
-            ));
+            return Err(ShardParseError::NoShards(text.to_string()));
         }
         if count > MAX_SHARDS {
-            return Err(format!("`{text}`: at most {MAX_SHARDS} shards"));
+            return Err(ShardParseError::TooMany(text.to_string()));
         }
         if index >= count {
-            return Err(format!(
-                "`{text}`: shard K must be below N (shards are numbered 0 to N − 1)"
-            ));
+            return Err(ShardParseError::IndexNotBelowCount(text.to_string()));
         }
         Ok(Self { index, count })
     }

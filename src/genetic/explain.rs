@@ -290,7 +290,8 @@ pub fn svg(camera: &Camera, render: &Image, plan: &Plan) -> Result<String, Strin
         render.width,
         render.height,
         &srgb::encode_image_u8(&backdrop),
-    )?;
+    )
+    .map_err(|e| e.to_string())?;
     let mut marks = Marks {
         camera,
         s: scale as f32,

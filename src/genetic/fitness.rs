@@ -75,9 +75,10 @@ pub fn fitness(v: &[f64], out: &mut Vec<f64>) {
 }
 
 /// A multiply-rotate hash of 64-bit words (rustc's FxHash, with its final rotation), for the
-/// [`Cache`]'s keys: a step key is twelve words, which the standard library's SipHash spent
-/// 5 % of a GA plan's instructions on (fig1, callgrind). The keys are the GA's own genes
-/// and parameters, never an adversary's, so a keyed hash buys nothing here.
+/// [`Cache`]'s keys: a step key is twelve words, and the standard library's SipHash on them
+/// showed in a GA plan's instruction count (reports/README.md, "Measurements formerly in
+/// code comments (2026-12-07)"). The keys are the GA's own genes and parameters, never an
+/// adversary's, so a keyed hash buys nothing here.
 #[derive(Clone, Copy, Default)]
 struct WordHasher(u64);
 
@@ -229,12 +230,12 @@ impl LightKey {
     }
 }
 
-/// Evaluates eq. 10 for whole generations, caching every generator's densities (by gene
-/// id: copies share the id), every step's direction densities and every light sampler's
-/// light densities (by their parameters: a generator changed in its absorption, its light
-/// sampler or one step reads the others' densities from the cache; on cbox, fig1 and
-/// glossy 60 % of the new generators' cones and patches, and 62 % of their light samplers,
-/// are ones the cache holds).
+/// Evaluates eq. 10 for whole generations, caching every generator's densities (by gene id:
+/// copies share the id), every step's direction densities and every light sampler's light
+/// densities (by their parameters: a generator changed in its absorption, its light sampler
+/// or one step reads the others' densities from the cache, which holds most of the new
+/// generators' samplers: reports/README.md, "Measurements formerly in code comments
+/// (2026-12-07)").
 #[derive(Default)]
 pub struct Evaluator {
     genes: Cache<u64>,
@@ -415,9 +416,9 @@ fn mixture_pdf(densities: &[&[f64]], weights: &[f64], pdf: &mut [f64]) {
 /// whose removal raises `V` least (the others' weights renormalised, `w_0 ≥ defensive`),
 /// while `V` stays within `1 + tolerance` of `v`, the full mixture's. The multiplicative
 /// steps never set a weight to 0, and every component costs the render its densities on
-/// every path of every pixel whose mixture holds it, however small its weight (on fig1, 37 %
-/// of the evolved components end below 10⁻³, some at 10⁻¹⁷⁴). Returns the kept components'
-/// indices, in order, and their weights.
+/// every path of every pixel whose mixture holds it, however small its weight (many evolved
+/// components end far below 10⁻³: docs/methods.md, "Convex mixture weights"). Returns the
+/// kept components' indices, in order, and their weights.
 pub fn prune_components(
     (f2_over_q, sampled): (&[f64], usize),
     densities: &[&[f64]],

@@ -3,7 +3,7 @@
 //!
 //! Component 0 of every individual is the defensive `srt` generator, never mutated, with
 //! weight ≥ `GaConfig::defensive_weight`: whatever the evolved components do, the mixture
-//! covers every light-carrying path, so the final estimator stays unbiased (design §5).
+//! covers every light-carrying path, so the final estimator stays unbiased.
 
 use super::test_paths::TestPaths;
 use super::GaConfig;
@@ -33,19 +33,17 @@ pub const ALPHA_RANGE: (f64, f64) = (0.05, 0.95);
 /// Random light-region probabilities `β` are uniform in `[0, BETA_MAX)`.
 pub const BETA_MAX: f64 = 0.95;
 /// A data-driven patch spans the light-carrying test paths' arrival points on its plane
-/// between these weighted quantiles along each of its axes. fig5 `ga-pt`, 64 spp, seeds 7
-/// and 11, `--patches 1` (`pt`: 0.81): relMSE 0.199 / 0.190 with 2–98 % and the defaults
-/// below, 0.194 / 0.193 with 5–95 %; the full range lets stray points stretch the patch
-/// (0.79, the gate closed, / 0.27).
+/// between these weighted quantiles along each of its axes: the full range lets stray
+/// points stretch the patch, and a narrower range did no better (reports/README.md,
+/// "Measurements formerly in code comments (2026-12-07)").
 const PATCH_QUANTILES: (f64, f64) = (0.02, 0.98);
 /// Share of data-driven patches fitted to the arrivals near a point rather than to all of
-/// them on its plane. The same runs with 10–90 % and `α` in `FOLLOW_ALPHA`: 0.23 / 0.25
-/// with none, 0.26 / 0.26 with half, 0.36 / 0.33 with all; with the defaults, none gave
-/// 0.199 / 0.191. A few local ones stay for planes that hold several lit regions.
+/// them on its plane. More local patches raised the error (same section); a few stay for
+/// planes that hold several lit regions.
 const PATCH_LOCAL_SHARE: f64 = 0.25;
 /// Probabilities `α` of data-driven patches are uniform in this range: a patch fitted to
 /// where light arrived needs little of the uniform part, half of which is below the surface
-/// (at 10–90 %: 0.239 / 0.255 with this range, 0.260 / 0.263 with `FOLLOW_ALPHA`).
+/// (this range did better than `FOLLOW_ALPHA`: same section).
 pub const PATCH_ALPHA: (f64, f64) = (0.8, 0.99);
 /// Half-edges of patches stay between these fractions of the scene's size.
 pub const PATCH_HALF_RANGE: (f64, f64) = (0.005, 2.0);
@@ -309,10 +307,11 @@ impl<'a> GenePool<'a> {
 
     /// A light-carrying test path picked with probability ∝ its `F²/q`, or with held-out
     /// placement ∝ its root (`None` without paths). `F²/q` is heavy-tailed on glossy paths,
-    /// and a few paths then take most of the picks (glossy, 64 spp, `ga --no-gate` with
-    /// held-out placement, seeds 401–403: relMSE 1.64 / 1.98 / 1.92e-2 ∝ `F²/q`, 1.57 / 1.77 /
-    /// 1.59e-2 ∝ its root); for `ga-pt`'s guides, which place from the paths they are
-    /// measured on, the root let fig5's pilot fail at 64².
+    /// and a few paths then take most of the picks, so held-out placement picks by the
+    /// root, which lowered `ga`'s error on glossy (reports/README.md, "Measurements
+    /// formerly in code comments (2026-12-07)"); `ga-pt`'s guides, which place from the
+    /// paths they are measured on, keep `F²/q`, since the root let fig5's pilot fail
+    /// (docs/methods.md, "Held-out placement").
     fn pick_path(&self, rng: &mut crate::sampling::Rng) -> Option<(&'a TestPaths, usize)> {
         let (paths, cdf) = self.paths.as_ref()?;
         let total = cdf.last().copied().unwrap_or(0.0);

@@ -1,7 +1,7 @@
-//! The genetic algorithm of the paper (§4–5, design §6): per pixel, a population of
+//! The genetic algorithm of the paper (§4–5; docs/methods.md): per pixel, a population of
 //! individuals — weighted sets of path generators — evolves towards the set whose mixture
-//! density (eq. 7) gives the estimator of eq. 8 the smallest variance, measured by eq. 10 on
-//! a fixed set of test paths.
+//! density (eq. 7) gives the estimator of eq. 8 the smallest variance, measured by eq. 10
+//! on a fixed set of test paths.
 //!
 //! * [`test_paths`]: the `M` test paths of one pixel, sampled once from a defensive density.
 //! * [`fitness`]: eq. 10–11, with every generator's densities cached on the test paths.
@@ -165,8 +165,9 @@ impl GaConfig {
 /// The weights are [`ChannelWeights::relative`] to the pixel's value `I`, so that this is,
 /// up to a constant factor, the pixel's share of the relMSE that `genpath compare` reports,
 /// `mean_c (x_c − ref_c)² / (ref_c² + 0.01)`. The luminance the paper's fitness could take
-/// instead weights blue by 0.07: on fig5 the mixture then aims at the red wall's light,
-/// and the image's blue channel keeps 1.5 times the red one's relative error.
+/// instead weights blue by 0.07: the mixture then neglects mostly blue light, and the
+/// image's blue channel stays noisier than its red one (reports/README.md, "Measurements
+/// formerly in code comments (2026-12-07)").
 ///
 /// Eq. 10's second moment becomes `Σ_c w_c E[(f_c/p)²] = E[F²/p²]` with
 /// `F² = Σ_c w_c f_c²`, still convex in the mixture weights.

@@ -50,9 +50,10 @@ fn roulette(fitness: &[f64], rng: &mut Rng) -> usize {
 /// With `GaConfig::convex_weights`: individuals per generation whose weights are optimised,
 /// and the steps each gets: at most 20, ending at the first that lowers `V` by less than
 /// 10⁻⁴ of it. The elite go on unchanged and are optimised again in every generation, where
-/// a step's gain is mostly 10⁻⁵–10⁻⁹ (cbox, `bench`): far below what `M` test paths can
-/// tell apart (`V`'s relative standard error is of the order of 1/√M), yet a 10⁻⁹ bound
-/// ran all 20 steps, 29 % of the GA's instructions.
+/// a step's gain is far below what `M` test paths can tell apart (`V`'s relative standard
+/// error is of the order of 1/√M), yet a tighter bound ran all 20 steps at a large share of
+/// the GA's instructions (reports/README.md, "Measurements formerly in code comments
+/// (2026-12-07)").
 const CONVEX_ELITE: usize = 4;
 const CONVEX_STEPS: Steps = Steps {
     iterations: 20,

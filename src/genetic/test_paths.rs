@@ -230,7 +230,8 @@ impl Default for Lane {
 /// After the camera rays, the last, partial packet of a step's pending rays goes as one
 /// packet only if it holds at least this many; fewer go as single rays: past the camera the
 /// rays are incoherent, and a packet query costs about as much as a full one however few
-/// lanes it holds (cbox, one thread: 16-ray packets 6.79 Mray/s, single rays 6.42).
+/// lanes it holds, while full incoherent packets are barely faster than single rays
+/// (reports/README.md, "Measurements formerly in code comments (2026-12-07)").
 pub const MIN_INCOHERENT_PACKET: usize = 12;
 
 /// Paths a [`Wave`] advances together at most: the pending rays of this many walks are

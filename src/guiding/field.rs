@@ -18,19 +18,17 @@
 //!   solid angle (a slit, a lit band), coarse elsewhere.
 //!
 //! It is trained on records of path-traced samples: at every non-delta vertex, the
-//! cosine-weighted incident radiance along the sampled direction (and along the light sample's
-//! direction, with its multiple-importance weight) over that direction's density. At a
-//! diffuse vertex, light arriving straight from an emitter is left out of the records (the
-//! light sample's record, and the emission the sampled direction finds at once): next-event
-//! estimation samples it well there, and a guide that learned it would spend its samples on
-//! the light instead of on the indirect light only it can find. fig1, 64 spp, seed 7: `pg`
-//! relMSE 0.0187 without direct light in the records, 0.0237 with; glossy 0.0055 against
-//! 0.0106; fig5 0.299 / 0.292 / 0.285 against 0.272 / 0.286 / 0.280 (seeds 7 / 11 / 13).
-//! An environment's light (Mitsuba's `constant`, or `envmap`) stays in the sampled
-//! directions' records: a `constant`'s light samples are uniform over the sphere, and a
-//! guide that leaves it to them is
-//! worse than none (`scenes/mitsuba/env.xml`, 256 spp: relMSE 1.5e-3 without it, 5.4e-4
-//! with it, `pt` 4.6e-4). The sum of
+//! cosine-weighted incident radiance along the sampled direction (and along the light
+//! sample's direction, with its multiple-importance weight) over that direction's density.
+//! At a diffuse vertex, light arriving straight from an emitter is left out of the records
+//! (the light sample's record, and the emission the sampled direction finds at once):
+//! next-event estimation samples it well there, and a guide that learned it would spend its
+//! samples on the light instead of on the indirect light only it can find; leaving it out
+//! lowered `pg`'s error on fig1 and glossy, at a small cost on fig5 (reports/README.md,
+//! "Measurements formerly in code comments (2026-12-07)"). An environment's light
+//! (Mitsuba's `constant`, or `envmap`) stays in the sampled directions' records: a
+//! `constant`'s light samples are uniform over the sphere, and a guide that leaves it to
+//! them is worse than none (measured on `scenes/mitsuba/env.xml`, same section). The sum of
 //! a quadrant's records is proportional to an estimate of `∫ L_i |cos| dω` over its solid
 //! angle; a quadrant's probability given its parent is its share of the parent's sum, a
 //! leaf's density is uniform over its part of the square (over the sphere, that divided by
@@ -48,11 +46,10 @@
 //! estimation runs with probability [`DARK_LIGHT_SHARE`] only, and multiple importance
 //! sampling weighs it at that share of its density (so emission found by the sampled
 //! direction takes nearly all the weight): still unbiased, and the shadow rays that could
-//! not arrive are not traced. A dark cell turns lit when one of its light samples reaches
-//! a light. fig1, 38 spp, seeds 7 / 11 / 13: 2.03 → 1.79 s, relMSE 0.0341 → 0.0355 (the
-//! shifted random streams alone give 0.0352: a share of 0.999); 1 236 of 24 576 cells
-//! dark, shadow rays 4.8 → 2.4 million. fig5 (32 spp) 0.66 → 0.54 s, glossy 0.56 → 0.53 s,
-//! cbox unchanged, at the same error.
+//! not arrive are not traced. A dark cell turns lit when one of its light samples reaches a
+//! light. This saves time wherever a region sees the light only indirectly, at the same
+//! error (reports/README.md, "What changed between de6d183 and ebcb7fc", and "Measurements
+//! formerly in code comments (2026-12-07)").
 //!
 //! In Open PGL's terms this is the `Field`; the records it is trained on are the
 //! [`SampleStorage`], filled by a [`PathSegmentStorage`] along each training path, and
@@ -82,24 +79,22 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 /// A share learned per region did not pay. Each region chose, from a grid over [0.1, 0.9],
 /// the share of least estimated second moment of its one-sample direction estimate
 /// (`Σ (f |cos| L_i / q)² q / (α p_guide + (1 − α) p_bsdf)` over its records, drawn with
-/// density `q`): `pg`'s relMSE at 2 s over six seeds rose to 1.02 × (fig1), 1.32 × (glossy),
-/// 1.19 × (fig5) and 1.08 × (cbox) of this fixed share's, with the previous pass's guide as
-/// `p_guide` (shares 0.58–0.71 on average), and to 1.08 / 1.52 / 1.47 / 1.17 × with the new
-/// guide (fit to the same records: shares 0.67–0.83). The vertex's own second moment leaves
-/// out what the share changes beyond it: the multiple-importance weights of the light the
-/// direction finds, and the later vertices of the path.
+/// density `q`), and `pg`'s error at equal time rose on every scene tried, with the
+/// previous pass's guide as `p_guide` and more with the new one (reports/README.md,
+/// "Measurements formerly in code comments (2026-12-07)"). The vertex's own second moment
+/// leaves out what the share changes beyond it: the multiple-importance weights of the
+/// light the direction finds, and the later vertices of the path.
 pub const GUIDE_SHARE: f64 = 0.5;
 
 /// The share of guided direction sampling at a spatially guided vertex of `m`:
 /// [`GUIDE_SHARE`] on every non-delta lobe but a rough dielectric's, where it is 0 whatever
 /// its roughness: the BSDF alone samples there (the guide still says how often next-event
-/// estimation runs). A radiance-only guide does not know the rough dielectric's lobes
-/// (the reflection, and `1 − F` of the time the refraction, as narrow as its roughness,
-/// on either side of the surface), so its samples mostly land where the BSDF sends
-/// little; on `scenes/mitsuba/roughglass.xml` (α 0.1 and 0.3, 256 spp, seeds 2–9) `pg`'s
-/// relMSE falls monotonically as the share does, from 3.7 × `pt`'s at 1/2 through 1.7 ×
-/// at 0.3, 1.2 × at 0.15, 1.02 × at 0.05 to 0.96 × at 0, and with α 0.7 and 1.0 from
-/// 1.8 × at 1/2 to 1.0 × at 0 (`docs/methods.md`).
+/// estimation runs). A radiance-only guide does not know the rough dielectric's lobes (the
+/// reflection, and `1 − F` of the time the refraction, as narrow as its roughness, on
+/// either side of the surface), so its samples mostly land where the BSDF sends little: on
+/// `scenes/mitsuba/roughglass.xml` `pg`'s error falls monotonically as the share does, to
+/// about `pt`'s at 0, at every roughness tried (docs/methods.md, "`pg`'s guide-vs-BSDF
+/// fraction").
 pub fn guide_share(m: &Material) -> f64 {
     if m.transmits() {
         0.0
@@ -116,8 +111,9 @@ pub(super) const DARK: u32 = 1 << 31;
 
 /// A node of a directional quadtree: per quadrant of its square (see [`quadrant`]), the
 /// quadrant's probability given the node, and its child node (0: the quadrant is a leaf,
-/// uniform inside). 32 bytes, two to a cache line: a guide of fig1 at 1024 samples per
-/// pixel has 125 000 of them, and lookups wander over all.
+/// uniform inside). 32 bytes, two to a cache line: a trained guide holds very many of them
+/// (reports/README.md, "Measurements formerly in code comments (2026-12-07)"), and lookups
+/// wander over all.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct QuadNode {
     pub(super) prob: [f32; 4],

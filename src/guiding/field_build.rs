@@ -24,10 +24,8 @@ pub const SPLIT_ENERGY: f64 = 0.01;
 pub const MIN_NODE_RECORDS: usize = 16;
 /// Depth limit of a directional quadtree: leaves of `4^-5` of the square at the finest
 /// (32 × 32, about 0.012 sr on average). Deeper leaves fit the noise of a pass's records
-/// more than the light: with 12 levels, `pg` at fixed samples had 4–12 % more error and
-/// took 2–8 % longer (fig1 40 spp: relMSE 0.0336 → 0.0322; at 256 spp 0.00395 → 0.00392;
-/// glossy 64 spp 0.0056 → 0.0051, 256 spp 0.00119 → 0.00106; fig5 256 spp 0.0590 →
-/// 0.0541). Six levels and more gave 12 levels' error on fig1, four 7 % more.
+/// more than the light, and cost time as well as error; shallower ones lose the light's
+/// detail (reports/README.md, "Measurements formerly in code comments (2026-12-07)").
 const MAX_DIRECTIONAL_DEPTH: u32 = 5;
 
 /// Moves the items of `items` for which `left` holds to the front; returns how many they are.

@@ -138,10 +138,11 @@ impl Guide {
     /// density and sample there. The spatial guide says how often next-event estimation
     /// runs there, at every vertex, and at a level's vertex it samples the level's BRDF
     /// share as past the levels: the GA's cones and patches add to what `pg` would sample
-    /// there instead of replacing it (glossy, 2 s, seeds 404 and 405: where they replaced
-    /// it, relMSE was 5× `pg`'s). At the path's `last` vertex it does not guide the
-    /// direction: that direction can only find emission, which next-event estimation finds
-    /// better, and the quadtree's descents would cost for nothing.
+    /// there instead of replacing it, since replacing it left glossy far noisier than `pg`
+    /// (reports/README.md, "What changed between ebcb7fc and c0f2981"). At the path's
+    /// `last` vertex it does not guide the direction: that direction can only find
+    /// emission, which next-event estimation finds better, and the quadtree's descents
+    /// would cost for nothing.
     pub fn at(&self, k: usize, x: Vec3, frame: Frame, last: bool) -> Vertex<'_> {
         let (spatial, light_share) = match self.spatial.as_deref() {
             Some(s) => {

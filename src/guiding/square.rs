@@ -9,9 +9,10 @@ use glam::Vec3;
 /// The position of unit direction `d` on the square: `u = (cos θ + 1) / 2` about the world
 /// `y` axis (equal-area in θ), and `v` the "diamond angle" of `(x, z)` over 4: a quarter of
 /// the square per quadrant of the azimuth, along which `v` runs as `z / (|x| + |z|)` does
-/// (no trigonometry either way: the equal-area `atan2` here and `sin_cos` back cost 4 % of
-/// a guided render); the price is a density over the square that varies by up to 2× with
-/// the azimuth, [`square_jacobian`].
+/// (no trigonometry either way, since the equal-area `atan2` here and `sin_cos` back showed
+/// in a guided render's time: reports/README.md, "What changed between de6d183 and
+/// ebcb7fc"); the price is a density over the square that varies by up to 2× with the
+/// azimuth, [`square_jacobian`].
 pub fn to_square(d: Vec3) -> [f32; 2] {
     let u = ((d.y + 1.0) * 0.5).clamp(0.0, 1.0);
     let s = d.x.abs() + d.z.abs();

@@ -189,7 +189,7 @@ pub fn write_atomic(
         path: path.to_owned(),
         message,
     };
-    let tmp = TempFile::create(path).map_err(write_err)?;
+    let tmp = TempFile::create(path).map_err(|e| write_err(e.to_string()))?;
     // Writers name the path they were given; the caller knows only the final one.
     write_tmp(&tmp.path).map_err(|e| match e {
         ImageError::Write { message, .. } => write_err(message),
@@ -213,6 +213,18 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
     })
 }
 
+/// Why no temporary file was made beside a destination.
+#[derive(Debug, thiserror::Error)]
+enum TempFileError {
+    #[error("not a file name")]
+    NotAFileName,
+    #[error("cannot create a file in directory {}: {source}", dir.display())]
+    Create {
+        dir: PathBuf,
+        source: std::io::Error,
+    },
+}
+
 /// A temporary file next to its destination, removed on drop unless persisted (so also when the
 /// writer panics).
 struct TempFile {
@@ -223,9 +235,12 @@ struct TempFile {
 impl TempFile {
     /// Reserves `.NAME.tmp-<pid>-<n>.EXT` beside `dest` (created exclusively, so two writers
     /// never share one; the process-wide counter only makes the first try succeed).
-    fn create(dest: &Path) -> Result<Self, String> {
+    fn create(dest: &Path) -> Result<Self, TempFileError> {
         static COUNTER: AtomicU64 = AtomicU64::new(0);
-        let stem = dest.file_stem().ok_or("not a file name")?.to_string_lossy();
+        let stem = dest
+            .file_stem()
+            .ok_or(TempFileError::NotAFileName)?
+            .to_string_lossy();
         let dir = match dest.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -246,11 +261,11 @@ impl TempFile {
                     })
                 }
                 Err(e) if e.kind() == ErrorKind::AlreadyExists => continue,
-                Err(e) => {
-                    return Err(format!(
-                        "cannot create a file in directory {}: {e}",
-                        dir.display()
-                    ))
+                Err(source) => {
+                    return Err(TempFileError::Create {
+                        dir: dir.to_path_buf(),
+                        source,
+                    })
                 }
             }
         }

@@ -52,7 +52,7 @@ pub fn write(path: &Path, img: &Image) -> Result<(), ImageError> {
         path: path.to_owned(),
         message,
     };
-    let c_path = c_path(path).map_err(write_err)?;
+    let c_path = c_path(path).map_err(|e| write_err(e.to_string()))?;
     // check_dims guarantees both fit in an i32.
     let (w, h) = (img.width as c_int, img.height as c_int);
     let linear = img.pixels.as_flattened();
@@ -102,7 +102,7 @@ pub fn read_encoded(path: &Path) -> Result<(Image, bool), ImageError> {
         path: path.to_owned(),
         message,
     };
-    let c_path = c_path(path).map_err(read_err)?;
+    let c_path = c_path(path).map_err(|e| read_err(e.to_string()))?;
     let (mut w, mut h, mut is_float): (c_int, c_int, c_int) = (0, 0, 0);
     let mut err = [0u8; ERR_LEN];
     let mut buf: Vec<f32> = Vec::new();
@@ -149,16 +149,26 @@ fn to_image(w: c_int, h: c_int, rgb: &[f32]) -> Image {
     img
 }
 
-fn c_path(path: &Path) -> Result<CString, String> {
+/// Why a path cannot be handed to OpenImageIO's C API.
+#[derive(Debug, thiserror::Error)]
+enum CPathError {
+    #[cfg(not(unix))]
+    #[error("path is not valid UTF-8")]
+    NotUtf8,
+    #[error("path contains a NUL byte")]
+    Nul,
+}
+
+fn c_path(path: &Path) -> Result<CString, CPathError> {
     #[cfg(unix)]
     let bytes = std::os::unix::ffi::OsStrExt::as_bytes(path.as_os_str()).to_vec();
     #[cfg(not(unix))]
     let bytes = path
         .to_str()
-        .ok_or("path is not valid UTF-8")?
+        .ok_or(CPathError::NotUtf8)?
         .as_bytes()
         .to_vec();
-    CString::new(bytes).map_err(|_| "path contains a NUL byte".to_string())
+    CString::new(bytes).map_err(|_| CPathError::Nul)
 }
 
 fn err_text(err: &[u8]) -> String {

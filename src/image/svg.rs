@@ -3,15 +3,20 @@
 
 use std::fmt::Write;
 
+/// Why pixels were not encoded as PNG: the encoder's error.
+#[derive(Debug, thiserror::Error)]
+#[error(transparent)]
+pub struct PngError(#[from] png::EncodingError);
+
 /// 8-bit RGB pixels as a PNG file's bytes.
-pub fn png_bytes(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, String> {
+pub fn png_bytes(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>, PngError> {
     let mut bytes = Vec::new();
     let mut encoder = png::Encoder::new(&mut bytes, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(rgb).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb)?;
+    writer.finish()?;
     Ok(bytes)
 }
 

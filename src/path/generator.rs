@@ -1,4 +1,5 @@
-//! Path generators and their weighted sets (paper §5.1–5.3, design §5 and §13).
+//! Path generators and their weighted sets (paper §5.1–5.3; docs/methods.md, "Path
+//! generators and mixtures").
 //!
 //! A [`PathGenerator`] is a sequence of (directional sampler, absorption) pairs plus a
 //! light-point sampler. It samples an eye path vertex by vertex, as a `Walk` (`walk.rs`: a state
@@ -16,7 +17,7 @@
 //!   scattering vertices then comes from each generator by two techniques, direction
 //!   sampling at every vertex (`p_dir`) or up to `x_{n−1}` and a light point from `x_n`
 //!   (`p_light`, without `x_n`'s absorption), which the mixture weighs by the balance
-//!   heuristic over every (generator, technique) pair (design §13).
+//!   heuristic over every (generator, technique) pair.
 //!
 //! The light sample picks an emitter as `pt` does ([`crate::scene::Scene::pick_light`]):
 //! a point on the area emitters by the generator's light-point sampler, a direction towards
@@ -53,8 +54,8 @@ pub const SRT_ABSORPTION_NEE_EVERY: f64 = 0.1;
 /// With [`Nee::Every`], the `srt` generator's steps before this one do not absorb (their
 /// absorption is [`ABSORPTION_MIN`]), as `pt`'s Russian roulette starts at bounce
 /// [`RR_START`](crate::scene::RR_START). Absorbing from the first vertex made `srt` noisier
-/// than `pt` per sample: cbox at 32 spp, relMSE over `pt`'s 1.26 with 0.1 at every vertex,
-/// 1.045 without absorption.
+/// than `pt` per sample (docs/methods.md, "The `srt` generator's absorption with NEE at
+/// every vertex").
 pub const SRT_ROULETTE_FROM: usize = crate::scene::RR_START as usize;
 
 /// The `srt` generator's absorption: `per_vertex` at each step from step `from` on, and
@@ -673,11 +674,11 @@ impl PathGenerator {
     }
 
     /// With [`Nee::Every`], the densities `(p_dir, p_light)` with which this generator
-    /// produces contribution `c` of `path` by its two techniques (design §13): directions at
-    /// all `c.len` vertices, or at the first `c.len − 1` and then a light sample from
-    /// `x_len`, whose absorption does not enter. Directions in solid angle, the last segment
-    /// too (a light point's density converted there). After a delta `x_len` `p_light` is 0,
-    /// and for a delta light `p_dir` is.
+    /// produces contribution `c` of `path` by its two techniques: directions at all `c.len`
+    /// vertices, or at the first `c.len − 1` and then a light sample from `x_len`, whose
+    /// absorption does not enter. Directions in solid angle, the last segment too (a light
+    /// point's density converted there). After a delta `x_len` `p_light` is 0, and for a
+    /// delta light `p_dir` is.
     pub fn pdf_techniques(
         &self,
         view: &SceneView,

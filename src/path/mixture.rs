@@ -22,8 +22,9 @@ pub struct Mixture {
     /// evaluation: a mixture with other generators is a new one ([`Mixture::new`]).
     pub generators: Vec<PathGenerator>,
     pub weights: Vec<f64>,
-    /// Where the estimator does next-event estimation: with [`Nee::Every`] the density of
-    /// a contribution is `Σ_g w_g (p_g,dir + p_g,light)` (design §13).
+    /// Where the estimator does next-event estimation: with [`Nee::Every`] the density of a
+    /// contribution is `Σ_g w_g (p_g,dir + p_g,light)`, the balance heuristic over every
+    /// (generator, technique) pair.
     pub nee: Nee,
     /// Fault injection for statistical tests: (component, factor) multiplies that
     /// component's density in [`Mixture::pdf_path`] only, making the estimator biased.

@@ -16,9 +16,9 @@ use super::generator::{
     DirectionSampler, PathGenerator, SrtAbsorption, Step, ABSORPTION_MAX, ABSORPTION_MIN,
 };
 use super::mixture::Mixture;
-use crate::sampling::anchor::AnchorSampler;
+use crate::sampling::anchor::{AnchorError, AnchorSampler};
 use crate::sampling::light_point::{LightPointError, LightPointSampler};
-use crate::sampling::patch::PatchSampler;
+use crate::sampling::patch::{PatchError, PatchSampler};
 use crate::scene::Scene;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -72,41 +72,56 @@ pub fn srt(scene: &Scene, max_bounces: u32, absorption: impl Into<SrtAbsorption>
     )
 }
 
+/// Which invariant of the estimator a generator breaks.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GeneratorError {
+    #[error("step {step}: absorption {absorption} is not in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]")]
+    Absorption { step: usize, absorption: f64 },
+    #[error("step {step}: {source}")]
+    Anchor { step: usize, source: AnchorError },
+    #[error("step {step}: {source}")]
+    Patch { step: usize, source: PatchError },
+    #[error("light: the scene has no area emitter to sample light points on")]
+    NoAreaEmitter,
+    #[error("light: {0}")]
+    Light(LightPointError),
+}
+
 /// Checks a generator against the invariants that keep the estimator unbiased and finite.
-pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), String> {
+pub fn check_generator(g: &PathGenerator, scene: &Scene) -> Result<(), GeneratorError> {
     for (k, step) in g.steps.iter().enumerate() {
         let a = step.absorption;
         if !(ABSORPTION_MIN..=ABSORPTION_MAX).contains(&a) {
-            return Err(format!(
-                "step {k}: absorption {a} is not in [{ABSORPTION_MIN}, {ABSORPTION_MAX}]"
-            ));
+            return Err(GeneratorError::Absorption {
+                step: k,
+                absorption: a,
+            });
         }
         match &step.sampler {
             DirectionSampler::Brdf => {}
             DirectionSampler::Anchor(a) => {
                 AnchorSampler::new(a.anchor, a.theta_c, a.alpha)
-                    .map_err(|e| format!("step {k}: {e}"))?;
+                    .map_err(|source| GeneratorError::Anchor { step: k, source })?;
             }
             DirectionSampler::Patch(p) => {
                 PatchSampler::new(p.center, p.half_u, p.half_v, p.alpha)
-                    .map_err(|e| format!("step {k}: {e}"))?;
+                    .map_err(|source| GeneratorError::Patch { step: k, source })?;
             }
         }
     }
     if scene.emitters.prims.is_empty() {
         // Lit by its environment alone: no light point is ever sampled.
         if g.light != uniform_light(scene) {
-            return Err("light: the scene has no area emitter to sample light points on".into());
+            return Err(GeneratorError::NoAreaEmitter);
         }
         return Ok(());
     }
     LightPointSampler::new(g.light.region, g.light.beta, &scene.emitters)
-        .map_err(|e| format!("light: {e}"))?;
+        .map_err(GeneratorError::Light)?;
     if g.light.region.is_invalid_on(&scene.mesh) {
-        return Err(format!(
-            "light: {}",
-            LightPointError::AnalyticLevel(g.light.region.prim)
-        ));
+        return Err(GeneratorError::Light(LightPointError::AnalyticLevel(
+            g.light.region.prim,
+        )));
     }
     Ok(())
 }

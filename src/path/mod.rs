@@ -47,9 +47,8 @@ pub struct SceneView<'a> {
 /// work of a ray, far beyond any scene's stack of masks).
 pub const MAX_PASSES: u32 = 256;
 
-/// Cost of one sampler density, in rays (with their shading): `ga-pt` against `pt` renders
-/// at 32 spp, 2 threads (best of 3): cbox 10.4 ns per density against 137 ns per ray, fig5
-/// 8.3 against 111.
+/// Cost of one sampler density, in rays (with their shading), as timed in `ga-pt` against
+/// `pt` renders (reports/README.md, "Measurements formerly in code comments (2026-12-07)").
 pub const DENSITY_COST: f64 = 0.075;
 
 /// Counts of ray queries, for statistics.

@@ -1,5 +1,6 @@
-//! Error against run time (design §11): `genpath sweep` renders each method at increasing
-//! budgets, measures relMSE and MSE against a reference, and writes a CSV and an SVG plot.
+//! Error against run time (reports/README.md): `genpath sweep` renders each method at
+//! increasing budgets, measures relMSE and MSE against a reference, and writes a CSV and an
+//! SVG plot.
 //!
 //! The time of a row is everything the method spends on the image: for `ga` the baseline,
 //! test paths and evolution plus the render. Within one repetition the GA runs once and its
@@ -11,6 +12,7 @@ pub mod plot;
 
 use crate::film::Shard;
 use crate::image::{metrics, Image};
+use crate::integrators::settings::SettingsError;
 use crate::integrators::{prepare, Integrator, Method, PrepareError, RenderSettings, Settings};
 use crate::path::SceneView;
 use crate::progress::progress_bar;
@@ -47,19 +49,37 @@ pub const KEY_ALIASES: [(&str, &str); 17] = [
     ("sp", "spatial_passes"),
 ];
 
+/// Why a `--methods` entry is no method with settings; each names the entry.
+#[derive(Debug, thiserror::Error)]
+pub enum MethodSpecError {
+    #[error("unknown method `{name}` in `{text}`")]
+    UnknownMethod { name: String, text: String },
+    #[error("`{text}`: `{part}` is not key=value")]
+    NotKeyValue { text: String, part: String },
+    #[error("`{text}`: {source}")]
+    Setting { text: String, source: SettingsError },
+}
+
 impl MethodSpec {
     /// A method name, optionally followed by `:key=value` pairs that override `base`'s
     /// settings: any setting's one name (`ga:test_paths=10000:ga_grid=32`), or an alias of
     /// [`KEY_ALIASES`] (`ga:m=10000:grid=32`); booleans are `true`/`false` (or 1/0).
-    pub fn parse(text: &str, base: &Settings) -> Result<Self, String> {
+    pub fn parse(text: &str, base: &Settings) -> Result<Self, MethodSpecError> {
         let mut parts = text.split(':');
         let name = parts.next().unwrap_or_default();
-        let method = <Method as clap::ValueEnum>::from_str(name, false)
-            .map_err(|_| format!("unknown method `{name}` in `{text}`"))?;
+        let method = <Method as clap::ValueEnum>::from_str(name, false).map_err(|_| {
+            MethodSpecError::UnknownMethod {
+                name: name.to_string(),
+                text: text.to_string(),
+            }
+        })?;
         let mut config = base.clone();
         for part in parts {
             let Some((key, value)) = part.split_once('=') else {
-                return Err(format!("`{text}`: `{part}` is not key=value"));
+                return Err(MethodSpecError::NotKeyValue {
+                    text: text.to_string(),
+                    part: part.to_string(),
+                });
             };
             let key = KEY_ALIASES
                 .iter()
@@ -67,7 +87,10 @@ impl MethodSpec {
                 .map_or(key, |(_, setting)| setting);
             config
                 .set(key, value)
-                .map_err(|e| format!("`{text}`: {e}"))?;
+                .map_err(|source| MethodSpecError::Setting {
+                    text: text.to_string(),
+                    source,
+                })?;
         }
         Ok(Self {
             label: text.to_string(),
@@ -151,35 +174,62 @@ pub fn csv(rows: &[Row]) -> String {
     out
 }
 
+/// Why a sweep's CSV cannot be read back; each names the line.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum CsvError {
+    #[error("line 1: not the header `{CSV_HEADER}`")]
+    Header,
+    #[error("line {line}: {found} fields, not {expected}")]
+    Fields {
+        line: usize,
+        found: usize,
+        expected: usize,
+    },
+    #[error("line {line}: `{field}` is not a number")]
+    NotANumber { line: usize, field: String },
+    #[error("line {line}: `{field}` is not a whole number")]
+    NotAWholeNumber { line: usize, field: String },
+    #[error("line {line}: spp out of range")]
+    SppOutOfRange { line: usize },
+}
+
 /// The rows of a CSV that [`csv`] wrote (its `efficiency` column, which follows from the
-/// others, is not read); an error names the line.
-pub fn parse_csv(text: &str) -> Result<Vec<Row>, String> {
+/// others, is not read).
+pub fn parse_csv(text: &str) -> Result<Vec<Row>, CsvError> {
     let mut lines = text.lines().enumerate();
     match lines.next() {
         Some((_, header)) if header.trim() == CSV_HEADER => {}
-        _ => return Err(format!("line 1: not the header `{CSV_HEADER}`")),
+        _ => return Err(CsvError::Header),
     }
     let mut rows = Vec::new();
     // A row has the header's fields.
     let fields = CSV_HEADER.split(',').count();
     for (i, line) in lines.filter(|(_, l)| !l.trim().is_empty()) {
         let f: Vec<&str> = line.split(',').collect();
-        let bad = |what: &str| format!("line {}: {what}", i + 1);
+        let line = i + 1;
         if f.len() != fields {
-            return Err(bad(&format!("{} fields, not {fields}", f.len())));
+            return Err(CsvError::Fields {
+                line,
+                found: f.len(),
+                expected: fields,
+            });
         }
         let num = |k: usize| {
-            f[k].parse::<f64>()
-                .map_err(|_| bad(&format!("`{}` is not a number", f[k])))
+            f[k].parse::<f64>().map_err(|_| CsvError::NotANumber {
+                line,
+                field: f[k].to_string(),
+            })
         };
         let int = |k: usize| {
-            f[k].parse::<u64>()
-                .map_err(|_| bad(&format!("`{}` is not a whole number", f[k])))
+            f[k].parse::<u64>().map_err(|_| CsvError::NotAWholeNumber {
+                line,
+                field: f[k].to_string(),
+            })
         };
         rows.push(Row {
             scene: f[0].to_string(),
             method: f[1].to_string(),
-            spp: u32::try_from(int(2)?).map_err(|_| bad("spp out of range"))?,
+            spp: u32::try_from(int(2)?).map_err(|_| CsvError::SppOutOfRange { line })?,
             seconds: num(3)?,
             ga_seconds: num(4)?,
             relmse: num(5)?,
@@ -221,8 +271,9 @@ pub enum SweepError {
 }
 
 /// Samples per pixel of the two renders that calibrate a time budget: long enough that
-/// their difference is not lost in timing noise (with 1 and 4, fig5 `ga-pt` budgeted for
-/// half its real cost per sample and ran 66 s for a 30 s budget).
+/// their difference is not lost in timing noise, which with fewer samples made a budgeted
+/// render run far past its budget (reports/README.md, "Measurements formerly in code
+/// comments (2026-12-07)").
 const CALIBRATION_SPP: [u32; 2] = [2, 16];
 
 /// With budgets in seconds, a GA plan may take this share of each budget
@@ -421,13 +472,13 @@ mod tests {
         assert_eq!(back[1].relmse, 3.5e-3);
         let old = "scene,method,spp,seconds,ga_seconds,relmse,mse,seed,efficiency,budget\n\
                    fig5,pt,40,2.01,0.5,3.5e-3,1.25e-3,401,1.4e2,2\n";
-        let err = parse_csv(old).unwrap_err();
+        let err = parse_csv(old).unwrap_err().to_string();
         assert!(
             err.contains("line 1") && err.contains("bad_fraction"),
             "{err}"
         );
         let short = format!("{CSV_HEADER}\nfig5,pt,40,2.01,0.5,3.5e-3,1.25e-3,401,1.4e2,2\n");
-        let err = parse_csv(&short).unwrap_err();
+        let err = parse_csv(&short).unwrap_err().to_string();
         assert!(
             err.contains("line 2") && err.contains("10 fields, not 11"),
             "{err}"

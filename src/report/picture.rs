@@ -4,7 +4,7 @@
 //! method's). One self-contained SVG: the images are PNGs inside it, the labels text.
 
 use super::Row;
-use crate::image::svg::{image_element, png_bytes, text};
+use crate::image::svg::{image_element, png_bytes, text, PngError};
 use crate::image::{srgb, Image};
 use std::fmt::Write;
 
@@ -98,18 +98,32 @@ fn error_scale(out: &mut String, x: u32, bottom: u32, w: u32) {
     }
 }
 
+/// Why a sweep's picture was not drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum PictureError {
+    #[error("{method} is {}×{}, the reference {}×{}", size.0, size.1, reference.0, reference.1)]
+    Size {
+        method: String,
+        size: (u32, u32),
+        reference: (u32, u32),
+    },
+    #[error(transparent)]
+    Png(#[from] PngError),
+}
+
 /// The picture of `panels` (every image of `reference`'s size) against `reference`, titled
 /// `title`: an SVG document.
-pub fn svg(title: &str, panels: &[Panel], reference: &Image) -> Result<String, String> {
+pub fn svg(title: &str, panels: &[Panel], reference: &Image) -> Result<String, PictureError> {
     let (w, h) = (reference.width, reference.height);
     if let Some(p) = panels
         .iter()
         .find(|p| (p.image.width, p.image.height) != (w, h))
     {
-        return Err(format!(
-            "{} is {}×{}, the reference {w}×{h}",
-            p.row.method, p.image.width, p.image.height
-        ));
+        return Err(PictureError::Size {
+            method: p.row.method.clone(),
+            size: (p.image.width, p.image.height),
+            reference: (w, h),
+        });
     }
     let columns = panels.len() as u32 + 1;
     let width = MARGIN + columns * (w + MARGIN);

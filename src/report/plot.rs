@@ -99,9 +99,15 @@ fn colour(method: &str, i: usize) -> RGBAColor {
     }
 }
 
+/// Why the plot was not drawn: the plotting library's error, as its text (its type depends
+/// on the drawing back-end).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("cannot draw the plot: {0}")]
+pub struct PlotError(String);
+
 /// The plot of `rows` as SVG text: of the methods only, or with `ablations` of every row;
 /// with `time` budgets (seconds), a tick at every budget.
-pub fn svg(title: &str, rows: &[Row], ablations: bool, time: bool) -> Result<String, String> {
+pub fn svg(title: &str, rows: &[Row], ablations: bool, time: bool) -> Result<String, PlotError> {
     let rows: Vec<Row> = rows
         .iter()
         .filter(|r| ablations || !is_ablation(&r.method))
@@ -110,9 +116,8 @@ pub fn svg(title: &str, rows: &[Row], ablations: bool, time: bool) -> Result<Str
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, (1000, 760)).into_drawing_area();
-        draw(&root, title, &rows, time).map_err(|e| format!("cannot draw the plot: {e}"))?;
-        root.present()
-            .map_err(|e| format!("cannot draw the plot: {e}"))?;
+        draw(&root, title, &rows, time).map_err(|e| PlotError(e.to_string()))?;
+        root.present().map_err(|e| PlotError(e.to_string()))?;
     }
     Ok(text)
 }

@@ -1,4 +1,4 @@
-//! The anchor-point sampler (paper §5.2, design §4): more directions inside a cone around the
+//! The anchor-point sampler (paper §5.2): more directions inside a cone around the
 //! direction to an anchor point, the rest uniformly over the remainder of the sphere.
 //!
 //! Densities are over the full sphere of directions in solid-angle measure, in `f64`:
@@ -34,7 +34,7 @@ pub struct AnchorSampler {
     /// Cone half-angle in (0, π).
     pub theta_c: f64,
     /// Probability mass inside the cone, in (0, 1): both densities stay positive, so every
-    /// direction can be sampled (unbiasedness, design §5).
+    /// direction can be sampled and the estimator stays unbiased.
     pub alpha: f64,
 }
 

@@ -1,8 +1,8 @@
-//! The light-point sampler (design §4; the paper's §6 optimises "the sample point on the light
-//! surface" too): the density over emitter area of the shadow ray's end point. Mass `β` lies
-//! uniformly on an anchor region — an emitter triangle or one cell of its fixed 4^k midpoint
-//! subdivision, whose area is exactly the triangle's over 4^k — and `1 − β` uniformly over
-//! all emitters by area.
+//! The light-point sampler (the paper's §6 optimises "the sample point on the light
+//! surface" too): the density over emitter area of the shadow ray's end point. Mass `β`
+//! lies uniformly on an anchor region — an emitter triangle or one cell of its fixed 4^k
+//! midpoint subdivision, whose area is exactly the triangle's over 4^k — and `1 − β`
+//! uniformly over all emitters by area.
 //!
 //! Subdivision: each level splits a triangle `(v0, v1, v2)` at its edge midpoints `m01, m12,
 //! m20` into four congruent children, numbered 0..3: child `i < 3` is the corner triangle at
@@ -201,7 +201,7 @@ impl LightDensity {
 pub struct LightPointSampler {
     pub region: LightRegion,
     /// Probability of the region, in [0, 1): below 1 so that every emitter point keeps a
-    /// positive density (design §5).
+    /// positive density and the estimator stays unbiased.
     pub beta: f64,
 }
 

@@ -14,7 +14,8 @@
 //! ```
 //!
 //! (area density `1/A`, `A = 4|n|`, times `t²/|cos θ|`, `cos θ = n·ω / |n|`). The uniform
-//! part keeps every direction possible (design §5), as the cone's outside density does.
+//! part keeps every direction possible, so the estimator stays unbiased, as the cone's
+//! outside density does.
 
 use glam::DVec3;
 use std::f64::consts::PI;

@@ -33,10 +33,10 @@ use super::texture::Texture;
 use glam::{Vec2, Vec3};
 use std::f64::consts::FRAC_1_PI;
 
-/// A surface material (design §3): a two-sided Lambertian lobe plus a glossy lobe
-/// ([`Glossy`]: a normalised modified-Phong lobe, or Mitsuba's rough conductor, rough
-/// plastic or rough dielectric), or a delta BSDF (an ideal mirror, a smooth conductor, a
-/// smooth or thin dielectric); and a one-sided emission.
+/// A surface material: a two-sided Lambertian lobe plus a glossy lobe ([`Glossy`]: a
+/// normalised modified-Phong lobe, or Mitsuba's rough conductor, rough plastic or rough
+/// dielectric), or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or thin
+/// dielectric); and a one-sided emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,

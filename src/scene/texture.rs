@@ -3,12 +3,32 @@
 
 use crate::image::srgb;
 use glam::{Affine2, Vec2, Vec3};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The most texels a bitmap may hold (16384²: 3 GiB of linear RGB), so that a typo or a
 /// hostile file fails with a message instead of exhausting memory.
 pub const MAX_TEXELS: u64 = 1 << 28;
+
+/// Why an image file gives no bitmap texture; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum BitmapError {
+    #[error(transparent)]
+    Image(#[from] crate::image::ImageError),
+    #[error("{}: {width}×{height} texels is not within 1..={MAX_TEXELS}, genpath's limit", path.display())]
+    Size {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+    },
+    #[error("{}: texel ({x}, {y}) is {texel:?}: texels must be finite and non-negative", path.display())]
+    Texel {
+        path: PathBuf,
+        x: usize,
+        y: usize,
+        texel: [f32; 3],
+    },
+}
 
 /// How a bitmap's texels are looked up (Mitsuba's `filter_type`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,16 +96,19 @@ impl Bitmap {
     /// integer formats' values sRGB-decoded unless `raw` (float formats' are linear), looked
     /// up by `lookup`. The error names the file: unreadable, beyond [`MAX_TEXELS`], or with
     /// a texel that is not finite or negative.
-    pub fn read(path: &Path, raw: bool, lookup: (Filter, Wrap, Affine2)) -> Result<Self, String> {
-        let (image, encoded) = crate::image::read_encoded(path).map_err(|e| e.to_string())?;
+    pub fn read(
+        path: &Path,
+        raw: bool,
+        lookup: (Filter, Wrap, Affine2),
+    ) -> Result<Self, BitmapError> {
+        let (image, encoded) = crate::image::read_encoded(path)?;
         let texels = u64::from(image.width) * u64::from(image.height);
         if texels > MAX_TEXELS || texels == 0 {
-            return Err(format!(
-                "{}: {}×{} texels is not within 1..={MAX_TEXELS}, genpath's limit",
-                path.display(),
-                image.width,
-                image.height
-            ));
+            return Err(BitmapError::Size {
+                path: path.to_path_buf(),
+                width: image.width,
+                height: image.height,
+            });
         }
         let mut pixels = image.pixels;
         if let Some(i) = pixels
@@ -93,13 +116,12 @@ impl Bitmap {
             .position(|t| t.iter().any(|c| !(c.is_finite() && *c >= 0.0)))
         {
             let w = image.width as usize;
-            return Err(format!(
-                "{}: texel ({}, {}) is {:?}: texels must be finite and non-negative",
-                path.display(),
-                i % w,
-                i / w,
-                pixels[i]
-            ));
+            return Err(BitmapError::Texel {
+                path: path.to_path_buf(),
+                x: i % w,
+                y: i / w,
+                texel: pixels[i],
+            });
         }
         if encoded && !raw {
             decode_srgb(&mut pixels);

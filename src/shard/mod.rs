@@ -1,9 +1,9 @@
-//! Shards of one render (design §13): `render --shard K/N` takes sample `s` of every pixel
-//! when `s mod N = K`, from the same random stream `(seed, pixel, s)` as a render on one
-//! machine, and keeps its per-pixel sums in a shard file ([`file`]); [`merge`] adds shards'
-//! sums. A shard records what makes it part of one render, its [`Identity`]: the genpath
-//! binary, the scene's files, the settings and the seeds, and a merge refuses shards whose
-//! identities differ.
+//! Shards of one render (docs/shards.md): `render --shard K/N` takes sample `s` of every
+//! pixel when `s mod N = K`, from the same random stream `(seed, pixel, s)` as a render on
+//! one machine, and keeps its per-pixel sums in a shard file ([`file`]); [`merge`] adds
+//! shards' sums. A shard records what makes it part of one render, its [`Identity`]: the
+//! genpath binary, the scene's files, the settings and the seeds, and a merge refuses
+//! shards whose identities differ.
 //!
 //! A method that learns (`ga`, `ga-pt`, `pg`) is sharded with its learned state trained
 //! once, by `genpath learn`, and saved in a plan file ([`plan_file`]) that every shard

@@ -77,6 +77,16 @@ pub enum PlanFileError {
     Payload { path: PathBuf, message: String },
 }
 
+/// Why a plan file's bytes were not encoded: its payload's `bincode` error or its
+/// header's JSON error.
+#[derive(Debug, thiserror::Error)]
+pub enum EncodeError {
+    #[error(transparent)]
+    Payload(#[from] bincode::Error),
+    #[error(transparent)]
+    Header(#[from] serde_json::Error),
+}
+
 /// The payload's encoding: `bincode` with fixed-width little-endian integers, nothing after.
 fn codec() -> impl Options {
     bincode::options()
@@ -86,20 +96,18 @@ fn codec() -> impl Options {
 }
 
 /// The payload's bytes: what a render's identity hashes ([`super::hash_bytes`]).
-pub fn payload(learned: &Learned) -> Result<Vec<u8>, String> {
-    codec().serialize(learned).map_err(|e| e.to_string())
+pub fn payload(learned: &Learned) -> Result<Vec<u8>, EncodeError> {
+    Ok(codec().serialize(learned)?)
 }
 
 /// The payload's bytes of a reference's plan: its two halves' learned states, one after
 /// the other.
-pub fn payload_halves(first: &Learned, second: &Learned) -> Result<Vec<u8>, String> {
-    codec()
-        .serialize(&(first, second))
-        .map_err(|e| e.to_string())
+pub fn payload_halves(first: &Learned, second: &Learned) -> Result<Vec<u8>, EncodeError> {
+    Ok(codec().serialize(&(first, second))?)
 }
 
 /// The file's bytes, from its header and payload.
-pub fn encode(header: &PlanHeader, payload: &[u8]) -> Result<Vec<u8>, String> {
+pub fn encode(header: &PlanHeader, payload: &[u8]) -> Result<Vec<u8>, EncodeError> {
     encode_framed(&PLAN, header, payload)
 }
 
@@ -126,8 +134,8 @@ fn encode_framed(
     kind: &Kind,
     header: &impl serde::Serialize,
     payload: &[u8],
-) -> Result<Vec<u8>, String> {
-    let json = serde_json::to_vec(header).map_err(|e| e.to_string())?;
+) -> Result<Vec<u8>, EncodeError> {
+    let json = serde_json::to_vec(header)?;
     let body = |out: &mut Vec<u8>| {
         out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
         out.extend_from_slice(payload);
@@ -167,7 +175,7 @@ fn write_framed(
         path: path.to_path_buf(),
         source: std::io::Error::other(message),
     };
-    let bytes = encode_framed(kind, header, payload).map_err(io)?;
+    let bytes = encode_framed(kind, header, payload).map_err(|e| io(e.to_string()))?;
     crate::image::write_bytes_atomic(path, &bytes).map_err(|e| io(e.to_string()))
 }
 

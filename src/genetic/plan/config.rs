@@ -48,9 +48,10 @@ crate::settings_table! {
             /// many times the evolved mixtures' (median); 0: never, inf: always.
             #[range = 0.0..=f64::INFINITY]
             pub baseline_keep_ratio: f64 = super::BASELINE_KEEP_RATIO,
-            // The union of `k` mixtures costs `ga` every component's densities on every path
-            // it samples, while `ga-pt` blends only the guides' first steps; hence the
-            // defaults (measured in docs/methods.md and reports/README.md).
+            // The union of `k` mixtures costs `ga` every component's densities on every
+            // path it samples, while `ga-pt` blends only the guides' first steps; hence the
+            // defaults (reports/README.md, "The settings' defaults: the measurements behind
+            // them", `ga_neighbours`).
             /// Nearest GA pixels whose mixtures each pixel combines (and whose best
             /// individuals start a warm-started GA pixel's population). Default: 2 for ga, 4
             /// for ga-pt
@@ -78,9 +79,10 @@ crate::settings_table! {
             #[value_name = "SECONDS"]
             #[range = 0.0..]
             pub time_limit: Option<f64> = None,
-            // One step leaves the GA a search space it explores in its generations, and path
-            // tracing's next-event estimation already finds the light from the vertices
-            // after the first (measured in reports/README.md).
+            // One step leaves the GA a search space it explores in its generations, and
+            // path tracing's next-event estimation already finds the light from the
+            // vertices after the first (reports/README.md, "The settings' defaults: the
+            // measurements behind them", `guide_steps`).
             /// ga-pt: vertices the evolved guide steers (the GA evolves that many directional
             /// steps, at most as many as the test paths need); path tracing's own sampling
             /// beyond.
@@ -110,11 +112,9 @@ impl PlanConfig {
     }
 
     /// Distance between grid GA pixels in a plan for `plan_for`. `ga-pt`'s guides beside
-    /// the spatial guide pay for fewer GA pixels: at 256² its GA phase then takes 0.14 s of a
-    /// 2 s budget on fig5 instead of 0.27 s, and its relMSE over `pg`'s at 2 s (geometric
-    /// mean over seeds 401–406, and 407–412) is 0.603 and 0.579 against 0.653 and 0.647 with
-    /// 32, at 8 and 30 s (seed 101) 0.536 and 0.578 against 0.566 and 0.584; on fig1, cbox
-    /// and glossy within 2 % of it either way (docs/methods.md).
+    /// the spatial guide pay for fewer GA pixels: a coarser grid halves its GA phase on
+    /// fig5 and lowers its error against `pg` there, and changes little elsewhere
+    /// (docs/methods.md, "The genetic algorithm (`--method ga`)", step 1, "Grid").
     pub fn grid(&self, plan_for: PlanFor) -> u32 {
         self.grid.unwrap_or(match plan_for {
             PlanFor::Mixture => 32,

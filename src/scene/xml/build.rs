@@ -177,7 +177,8 @@ fn shape(p: &Props, g: &mut Geometry, warnings: &mut Vec<String>) -> Result<(), 
         face_normals: p.bool("face_normals", false)?,
     };
     let raw = shapes::load(p, &mut g.files)?;
-    raw.check_indices(&p.what()).map_err(|m| p.error(m))?;
+    raw.check_indices(&p.what())
+        .map_err(|e| p.error(e.to_string()))?;
     let material = shape_material(p, g, warnings)?;
     p.finish()?;
     let placed = shapes::place(raw, &how, p.loc(), p)?;

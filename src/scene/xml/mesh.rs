@@ -16,9 +16,18 @@ pub struct RawMesh {
     pub uvs: Option<Vec<Option<Vec2>>>,
 }
 
+/// A face index of a mesh (`what`) that names no vertex.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{what}: face index {index} is out of range ({vertices} vertices)")]
+pub struct FaceIndexError {
+    pub what: String,
+    pub index: u32,
+    pub vertices: u64,
+}
+
 impl RawMesh {
     /// Checks that every index names a vertex.
-    pub fn check_indices(&self, what: &str) -> Result<(), String> {
+    pub fn check_indices(&self, what: &str) -> Result<(), FaceIndexError> {
         let n = self.positions.len() as u64;
         match self
             .triangles
@@ -26,9 +35,11 @@ impl RawMesh {
             .flatten()
             .find(|&&i| u64::from(i) >= n)
         {
-            Some(i) => Err(format!(
-                "{what}: face index {i} is out of range ({n} vertices)"
-            )),
+            Some(&index) => Err(FaceIndexError {
+                what: what.to_string(),
+                index,
+                vertices: n,
+            }),
             None => Ok(()),
         }
     }

@@ -93,15 +93,46 @@ impl PropertyAccess for Skipped {
     }
 }
 
-/// Reads a PLY file (its `v` turned into `1 − v` with `flip_tex_coords`); errors are
-/// messages for the caller to place.
-pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+/// Why a PLY file is no mesh; the caller names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum PlyError {
+    #[error("cannot read: {0}")]
+    Read(std::io::Error),
+    #[error("malformed PLY header: {0}")]
+    Header(std::io::Error),
+    #[error("element `{name}` claims {count} entries, more than the file's {size} bytes")]
+    Count {
+        name: String,
+        count: usize,
+        size: u64,
+    },
+    #[error("element `{name}`: {source} (truncated or malformed)")]
+    Truncated {
+        name: String,
+        source: std::io::Error,
+    },
+    #[error("vertex {0} is not finite")]
+    VertexNotFinite(usize),
+    #[error("face {0} has fewer than 3 vertex indices")]
+    FewIndices(usize),
+    #[error("face {face}: vertex index {index} is out of range ({vertices} vertices)")]
+    IndexOutOfRange {
+        face: usize,
+        index: i64,
+        vertices: i64,
+    },
+    #[error("no `vertex` element")]
+    NoVertices,
+}
+
+/// Reads a PLY file (its `v` turned into `1 − v` with `flip_tex_coords`).
+pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, PlyError> {
+    let file = std::fs::File::open(path).map_err(PlyError::Read)?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let mut reader = BufReader::new(file);
     let header = Parser::<Skipped>::new()
         .read_header(&mut reader)
-        .map_err(|e| format!("malformed PLY header: {e}"))?;
+        .map_err(PlyError::Header)?;
     let mut mesh = RawMesh::default();
     let mut normals = Vec::new();
     let mut has_normals = false;
@@ -109,13 +140,16 @@ pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
     for (name, def) in &header.elements {
         // Every element takes at least one byte: a count beyond the file is a lie.
         if def.count as u64 > size {
-            return Err(format!(
-                "element `{name}` claims {} entries, more than the file's {size} bytes",
-                def.count
-            ));
+            return Err(PlyError::Count {
+                name: name.clone(),
+                count: def.count,
+                size,
+            });
         }
-        let truncated =
-            |e: std::io::Error| format!("element `{name}`: {e} (truncated or malformed)");
+        let truncated = |source: std::io::Error| PlyError::Truncated {
+            name: name.clone(),
+            source,
+        };
         match name.as_str() {
             "vertex" => {
                 has_normals = ["nx", "ny", "nz"]
@@ -130,7 +164,7 @@ pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
                 for (i, v) in vertices.iter().enumerate() {
                     let p = DVec3::from(v.p);
                     if !p.is_finite() || (has_normals && !DVec3::from(v.n).is_finite()) {
-                        return Err(format!("vertex {i} is not finite"));
+                        return Err(PlyError::VertexNotFinite(i));
                     }
                     mesh.positions.push(p);
                     normals.push(DVec3::from(v.n));
@@ -154,12 +188,14 @@ pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
                 let n = mesh.positions.len() as i64;
                 for (i, f) in faces.iter().enumerate() {
                     if f.indices.len() < 3 {
-                        return Err(format!("face {i} has fewer than 3 vertex indices"));
+                        return Err(PlyError::FewIndices(i));
                     }
-                    if let Some(bad) = f.indices.iter().find(|&&k| k < 0 || k >= n) {
-                        return Err(format!(
-                            "face {i}: vertex index {bad} is out of range ({n} vertices)"
-                        ));
+                    if let Some(&index) = f.indices.iter().find(|&&k| k < 0 || k >= n) {
+                        return Err(PlyError::IndexOutOfRange {
+                            face: i,
+                            index,
+                            vertices: n,
+                        });
                     }
                     let k = |j: usize| f.indices[j] as u32;
                     for j in 1..f.indices.len() - 1 {
@@ -175,7 +211,7 @@ pub fn load(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, String> {
         }
     }
     if mesh.positions.is_empty() {
-        return Err("no `vertex` element".into());
+        return Err(PlyError::NoVertices);
     }
     if has_normals {
         mesh.normals = Some(normals);

@@ -3,7 +3,7 @@
 //! triangle counts, positions, optional normals, UVs and colours, and `u32` triangles;
 //! files with several meshes end with a table of their offsets (`shape_index`).
 
-use super::mesh::RawMesh;
+use super::mesh::{FaceIndexError, RawMesh};
 use flate2::read::ZlibDecoder;
 use glam::{DVec3, Vec2};
 use std::io::{Read, Seek, SeekFrom};
@@ -54,30 +54,55 @@ fn read_floats(
     })
 }
 
-/// Mesh `index` of the file; errors are messages for the caller to place.
-pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
-    let io = |e: std::io::Error| format!("truncated or malformed serialized mesh: {e}");
-    let mut file = std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?;
+/// Why a Mitsuba serialized file gives no mesh; the caller names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SerializedError {
+    #[error("cannot read: {0}")]
+    Read(std::io::Error),
+    #[error("truncated or malformed serialized mesh: {0}")]
+    Malformed(std::io::Error),
+    #[error("not a Mitsuba serialized mesh (bad magic number)")]
+    BadMagic,
+    #[error("version 5 serialized meshes are not supported yet (convert the mesh to PLY)")]
+    Version5,
+    #[error("serialized format version {0} is not 3 or 4")]
+    Version(u16),
+    #[error("shape_index {index} is out of range (the file has {count} meshes)")]
+    IndexOutOfRange { index: u32, count: u32 },
+    #[error("mesh {index}'s offset {offset} is beyond the file")]
+    OffsetBeyondFile { index: u32, offset: u64 },
+    #[error("implausible counts ({vertices} vertices, {faces} triangles) for a {size}-byte file")]
+    Counts {
+        vertices: u64,
+        faces: u64,
+        size: u64,
+    },
+    #[error("vertex {0} is not finite")]
+    VertexNotFinite(usize),
+    #[error(transparent)]
+    FaceIndex(#[from] FaceIndexError),
+}
+
+/// Mesh `index` of the file.
+pub fn load(path: &Path, index: u32) -> Result<RawMesh, SerializedError> {
+    let io = SerializedError::Malformed;
+    let mut file = std::fs::File::open(path).map_err(SerializedError::Read)?;
     let size = file.metadata().map_err(io)?.len();
     if read_u16(&mut file).map_err(io)? != MAGIC {
-        return Err("not a Mitsuba serialized mesh (bad magic number)".into());
+        return Err(SerializedError::BadMagic);
     }
     let version = read_u16(&mut file).map_err(io)?;
     if version == 5 {
-        return Err(
-            "version 5 serialized meshes are not supported yet (convert the mesh to PLY)".into(),
-        );
+        return Err(SerializedError::Version5);
     }
     if version != 3 && version != 4 {
-        return Err(format!("serialized format version {version} is not 3 or 4"));
+        return Err(SerializedError::Version(version));
     }
     if index > 0 {
         file.seek(SeekFrom::End(-4)).map_err(io)?;
         let count = read_u32(&mut file).map_err(io)?;
         if index >= count {
-            return Err(format!(
-                "shape_index {index} is out of range (the file has {count} meshes)"
-            ));
+            return Err(SerializedError::IndexOutOfRange { index, count });
         }
         let entry = if version == 4 { 8 } else { 4 };
         let back = 4 + entry * i64::from(count - index);
@@ -88,7 +113,7 @@ pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
             read_u32(&mut file).map_err(io)?.into()
         };
         if offset >= size {
-            return Err(format!("mesh {index}'s offset {offset} is beyond the file"));
+            return Err(SerializedError::OffsetBeyondFile { index, offset });
         }
         file.seek(SeekFrom::Start(offset + 4)).map_err(io)?;
     }
@@ -112,9 +137,11 @@ pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
         || faces.saturating_mul(12) > limit
         || vertices > u64::from(u32::MAX)
     {
-        return Err(format!(
-            "implausible counts ({vertices} vertices, {faces} triangles) for a {size}-byte file"
-        ));
+        return Err(SerializedError::Counts {
+            vertices,
+            faces,
+            size,
+        });
     }
     let double = flags & DOUBLE_PRECISION != 0;
     let p = read_floats(&mut z, vertices, 3, double).map_err(io)?;
@@ -140,7 +167,7 @@ pub fn load(path: &Path, index: u32) -> Result<RawMesh, String> {
     };
     let positions = vec3(&p);
     if let Some(i) = positions.iter().position(|x| !x.is_finite()) {
-        return Err(format!("vertex {i} is not finite"));
+        return Err(SerializedError::VertexNotFinite(i));
     }
     let triangles: Vec<[u32; 3]> = bytes
         .chunks_exact(12)

@@ -43,14 +43,14 @@ pub fn load(p: &Props, files: &mut Vec<std::path::PathBuf>) -> Result<RawMesh, S
         "ply" => {
             let path = file(p)?;
             let flip = p.bool("flip_tex_coords", false)?;
-            ply::load(&path, flip).map_err(|m| mesh_error(&path, m))?
+            ply::load(&path, flip).map_err(|e| mesh_error(&path, e.to_string()))?
         }
         "serialized" => {
             let path = file(p)?;
             let index = p.int("shape_index", 0)?;
             let index = u32::try_from(index)
                 .map_err(|_| p.error(format!("`shape_index` {index} is negative")))?;
-            serialized::load(&path, index).map_err(|m| mesh_error(&path, m))?
+            serialized::load(&path, index).map_err(|e| mesh_error(&path, e.to_string()))?
         }
         "cylinder" => {
             return Err(p.error(
@@ -349,19 +349,26 @@ pub fn obj(path: &Path, flip_tex_coords: bool) -> Result<RawMesh, SceneError> {
     Ok(mesh)
 }
 
+/// Why a part of an OBJ face is no index into the items defined before it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+enum ObjIndexError {
+    #[error("`{0}` is not an index")]
+    NotAnIndex(String),
+    #[error("index {index} is out of range ({count} defined so far)")]
+    OutOfRange { index: i64, count: usize },
+}
+
 /// A 1-based (or negative, relative) OBJ index into `count` items; `None` for an empty one.
-fn obj_index(part: Option<&str>, count: usize) -> Result<Option<usize>, String> {
+fn obj_index(part: Option<&str>, count: usize) -> Result<Option<usize>, ObjIndexError> {
     let Some(text) = part.filter(|t| !t.is_empty()) else {
         return Ok(None);
     };
     let k: i64 = text
         .parse()
-        .map_err(|_| format!("`{text}` is not an index"))?;
+        .map_err(|_| ObjIndexError::NotAnIndex(text.to_string()))?;
     let i = if k > 0 { k - 1 } else { count as i64 + k };
     if k == 0 || i < 0 || i >= count as i64 {
-        return Err(format!(
-            "index {k} is out of range ({count} defined so far)"
-        ));
+        return Err(ObjIndexError::OutOfRange { index: k, count });
     }
     Ok(Some(i as usize))
 }

@@ -30,13 +30,25 @@ const CIE_MAX: f64 = 830.0;
 const CIE_SAMPLES: usize = 95;
 const CIE_Y_NORMALIZATION: f64 = 1.0 / 106.750_259_399_414_06;
 
+/// Why a `<spectrum>`'s value is no spectrum.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SpectrumError {
+    #[error("<spectrum>: could not parse \"{0}\" as a finite number")]
+    NotANumber(String),
+    #[error("<spectrum>: \"{0}\" is not wavelength:value")]
+    NotAPair(String),
+    #[error("<spectrum> needs one value or at least two wavelength:value pairs")]
+    TooFewPairs,
+    #[error("<spectrum>: wavelengths must increase")]
+    NotIncreasing,
+}
+
 impl Spectrum {
     /// `"0.5"` or `"400:0.1, 500:0.4, …"`.
-    pub fn parse(text: &str) -> Result<Spectrum, String> {
+    pub fn parse(text: &str) -> Result<Spectrum, SpectrumError> {
         let tokens: Vec<&str> = super::numbers::tokens(text).collect();
         let number = |t: &str| {
-            super::numbers::parse_f64(t)
-                .ok_or_else(|| format!("<spectrum>: could not parse \"{t}\" as a finite number"))
+            super::numbers::parse_f64(t).ok_or_else(|| SpectrumError::NotANumber(t.to_string()))
         };
         if let [single] = tokens[..] {
             if !single.contains(':') {
@@ -47,14 +59,14 @@ impl Spectrum {
         for t in tokens {
             let (w, v) = t
                 .split_once(':')
-                .ok_or_else(|| format!("<spectrum>: \"{t}\" is not wavelength:value"))?;
+                .ok_or_else(|| SpectrumError::NotAPair(t.to_string()))?;
             samples.push((number(w)?, number(v)?));
         }
         if samples.len() < 2 {
-            return Err("<spectrum> needs one value or at least two wavelength:value pairs".into());
+            return Err(SpectrumError::TooFewPairs);
         }
         if samples.windows(2).any(|w| w[1].0 <= w[0].0) {
-            return Err("<spectrum>: wavelengths must increase".into());
+            return Err(SpectrumError::NotIncreasing);
         }
         Ok(Spectrum::Samples(samples))
     }

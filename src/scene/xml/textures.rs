@@ -139,7 +139,7 @@ impl Textures {
         );
         let path = p.doc.resolve(p.loc(), name);
         self.files.push(path.clone());
-        Bitmap::read(&path, raw, (filter, wrap, to_uv)).map_err(|e| p.error(e))
+        Bitmap::read(&path, raw, (filter, wrap, to_uv)).map_err(|e| p.error(e.to_string()))
     }
 }
 

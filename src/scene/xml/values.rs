@@ -57,7 +57,7 @@ impl Parser {
                     ));
                 }
                 Value::Spectrum(
-                    Spectrum::parse(value()?).map_err(|message| self.err(el.loc, message))?,
+                    Spectrum::parse(value()?).map_err(|e| self.err(el.loc, e.to_string()))?,
                 )
             }
             "transform" => Value::Transform(self.transform(el)?),
