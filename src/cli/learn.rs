@@ -20,7 +20,7 @@ use super::session::{beside, shard_path, write_stats, Session};
 use anyhow::{bail, Context, Result};
 use clap::{ArgMatches, Args};
 use genpath::film::{LayerSums, Shard, Stop};
-use genpath::genetic::plan::{LearnStore, PlanError, WaveEntry};
+use genpath::genetic::plan::{LearnStore, PlanError, StoreError, WaveEntry};
 use genpath::integrators::{prepare, Learned, Method, PrepareError, RenderSettings};
 use genpath::path::SceneView;
 use genpath::shard::plan_file::{self, PlanHeader, TrainingHeader, WaveHeader};
@@ -428,7 +428,7 @@ impl LearnDir {
 }
 
 impl LearnStore for LearnDir {
-    fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, String> {
+    fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, StoreError> {
         let files = self
             .files(wave)
             .map_err(|e| format!("{}: {e}", self.dir.display()))?;
@@ -439,7 +439,7 @@ impl LearnStore for LearnDir {
         Ok(entries)
     }
 
-    fn save(&self, wave: usize, jobs: usize, entries: &[WaveEntry]) -> Result<(), String> {
+    fn save(&self, wave: usize, jobs: usize, entries: &[WaveEntry]) -> Result<(), StoreError> {
         let path = self.file(wave);
         let mut all = match path.exists() {
             true => self.read(&path, wave)?,
@@ -452,7 +452,7 @@ impl LearnStore for LearnDir {
             jobs,
             shard: self.shard.to_string(),
         };
-        plan_file::write_waves(&path, &header, &all).map_err(|e| e.to_string())
+        plan_file::write_waves(&path, &header, &all).map_err(|e| StoreError(e.to_string()))
     }
 
     fn mine(&self, job: usize) -> bool {
@@ -467,7 +467,7 @@ impl LearnStore for LearnDir {
         self.stop.requested()
     }
 
-    fn load_training(&self) -> Result<Option<Vec<u8>>, String> {
+    fn load_training(&self) -> Result<Option<Vec<u8>>, StoreError> {
         let path = self.dir.join("training.bin");
         if !path.exists() {
             return Ok(None);
@@ -477,13 +477,13 @@ impl LearnStore for LearnDir {
         Ok(Some(state))
     }
 
-    fn save_training(&self, passes: u32, state: &[u8]) -> Result<(), String> {
+    fn save_training(&self, passes: u32, state: &[u8]) -> Result<(), StoreError> {
         let header = TrainingHeader {
             identity: self.identity.clone(),
             passes,
         };
         plan_file::write_training(&self.dir.join("training.bin"), &header, state)
-            .map_err(|e| e.to_string())
+            .map_err(|e| StoreError(e.to_string()))
     }
 }
 

@@ -16,7 +16,7 @@
 //! every mark and counts the GA pixels.
 
 use super::plan::{GaPixel, Plan};
-use crate::image::svg::{escape, image_element, png_bytes};
+use crate::image::svg::{escape, image_element, png_bytes, PngError};
 use crate::image::{srgb, Image};
 use crate::path::generator::{DirectionSampler, PathGenerator};
 use crate::sampling::patch::PatchSampler;
@@ -282,7 +282,7 @@ fn legend(out: &mut String, marks: &Marks, plan: &Plan) {
 
 /// The explanation of `plan` over `render` (the size of the plan), seen through `camera`:
 /// an SVG document.
-pub fn svg(camera: &Camera, render: &Image, plan: &Plan) -> Result<String, String> {
+pub fn svg(camera: &Camera, render: &Image, plan: &Plan) -> Result<String, PngError> {
     let scale = MIN_WIDTH.div_ceil(render.width.max(1)).max(1);
     let (width, height) = (render.width * scale, render.height * scale);
     let backdrop = backdrop(render);
@@ -290,8 +290,7 @@ pub fn svg(camera: &Camera, render: &Image, plan: &Plan) -> Result<String, Strin
         render.width,
         render.height,
         &srgb::encode_image_u8(&backdrop),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let mut marks = Marks {
         camera,
         s: scale as f32,

@@ -134,22 +134,33 @@ pub struct SpatialField {
     pub(super) quads: Vec<QuadNode>,
 }
 
+/// Why a spatial guide (or its training's dark cells) read from a file cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum GuideStateError {
+    #[error("a spatial guide of {regions} regions for {cells} lattice cells")]
+    Regions { regions: usize, cells: usize },
+    #[error("a spatial guide pointing past its {nodes} nodes")]
+    Nodes { nodes: usize },
+    #[error("{flags} dark-cell flags for a lattice of {cells} cells")]
+    DarkFlags { flags: usize, cells: usize },
+}
+
 impl SpatialField {
     /// Checks what a lookup relies on, for a guide read from a file: a region per lattice
     /// cell and facing, and every quadtree root and child a node.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), GuideStateError> {
         let cells = self.lattice.cells() * super::lattice::FACINGS;
         if self.regions.len() != cells || self.lattice.res.contains(&0) {
-            return Err(format!(
-                "a spatial guide of {} regions for {cells} lattice cells",
-                self.regions.len()
-            ));
+            return Err(GuideStateError::Regions {
+                regions: self.regions.len(),
+                cells,
+            });
         }
         let nodes = self.quads.len();
         let roots = self.regions.iter().map(|r| (r & !DARK) as usize);
         let children = self.quads.iter().flat_map(|q| q.child.map(|c| c as usize));
         if roots.chain(children).any(|i| i >= nodes) {
-            return Err(format!("a spatial guide pointing past its {nodes} nodes"));
+            return Err(GuideStateError::Nodes { nodes });
         }
         Ok(())
     }

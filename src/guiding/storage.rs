@@ -2,7 +2,7 @@
 //! the scene's box, and which lattice cells its light samples found dark; a
 //! [`SpatialField`] is built from them ([`SampleStorage::field`]).
 
-use super::field::SpatialField;
+use super::field::{GuideStateError, SpatialField};
 use super::lattice::{Lattice, FACINGS};
 use crate::accel::TriangleMesh;
 use glam::Vec3;
@@ -88,13 +88,12 @@ impl SampleStorage {
 
     /// Takes `dark` as the cells that are dark (a training kept between processes); refused
     /// when it is not of this storage's lattice.
-    pub fn set_dark(&mut self, dark: Vec<bool>) -> Result<(), String> {
+    pub fn set_dark(&mut self, dark: Vec<bool>) -> Result<(), GuideStateError> {
         if dark.len() != self.dark.len() {
-            return Err(format!(
-                "{} dark-cell flags for a lattice of {} cells",
-                dark.len(),
-                self.dark.len()
-            ));
+            return Err(GuideStateError::DarkFlags {
+                flags: dark.len(),
+                cells: self.dark.len(),
+            });
         }
         self.dark = dark;
         Ok(())

@@ -134,7 +134,7 @@ pub fn plan_summary(plan: &Plan) -> serde_json::Value {
 
 /// `render --explain`'s picture of what `plan` learned over `image`.
 pub fn explain_plan(camera: &Camera, image: &Image, plan: &Plan) -> Result<String, ExplainError> {
-    explain::svg(camera, image, plan).map_err(ExplainError)
+    explain::svg(camera, image, plan).map_err(|e| ExplainError(e.into()))
 }
 
 /// What `check` verifies of `plan`: the mixtures it evolved, at their GA pixels, and its

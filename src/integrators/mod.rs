@@ -315,8 +315,8 @@ impl Description {
 
 /// Why `render --explain` drew no picture.
 #[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct ExplainError(pub String);
+#[error(transparent)]
+pub struct ExplainError(#[from] pub Box<dyn std::error::Error + Send + Sync>);
 
 /// A prepared method, as every command renders it.
 pub trait Integrator: Send + Sync {

@@ -114,7 +114,7 @@ impl SpatialIntegrator {
         if let Some(plan) = &state.plan {
             check_plan_size(plan, context)?;
         }
-        state.guide.check().map_err(mismatch)?;
+        state.guide.check().map_err(|e| mismatch(e.to_string()))?;
         let Some(samples) = learned.samples else {
             return Err(mismatch(
                 "a spatial guide without its training's samples".into(),
@@ -469,7 +469,6 @@ pub fn train_spatial(
     let mut records = SampleStorage::around(&view.scene.mesh);
     let open_plan = plan.filter(|p| !p.is_closed());
     let store = settings.learning.as_deref();
-    let kept = |e: String| PrepareError::Kept(e);
     let mut at = Between::start(store, &mut records, pixels, open_plan.is_some())?;
     let bar = progress_bar(0, "guide", settings.progress);
     let stop = &settings.control.stop;
@@ -539,11 +538,7 @@ pub fn train_spatial(
         at.last = t0.elapsed().as_secs_f64();
         at.passes += 1;
         if let Some(store) = store {
-            // Kept beside it: the seconds so far, and the records' dark cells
-            // ([`SampleStorage::dark`]), which the next guide keeps.
-            let kept_state = (&at, elapsed(&at), records.dark());
-            let bytes = bincode::serialize(&kept_state).map_err(|e| kept(e.to_string()))?;
-            store.save_training(at.passes, &bytes).map_err(kept)?;
+            at.keep(store, elapsed(&at), &records)?;
         }
     }
     bar.finish_and_clear();
@@ -590,6 +585,22 @@ struct Between {
 }
 
 impl Between {
+    /// Keeps this training in `store` after a finished pass, with the seconds so far and the
+    /// records' dark cells ([`SampleStorage::dark`]), which the next guide keeps.
+    fn keep(
+        &self,
+        store: &dyn LearnStore,
+        seconds: f64,
+        records: &SampleStorage,
+    ) -> Result<(), PrepareError> {
+        let kept = |e: String| PrepareError::Kept(e);
+        let bytes = bincode::serialize(&(self, seconds, records.dark()))
+            .map_err(|e| kept(e.to_string()))?;
+        store
+            .save_training(self.passes, &bytes)
+            .map_err(|e| kept(e.to_string()))
+    }
+
     /// The training kept by an earlier process in `store` (and its records' dark cells,
     /// set in `records`), or, before the first pass, no samples and a guide that has learned
     /// nothing; `trialling` whether a plan's guides are to be tried.
@@ -600,12 +611,13 @@ impl Between {
         trialling: bool,
     ) -> Result<Self, PrepareError> {
         let kept = |e: String| PrepareError::Kept(e);
-        let at = match store.map(|s| s.load_training()).transpose().map_err(kept)? {
+        let loaded = store.map(|s| s.load_training()).transpose();
+        let at = match loaded.map_err(|e| kept(e.to_string()))? {
             Some(Some(bytes)) => {
                 let (at, seconds, dark): (Between, f64, Vec<bool>) =
                     bincode::deserialize(&bytes)
                         .map_err(|e| kept(format!("the spatial guide's training: {e}")))?;
-                records.set_dark(dark).map_err(kept)?;
+                records.set_dark(dark).map_err(|e| kept(e.to_string()))?;
                 Between { seconds, ..at }
             }
             _ => Between {

@@ -69,7 +69,7 @@ pub use config::{GateConfig, PlanConfig};
 pub use gate::{COST_SAMPLES, GATE_SAMPLES};
 pub use pilot::{PILOT_PIXELS, PILOT_SHARE};
 pub use pixel::{COMPONENT_TOLERANCE, CONVEX_STEPS, PRUNE_SHARE};
-pub use stages::{LearnStore, PlanError, WaveEntry};
+pub use stages::{LearnStore, PlanError, StoreError, WaveEntry};
 pub use types::{gate_margins, GaPixel, Moments, Origin, PlanFor, PlanStats, Trial};
 
 use super::nearest::PointGrid;

@@ -31,9 +31,9 @@ pub struct WaveEntry {
 /// a plan's GA pixels, and the spatial guide's training after its last finished pass.
 pub trait LearnStore: Send + Sync + std::fmt::Debug {
     /// Every result of wave `wave` saved so far, by this job or any other.
-    fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, String>;
+    fn load(&self, wave: usize) -> Result<Vec<WaveEntry>, StoreError>;
     /// Keeps `entries`, new results of wave `wave` (of `jobs` jobs) this job evolved.
-    fn save(&self, wave: usize, jobs: usize, entries: &[WaveEntry]) -> Result<(), String>;
+    fn save(&self, wave: usize, jobs: usize, entries: &[WaveEntry]) -> Result<(), StoreError>;
     /// Whether this job evolves job `job` of a wave (every job, unless the GA is split).
     fn mine(&self, job: usize) -> bool;
     /// Whether the GA is split over jobs: this one stops once its share of a wave is done.
@@ -41,10 +41,22 @@ pub trait LearnStore: Send + Sync + std::fmt::Debug {
     /// The signal that asked the learning to stop, if one did.
     fn stop_requested(&self) -> Option<usize>;
     /// The spatial guide's training as [`Self::save_training`] last kept it, if it did.
-    fn load_training(&self) -> Result<Option<Vec<u8>>, String>;
+    fn load_training(&self) -> Result<Option<Vec<u8>>, StoreError>;
     /// Keeps the spatial guide's training after a finished pass (`pass`, counted from 1),
     /// encoded as `state`.
-    fn save_training(&self, pass: u32, state: &[u8]) -> Result<(), String>;
+    fn save_training(&self, pass: u32, state: &[u8]) -> Result<(), StoreError>;
+}
+
+/// Why a [`LearnStore`] could not keep or give back what learning finished: its files,
+/// named in the message.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct StoreError(pub String);
+
+impl From<String> for StoreError {
+    fn from(message: String) -> Self {
+        Self(message)
+    }
 }
 
 /// Why a plan is not built.
@@ -72,7 +84,7 @@ pub enum PlanError {
         missing: usize,
     },
     #[error("the GA's waves: {0}")]
-    Store(String),
+    Store(StoreError),
 }
 
 fn share_done(wave: Option<usize>, evolved: usize, missing: usize) -> String {

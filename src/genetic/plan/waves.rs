@@ -5,7 +5,7 @@ use super::super::individual::Individual;
 use super::baseline::baseline_choice;
 use super::context::{GaRun, PixelContext};
 use super::pixel::run_pixel;
-use super::stages::{LearnStore, PlanError, WaveEntry};
+use super::stages::{LearnStore, PlanError, StoreError, WaveEntry};
 use super::types::{Evolved, Origin, PlanFor, PlanStats};
 use crate::film::PixelSums;
 use crate::progress::progress_bar;
@@ -140,17 +140,17 @@ impl<'a> Waves<'a> {
         for e in store.load(number).map_err(PlanError::Store)? {
             let job = e.job as usize;
             let Some(expected) = wave.get(job).map(|j| self.chosen[j.pixel]) else {
-                return Err(PlanError::Store(format!(
+                return Err(PlanError::Store(StoreError(format!(
                     "wave {number} has {} GA pixels, and a stored result is for its job {job}",
                     wave.len()
-                )));
+                ))));
             };
             if (e.pixel.x, e.pixel.y) != (expected.0, expected.1) {
-                return Err(PlanError::Store(format!(
+                return Err(PlanError::Store(StoreError(format!(
                     "wave {number}, job {job}: the stored result is for pixel ({}, {}), this \
                      plan's job is pixel ({}, {})",
                     e.pixel.x, e.pixel.y, expected.0, expected.1
-                )));
+                ))));
             }
             let mut pixel = e.pixel;
             pixel.best = e.best;
