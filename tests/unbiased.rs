@@ -385,6 +385,11 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
     };
     let integrator: Box<dyn Integrator> = match (plan, mixture, spatial) {
         (plan, _, Some(training)) => Box::new(SpatialIntegrator {
+            method: if plan.is_some() {
+                Method::GaPt
+            } else {
+                Method::Pg
+            },
             plan,
             training,
             max_bounces,

@@ -72,6 +72,7 @@ pub fn train(
     let training = train_spatial(context.view, context.settings, schedule, trained_beside)?;
     let plan = beside.map(|(plan, _)| plan);
     Ok(SpatialIntegrator {
+        method: context.settings.method,
         plan,
         training,
         max_bounces: context.settings.max_bounces,
@@ -92,6 +93,8 @@ struct SpatialState {
 /// Path tracing guided by a trained spatial guide, beside a GA plan's per-pixel guides
 /// where it has one (`ga-pt`) and where the training's trial left them.
 pub struct SpatialIntegrator {
+    /// The method it is (`pg`, or `ga-pt` with its plan), which its learned state names.
+    pub method: Method,
     pub plan: Option<Plan>,
     pub training: SpatialTraining,
     pub max_bounces: u32,
@@ -122,6 +125,7 @@ impl SpatialIntegrator {
         };
         let settings = context.settings;
         Ok(Self {
+            method: settings.method,
             plan: state.plan,
             training: SpatialTraining {
                 guide: Arc::new(state.guide),
@@ -157,13 +161,8 @@ impl PixelIntegrator for SpatialIntegrator {
             guide: training.guide.as_ref().clone(),
             plan_guides: training.plan_guides,
         };
-        let method = if self.plan.is_some() {
-            Method::GaPt
-        } else {
-            Method::Pg
-        };
         Some(Learned::new(
-            method,
+            self.method,
             Some(training.samples.clone()),
             &state,
             &summary,
