@@ -6,7 +6,7 @@ use super::args::SettingsArgs;
 use anyhow::Result;
 use clap::Args;
 use genpath::integrators::settings::declarations;
-use genpath::integrators::Settings;
+use genpath::integrators::{Method, Settings};
 use std::fmt::Write as _;
 
 #[derive(Args)]
@@ -49,6 +49,7 @@ pub fn markdown() -> String {
          one per concern: `srt`, `mixture`, `ga` (the genetic algorithm), `plan` (where it\n\
          runs), `gate` and `spatial` (the spatial guide).\n",
     );
+    out.push_str(&readers());
     let mut heading = None;
     for arg in command.get_arguments() {
         let id = arg.get_id().as_str();
@@ -88,5 +89,21 @@ pub fn markdown() -> String {
         "\nAliases of `sweep --methods` keys, from the first line of work: {}.",
         aliases.join(", ")
     );
+    out
+}
+
+/// Which methods read each table, from each method's declaration ([`MethodInfo::settings`]).
+///
+/// [`MethodInfo::settings`]: genpath::integrators::MethodInfo::settings
+fn readers() -> String {
+    use clap::ValueEnum;
+    let mut out = String::from("\n| table | read by |\n|---|---|\n");
+    for (table, _) in genpath::integrators::settings::tables() {
+        let methods: Vec<String> = (Method::value_variants().iter())
+            .filter(|m| m.info().settings.contains(&table))
+            .map(|m| format!("`{}`", m.name()))
+            .collect();
+        let _ = writeln!(out, "| `{table}` | {} |", methods.join(", "));
+    }
     out
 }

@@ -33,6 +33,7 @@ pub const METHOD: MethodInfo = MethodInfo {
     prepare_learned: Some(prepare_learned),
     splits_learning: true,
     explains: true,
+    settings: &["srt", "ga", "plan", "gate", "spatial"],
     ..MethodInfo::plain(prepare)
 };
 

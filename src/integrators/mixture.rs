@@ -19,9 +19,15 @@ pub struct MixtureIntegrator {
 
 /// `srt`: the paper's stochastic ray tracing, a mixture of its one generator.
 /// `srt`: the paper's stochastic ray tracing, one generator.
-pub const SRT: MethodInfo = MethodInfo::plain(prepare_srt);
-/// `mixture`: a mixture of generators from a file.
-pub const METHOD: MethodInfo = MethodInfo::plain(prepare);
+pub const SRT: MethodInfo = MethodInfo {
+    settings: &["srt"],
+    ..MethodInfo::plain(prepare_srt)
+};
+/// `mixture`: a mixture of generators from a file, with `srt`'s next-event estimation.
+pub const METHOD: MethodInfo = MethodInfo {
+    settings: &["srt", "mixture"],
+    ..MethodInfo::plain(prepare)
+};
 
 fn prepare_srt(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     let max_bounces = context.settings.max_bounces;

@@ -109,6 +109,9 @@ pub struct MethodInfo {
     pub explains: bool,
     /// Whether its image is the scene's, so that `check` compares it with `pt`'s.
     pub renders_the_scene: bool,
+    /// The tables of [`Settings`] it reads (`["srt", "ga", …]`; none for one that has no
+    /// settings of its own), which docs/settings.md lists beside each table.
+    pub settings: &'static [&'static str],
 }
 
 /// How a method is prepared ([`MethodInfo::prepare`]).
@@ -125,6 +128,7 @@ impl MethodInfo {
             splits_learning: false,
             explains: false,
             renders_the_scene: true,
+            settings: &[],
         }
     }
 }
@@ -360,5 +364,54 @@ impl<I: PixelIntegrator> Integrator for I {
     }
     fn self_check(&self) -> SelfCheck<'_> {
         PixelIntegrator::self_check(self)
+    }
+}
+
+/// The settings tables that `methods` name but `tables` lacks, and the tables no method
+/// reads: what the methods' declarations ([`MethodInfo::settings`]) must not have.
+pub fn settings_mismatches(methods: &[(String, &[&str])], tables: &[&str]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (method, named) in methods {
+        for table in named.iter().filter(|t| !tables.contains(t)) {
+            out.push(format!(
+                "{method} reads a table `{table}` that the settings lack"
+            ));
+        }
+    }
+    for table in tables {
+        if !methods.iter().any(|(_, named)| named.contains(table)) {
+            out.push(format!("no method reads the table `{table}`"));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{settings_mismatches, Method};
+    use clap::ValueEnum;
+
+    /// Every table a method declares is one of [`super::Settings`]'s, and every table is read
+    /// by some method; the twin: a method that names a table the settings lack.
+    #[test]
+    fn methods_declare_the_tables_they_read() {
+        let methods: Vec<(String, &[&str])> = (Method::value_variants().iter())
+            .map(|m| (m.name(), m.info().settings))
+            .collect();
+        let tables: Vec<&str> = (super::settings::tables().into_iter())
+            .map(|(name, _)| name)
+            .collect();
+        assert_eq!(tables.len(), 6, "{tables:?}");
+        assert_eq!(settings_mismatches(&methods, &tables), Vec::<String>::new());
+        let mut wrong = methods.clone();
+        wrong.push(("made-up".into(), &["srt", "gaa"]));
+        assert_eq!(
+            settings_mismatches(&wrong, &tables),
+            ["made-up reads a table `gaa` that the settings lack"]
+        );
+        assert_eq!(
+            settings_mismatches(&methods, &[&tables[..], &["orphan"]].concat()),
+            ["no method reads the table `orphan`"]
+        );
     }
 }
