@@ -254,14 +254,10 @@ fn learn_one(
     quiet: bool,
 ) -> Result<Option<Learned>> {
     let store = LearnDir::open(target.dir.clone(), target.identity, shard, stop.clone())?;
-    let settings = RenderSettings {
-        control: genpath::film::Control {
-            stop: stop.clone(),
-            ..Default::default()
-        },
-        learning: Some(Arc::new(store)),
-        ..target.settings
-    };
+    // The target's one `RenderSettings`, with the signals that stop it and the store.
+    let mut settings = target.settings;
+    settings.control.stop = stop.clone();
+    settings.learning = Some(Arc::new(store));
     let t_learn = Instant::now();
     let prepared = match session.pool.install(|| prepare(view, config, &settings)) {
         Ok(prepared) => prepared,
