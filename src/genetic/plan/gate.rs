@@ -108,8 +108,9 @@ fn variance_error(values: &[DVec3], mean: DVec3, weights: ChannelWeights, weight
 /// `pt`'s and the guided path tracer's variances come from `GATE_SAMPLES` samples each.
 /// The mixture estimator's cannot: its variance hides in rare paths where the mixture's
 /// density is far below `srt`'s (down to the defensive weight), which a few hundred of its
-/// own samples mostly miss (fig5: the median 512-sample variance is 2–7× below the true
-/// one). Its second moment is therefore eq. 10 on fresh `srt` test paths, which sample
+/// own samples mostly miss, so they underestimate it (reports/README.md, "Measurements
+/// formerly in code comments (2026-12-07)", `run_trial`). Its second moment is therefore
+/// eq. 10 on fresh `srt` test paths, which sample
 /// exactly those paths at `srt`'s rate; its cost comes from `COST_SAMPLES` samples.
 pub(super) fn run_trial(
     context: &PixelContext,

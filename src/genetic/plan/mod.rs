@@ -9,7 +9,8 @@
 //!    variance; extra GA pixels go to the cells with the highest baseline relative variance,
 //!    at their noisiest pixel. The samples are unbiased samples of the image, drawn from
 //!    their own streams: the image keeps them ([`Plan::baseline`]), as `pg` keeps its
-//!    training passes' (on fig1 at 2 s they were 0.33 s of a 0.65 s plan).
+//!    training passes', since they are a large share of the plan's time (reports/README.md,
+//!    "Measurements formerly in code comments (2026-12-07)", `genetic::plan`'s baseline).
 //! 3. **Evolution.** Per GA pixel, `M` test paths from the defensive `srt` density and the
 //!    genetic algorithm on them, in parallel; every pixel has its own random streams, derived
 //!    from the seed and the pixel alone, so the result does not depend on the thread count.
@@ -33,20 +34,21 @@
 //!    run: the image renders with `pt`, for a guide except near a pilot pixel that does not
 //!    predict a loss; with the spatial guide (`ga-pt`'s default) a failed pilot leaves
 //!    every pixel to it, since the pilot compared the GA's guides with `pt`, not with the
-//!    spatial guide (fig1, 2 s: 0.54 → 0.52 × `pt`, as `pg`); where it passes, the
-//!    spatial guide's training passes try the guides against that guide alone
-//!    (`integrators::pg::train_spatial`). (A pilot that closes the
-//!    plan when it fails — a mixture's, or a guide's beside the spatial guide — stops
-//!    starting pixels once it cannot pay, so there it is `pt` or the spatial guide
-//!    everywhere. cbox, `ga`, 64
-//!    spp: the plan took 0.09–0.16 s of baseline and 0.16–0.26 s of GA with the baseline
-//!    first, 0.01 s of grid rays and 0.16 s of GA with the pilot first.) Where they do, the pilot pixels go on from their best individuals
-//!    (with a fresh random stream). For a guide the other GA pixels then run no trial and
-//!    keep their guides: a guide keeps `pt`'s next-event estimation and BRDF sampling, so
-//!    it rarely loses much, and on fig5 the trials cost 40 % of the GA phase while the
-//!    pixels they sent to `pt` made the image no better. A mixture's variance can exceed
-//!    `pt`'s many times, so there every GA pixel runs its trial. Low-variance cells
-//!    (pruning) render with `pt` too.
+//!    spatial guide, and the guides it kept were worse than the spatial guide alone
+//!    (reports/README.md, "Results", "What changed between de6d183 and ebcb7fc", item 3);
+//!    where it passes, the spatial guide's training passes try the guides against that
+//!    guide alone (`integrators::pg::train_spatial`). (A pilot that closes the plan when it
+//!    fails — a mixture's, or a guide's beside the spatial guide — stops starting pixels
+//!    once it cannot pay, so there it is `pt` or the spatial guide everywhere. The pilot
+//!    runs before the baseline so that a scene where the GA cannot pay spends nothing on a
+//!    baseline: reports/README.md, "Measurements formerly in code comments (2026-12-07)",
+//!    `genetic::plan`'s pilot.) Where they do, the pilot pixels go on from their best
+//!    individuals (with a fresh random stream). For a guide the other GA pixels then run
+//!    no trial and keep their guides: a guide keeps `pt`'s next-event estimation and BRDF
+//!    sampling, so it rarely loses much, and the trials cost a large share of the GA phase
+//!    for no better image (docs/methods.md, "The genetic algorithm (`--method ga`)", "The
+//!    gate"). A mixture's variance can exceed `pt`'s many times, so there every GA pixel
+//!    runs its trial. Low-variance cells (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -81,8 +83,11 @@ use std::time::Duration;
 
 /// The default of `PlanConfig::baseline_keep_ratio`. Averaged with equal weights, `b`
 /// samples of variance `r σ²` beside `n` of variance `σ²` lower the variance of the mean
-/// while `r < 2 + b/n`. (Test paths at 256², seed 401: the median of `V_srt / V_best` is 1.16
-/// on fig1, 1.37 on cbox, 2.25 on glossy and 5.6 on fig5.)
+/// while `r < 2 + b/n`: 2 is that bound at large `n`, not tuned on any scene. It keeps
+/// the baseline where `srt` is close to the evolved mixtures and drops it where they are
+/// far better (the medians of `V_srt / V_best` on the test scenes: docs/methods.md, "The
+/// genetic algorithm (`--method ga`)", step 2, "Baseline"; their seed in reports/README.md,
+/// "`ga` keeps its baseline's samples (issue 23, 2026-12-04)").
 pub const BASELINE_KEEP_RATIO: f64 = 2.0;
 
 /// GA pixels and their mixtures, and how every other pixel combines them. It serialises
@@ -164,8 +169,8 @@ impl Plan {
     /// [`BASELINE_KEEP_RATIO`]). Else it drops them and the image takes all its samples
     /// itself. The choice depends on the test paths alone, drawn from their own streams, so
     /// the image stays unbiased. A guide's plan (`ga-pt`) keeps none: the test paths do not
-    /// measure its guided path tracer, and on fig5 at 2 s its 4 baseline samples among
-    /// about 45 raised `ga-pt`'s error from 0.33 to 1.12 × `pt`'s.
+    /// measure its guided path tracer, and `srt` samples beside its guided ones raise its
+    /// error (docs/methods.md, "The genetic algorithm (`--method ga`)", step 2, "Baseline").
     pub fn settle_baseline(&mut self, spp: u32, keep_ratio: f64) {
         let mut ratios: Vec<f64> = (self.pixels.iter())
             .filter(|p| p.v_best > 0.0)

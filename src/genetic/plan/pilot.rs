@@ -10,10 +10,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// GA pixels evolved before the gate decides whether to evolve the others.
 pub const PILOT_PIXELS: usize = 8;
-/// The pilot evolves for `1 / PILOT_SHARE` of the generations before its trial decides: a
-/// scene where the GA cannot pay costs a quarter of a full pilot (cbox, 2 s budgets: the
-/// full pilot took a third of the time). Where the pilot pays, its pixels go on from their
-/// best individual for the remaining generations.
+/// The pilot evolves for `1 / PILOT_SHARE` of the generations before its trial decides, so
+/// a scene where the GA cannot pay spends a quarter of a full pilot on finding out: a full
+/// pilot is a large share of a short budget (reports/README.md, "Measurements formerly in
+/// code comments (2026-12-07)", `PILOT_SHARE`). Where the pilot pays, its pixels go on from
+/// their best individual for the remaining generations.
 pub const PILOT_SHARE: usize = 4;
 
 /// The pilot: with the gate, up to `PILOT_PIXELS` grid pixels spread evenly over the image
@@ -36,12 +37,11 @@ pub(super) fn pilot_pixels(grid: &[(u32, u32)], gate: bool) -> Vec<(u32, u32, Or
 ///
 /// Where a failed pilot `closes` the plan (a mixture's, or a guide's beside the spatial
 /// guide), a pilot pixel is not started once so many others failed to pay that the pilot
-/// cannot (cbox, `ga`: the GA phase 0.16 -> 0.12 s; `ga-pt`, 8 spp, three runs each: fig1
-/// 0.092 -> 0.070–0.073 s, 6 of 8 pilot pixels evolved, cbox 0.066 -> 0.050–0.064 s). The
-/// image is the same bit for bit. Which pixels that skips depends on the
-/// threads' timing, so such a pilot that fails leaves the whole image to `pt` or the spatial
-/// guide (see
-/// `Plan::closed`), whichever of its pixels ran. With a store (learning kept between
+/// cannot: where the pilot fails this shortens the GA phase, and the image is the same bit
+/// for bit (reports/README.md, "Measurements formerly in code comments (2026-12-07)",
+/// `scout_pilot`). Which pixels that skips depends on the threads' timing, so such a pilot
+/// that fails leaves the whole image to `pt` or the spatial guide (see `Plan::closed`),
+/// whichever of its pixels ran. With a store (learning kept between
 /// processes, or split over jobs) every pilot pixel runs, as one wave: the store's
 /// results must not depend on timing.
 pub(super) fn scout_pilot(waves: &mut Waves, scout: usize, closes: bool) -> Result<(), PlanError> {

@@ -15,9 +15,10 @@ use crate::sampling::{derived_seed, sample_rng, Stream};
 use std::time::Instant;
 
 /// With pruning, generators get the steps that carry all but this share of the test paths'
-/// `Σ F²/q`: none, so steps are cut only past the deepest light-carrying test path. (Cutting
-/// at 0.1 % made fig5 worse, 4.14 against 2.70 relMSE at 128², 64 spp: with M = 10 000 only
-/// ~100 test paths carry light, too few to call a depth's share negligible.)
+/// `Σ F²/q`: none, so steps are cut only past the deepest light-carrying test path. (Where
+/// few test paths carry light, as on fig5, they are too few to call a depth's share
+/// negligible, and a share above 0 made the image worse: reports/README.md, "Measurements
+/// formerly in code comments (2026-12-07)", `PRUNE_SHARE`.)
 pub const PRUNE_SHARE: f64 = 0.0;
 
 /// Steps of [`fitness::optimise_weights`] on the evolved mixture with
@@ -31,22 +32,22 @@ pub const CONVEX_STEPS: fitness::Steps = fitness::Steps {
 /// With pruning (`PlanConfig::prune`), the evolved mixture of `ga` keeps only the components
 /// without which its `V` would rise by more than this share, in all
 /// ([`fitness::prune_components`]). A component costs the render its densities at every
-/// vertex of every path of every pixel whose mixture holds it: about 0.27 densities per ray
-/// on fig1, which at [`crate::path::DENSITY_COST`] each is 2 % of the work per component.
-/// 64 spp, seed 401, tolerance 0 / 0.01 / 0.03 / 0.1: fig1's 400 components go to 208 / 184
-/// / 154, its densities 85.0 M → 36.8 / 30.5 / 23.3 M, relMSE 4.12 → 4.16 / 4.19 / 4.33e-2;
-/// glossy 230 → 113 / 105 / 92 components, relMSE 1.53 → 1.49 / 1.47 / 1.59e-2. `ga-pt`'s
-/// guides keep theirs (its images stay as they were), and so does the paper's end-only
-/// estimator (`--nee end`), whose rare large contributions the test paths' `V` sees too
-/// seldom: pruned at this tolerance, fig5 at 64 spp (seed 1, no gate) had relMSE 1.55
-/// against 1.14.
+/// vertex of every path of every pixel whose mixture holds it (at
+/// [`crate::path::DENSITY_COST`] each), and the weight steps never drop one; this share
+/// leaves out most of them for little more error, where a larger one raised the error
+/// (reports/README.md, "Measurements formerly in code comments (2026-12-07)",
+/// `COMPONENT_TOLERANCE`; docs/methods.md, "The genetic algorithm (`--method ga`)", "Convex
+/// mixture weights"). `ga-pt`'s guides keep theirs (its images stay as they were), and so
+/// does the paper's end-only estimator (`--nee end`), whose rare large contributions the
+/// test paths' `V` sees too seldom to prune by (the same bullet of reports/README.md).
 pub const COMPONENT_TOLERANCE: f64 = 0.02;
 
 /// With `GaConfig::held_out`, the placement paths stop at `max_light_paths /
 /// PLACEMENT_SHARE` light-carrying ones: anchors and patches need where light went, not
 /// eq. 10's precision. With next-event estimation at every vertex most test paths carry
-/// light and this costs a few hundred paths; `ga-pt`'s end-only test paths seldom do (fig5:
-/// 1 %), so that there a held-out set costs as much as the first (see `GaConfig::held_out`).
+/// light and this costs a few hundred paths; `ga-pt`'s end-only test paths seldom do, so
+/// that there a held-out set costs as much as the first (see `GaConfig::held_out`, and
+/// docs/methods.md, "The genetic algorithm (`--method ga`)", "Held-out placement").
 pub const PLACEMENT_SHARE: usize = 4;
 
 /// What a pixel keeps of its GA: its best individual's mixture, or `srt` where that was

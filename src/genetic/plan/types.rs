@@ -111,12 +111,12 @@ pub(super) type Evolved = (GaPixel, RayCounts);
 /// prefers `pt` where it predicts one below `lose`.
 ///
 /// The guided path tracer keeps `pt`'s next-event estimation and its BRDF sampling (at the
-/// defensive weight), so it rarely loses much, while its 2048-sample trial is noisy (fig5:
-/// sending every pixel below 1.25 to `pt` lost 20 % relMSE against no gate): it must win
-/// by 1.25 and is dropped below 0.8. The mixture estimator's prediction is the less certain
-/// (fig5, 9 GA pixels against 200 000-sample variances: within a factor 2 either way), its
-/// variance grows faster away from the GA pixel and can exceed `pt`'s many times: it must
-/// win by 2 everywhere.
+/// defensive weight), so it rarely loses much, while its 2048-sample trial is noisy enough
+/// that sending every pixel below the winning margin to `pt` made the image worse than no
+/// gate: it must win by 1.25 and is dropped below 0.8. The mixture estimator's prediction
+/// is the less certain, and its variance grows faster away from the GA pixel and can
+/// exceed `pt`'s many times: it must win by 2 everywhere. (reports/README.md,
+/// "Measurements formerly in code comments (2026-12-07)", `gate_margins`.)
 pub fn gate_margins(plan_for: PlanFor) -> (f64, f64) {
     match plan_for {
         PlanFor::Guide => (0.8, 1.25),
@@ -160,11 +160,11 @@ impl Trial {
     /// ([`Moments::variance_error`]).
     ///
     /// A guide's pilot counts this against the winning margin. Its 2048-sample variances are
-    /// heavy-tailed where rare paths carry the light: glossy's pilot pixels' gains range
-    /// from 0.04 to 55 on one seed, with relative standard errors up to 0.9, and half of
-    /// them passed 1.25 on five seeds of twelve (401–412), where the GA then lost to `pg`
-    /// (1.08–1.18 × its relMSE at 2 s). One standard error below, glossy's pilot passes on
-    /// none of the twelve and fig5's on all twelve, as before (two below: ten).
+    /// heavy-tailed where rare paths carry the light, so the estimate alone lets a pilot
+    /// pass on scenes where the GA then loses to `pg`; one standard error below stops those
+    /// pilots and keeps the ones that pay (docs/methods.md, "The genetic algorithm
+    /// (`--method ga`)", "The gate"; reports/README.md, "`ga-pt`'s cautious pilot
+    /// (2026-12-05)").
     pub fn cautious_gain(&self) -> f64 {
         let error = self.pt.variance_error.hypot(self.evolved.variance_error);
         self.gain * (-error).exp()

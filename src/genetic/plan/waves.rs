@@ -256,9 +256,10 @@ impl<'a> Waves<'a> {
         // A mixture's variance can grow fast away from its GA pixel, so with the gate a
         // cell the GA did not reach renders with `pt`. A guide keeps `pt`'s next-event
         // estimation and BRDF sampling: once the pilot showed it pays, such a cell takes
-        // its evolved neighbours' guides, as without the gate (fig5, 2 s budgets, where
-        // half the GA pixels are late: relMSE 0.83 with those cells on `pt`, 0.56
-        // without the gate).
+        // its evolved neighbours' guides, as without the gate: sending those cells to `pt`
+        // made the image worse where the time limit leaves many GA pixels out
+        // (reports/README.md, "Measurements formerly in code comments (2026-12-07)",
+        // `Waves::past_pilot`).
         if gate && self.context.plan_for == PlanFor::Mixture {
             let chosen = &self.chosen;
             fallback_points.extend(late.iter().map(|&i| (chosen[i].0, chosen[i].1)));
