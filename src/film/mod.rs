@@ -10,11 +10,11 @@
 //! on the thread count.
 //!
 //! The loop ([`render`]) walks the image in tiles, draws sample `s` of pixel `p` from the
-//! random stream `(seed, p, s)` with its camera ray first ([`pixel_sample`]), and asks a
+//! random stream `(seed, p, s)` with its camera ray first ([`sample_pixel`]), and asks a
 //! [`PixelEstimator`] for its value. It can stop, checkpoint and resume ([`Control`]), and
 //! take only one shard's samples ([`Shard`]). Everything else that samples pixels of the
 //! image (a GA plan's baseline, its gate, `check`, the GA's test paths) draws its samples
-//! through [`pixel_sample`] too.
+//! through [`sample_pixel`] too.
 
 mod control;
 mod render;
