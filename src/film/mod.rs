@@ -22,8 +22,8 @@ mod shard;
 
 pub use control::{Checkpoint, Control, Stop};
 pub use render::{
-    pixel_sample, render, render_tile, sample_pixel, sample_stream, tiles, Pass, PixelResult, Tile,
-    TileResult, TILE,
+    render, render_tile, sample_pixel, sample_stream, tiles, Pass, PixelResult, Tile, TileResult,
+    TILE,
 };
 pub use shard::{Shard, ShardParseError, MAX_SHARDS};
 
@@ -189,10 +189,6 @@ impl Splats {
     /// Counts `n` light paths traced, whether or not they splatted.
     pub fn count_light_paths(&mut self, n: u64) {
         self.light_paths += n;
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.list.is_empty() && self.light_paths == 0
     }
 }
 

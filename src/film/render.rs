@@ -37,7 +37,7 @@ pub struct Pass {
 /// Sample `s` of pixel `(x, y)` of `camera`'s image: its random stream `(seed, pixel, s)`
 /// and the camera ray drawn first from it. Every pass over the image's pixels (a render, a
 /// GA plan's baseline and gate, `check`, the GA's test paths) draws its samples so.
-pub fn pixel_sample(camera: &Camera, seed: u64, (x, y): (u32, u32), s: u64) -> (Ray, Rng) {
+fn pixel_sample(camera: &Camera, seed: u64, (x, y): (u32, u32), s: u64) -> (Ray, Rng) {
     let mut rng = sample_stream(camera, seed, (x, y), s);
     let ray = camera_ray(camera, (x, y), &mut rng);
     (ray, rng)
