@@ -15,7 +15,7 @@ import sys
 PHASES = [
     ("Embree traversal (libembree3)", lambda dso, sym: "embree" in dso),
     ("Embree calls (our intersect/occluded wrappers)", lambda dso, sym: "EmbreeAccel" in sym),
-    ("BSDF eval, pdf and sampling", lambda dso, sym: "brdf::" in sym or "VertexBsdf" in sym or "specular" in sym),
+    ("BSDF eval, pdf and sampling", lambda dso, sym: "bsdf::" in sym or "VertexBsdf" in sym or "specular" in sym),
     ("light sampling and next-event estimation", lambda dso, sym: any(
         k in sym for k in ("LightPoint", "sample_seen_from", "LightCandidate", "next_event", "Emitters", "pick_light"))),
     ("the path loop (MIS weights, Russian roulette, inlined)", lambda dso, sym: any(

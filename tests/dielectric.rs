@@ -1,4 +1,4 @@
-//! The delta BSDFs of glass (`genpath::sampling::specular`): the frequency with which a
+//! The delta BSDFs of glass (`genpath::scene::material::specular`): the frequency with which a
 //! smooth and a thin dielectric reflect is the Fresnel reflectance of an independent
 //! implementation (Snell's law and the Fresnel amplitudes by angles), by a binomial z-test
 //! at several angles from both sides, paired with an index of refraction 3 % off that the
@@ -10,7 +10,7 @@
 //! where a ray meets it, by the same binomial test (an index 3 % off rejected), with its
 //! weights. Run with `cargo test --profile release-tests --test dielectric`.
 
-use genpath::sampling::specular;
+use genpath::scene::material::specular;
 use genpath::scene::{Dielectric, Material};
 use glam::{DVec3, Vec3};
 use rand::{Rng, SeedableRng};
@@ -273,7 +273,7 @@ fn plastic_chooses_its_delta_reflection_with_mitsubas_probability_and_a_3_percen
 ) {
     use genpath::accel::{self, AccelKind};
     use genpath::path::{RayCounts, SceneView};
-    use genpath::sampling::brdf::{self, Frame};
+    use genpath::scene::material::bsdf::{self, Frame};
     let dir = tempfile::tempdir().unwrap();
     let eta = 1.5;
     let scene = plastic_plane(dir.path(), eta);
@@ -308,8 +308,8 @@ fn plastic_chooses_its_delta_reflection_with_mitsubas_probability_and_a_3_percen
             } else {
                 // The diffuse choice at one `wi`, 40° off the normal.
                 let wi = wo_at(f64::to_radians(40.0), true) * Vec3::new(-1.0, 1.0, 1.0);
-                let value = brdf::eval(m, Frame::facing(&x, wo), wo, wi).x;
-                let fdr = genpath::scene::fresnel::fresnel_diffuse_reflectance(1.0 / eta);
+                let value = bsdf::eval(m, Frame::facing(&x, wo), wo, wi).x;
+                let fdr = genpath::scene::material::fresnel::fresnel_diffuse_reflectance(1.0 / eta);
                 let t = |th: f64| 1.0 - fresnel_by_angles(th, 1.0, eta);
                 let expected = 0.6 / (1.0 - fdr) * t(theta) * t(f64::to_radians(40.0))
                     / (std::f64::consts::PI * eta * eta)

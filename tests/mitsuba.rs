@@ -1167,7 +1167,7 @@ fn pt_agrees_with_mitsuba_through_rough_glass_and_wrong_roughnesses_or_sides_do_
 /// sampling modes, white reflectance and transmittance, both sides scattering.
 #[test]
 fn roughglass_xml_has_mitsubas_parameters() {
-    use genpath::scene::microfacet::Distribution;
+    use genpath::scene::material::microfacet::Distribution;
     use genpath::scene::Glossy;
     let scene = Scene::load(&scene_path("roughglass.xml")).unwrap();
     let glass: Vec<_> = scene

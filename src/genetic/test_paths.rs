@@ -35,7 +35,8 @@ use crate::path::mixture::Mixture;
 use crate::path::walk::{Query, Walk};
 use crate::path::{RayCounts, SceneView};
 use crate::sampling::light_point::{finest_cell, PointCells};
-use crate::sampling::{brdf, camera_ray, sample_rng, uniform, Rng};
+use crate::sampling::{camera_ray, sample_rng, uniform, Rng};
+use crate::scene::material::bsdf;
 use crate::scene::Camera;
 use crate::scene::SurfacePoint;
 use glam::DVec3;
@@ -594,7 +595,7 @@ impl TestPaths {
                 0.0
             } else {
                 let m = view.scattering_material(&v.point, v.wo);
-                brdf::pdf(m, brdf::Frame::facing(&v.point, v.wo), v.wo, wi)
+                bsdf::pdf(m, bsdf::Frame::facing(&v.point, v.wo), v.wo, wi)
             };
             self.point.push(v.point.p.as_dvec3());
             self.prim.push(v.point.prim);

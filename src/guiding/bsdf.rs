@@ -7,8 +7,8 @@ use super::field::guide_share;
 use super::guide::Guide;
 use super::vertex::Vertex;
 use crate::path::pt::{Bsdf, GuidedVertex, PathGuide, VertexBsdf};
-use crate::sampling::BrdfSample;
 use crate::sampling::{uniform, Rng};
+use crate::scene::material::BrdfSample;
 use glam::Vec3;
 
 /// The BSDF at one vertex with the guide's samplers there ([`Vertex`]). Its contract:
@@ -120,7 +120,8 @@ mod tests {
     use crate::guiding::guide::tests::mixture;
     use crate::guiding::SpatialField;
     use crate::path::pt::Unguided;
-    use crate::sampling::{brdf, sample_rng};
+    use crate::sampling::sample_rng;
+    use crate::scene::material::bsdf;
     use crate::scene::Material;
     use std::sync::Arc;
 
@@ -161,8 +162,8 @@ mod tests {
 
     const N: Vec3 = Vec3::Y;
 
-    fn frame() -> brdf::Frame {
-        brdf::Frame::new(N, Vec3::ZERO)
+    fn frame() -> bsdf::Frame {
+        bsdf::Frame::new(N, Vec3::ZERO)
     }
 
     fn wo() -> Vec3 {
@@ -185,7 +186,7 @@ mod tests {
             assert_eq!(uniform(&mut a).to_bits(), uniform(&mut b).to_bits());
             if let Some(s) = s {
                 assert_eq!(guided.pdf(s.wi).to_bits(), expected_pdf(s.wi).to_bits());
-                let f = brdf::eval(guided.bsdf.material, frame(), wo(), s.wi);
+                let f = bsdf::eval(guided.bsdf.material, frame(), wo(), s.wi);
                 assert_eq!(guided.eval(s.wi), f);
                 sampled += 1;
             }
@@ -237,9 +238,9 @@ mod tests {
                         uniform(rng) as f64,
                         uniform(rng) as f64,
                     ];
-                    brdf::sample(&m, frame(), wo(), u)
+                    bsdf::sample(&m, frame(), wo(), u)
                 };
-                assert_draws_as(&guided, bsdf_sampled, |wi| brdf::pdf(&m, frame(), wo(), wi));
+                assert_draws_as(&guided, bsdf_sampled, |wi| bsdf::pdf(&m, frame(), wo(), wi));
             }
         }
     }

@@ -7,7 +7,7 @@ use super::field::{guide_share, SpatialField};
 use super::level::Level;
 #[cfg(doc)]
 use super::Guide;
-use crate::sampling::brdf::{self, Frame};
+use crate::scene::material::bsdf::{self, Frame};
 use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 
@@ -107,7 +107,7 @@ impl Vertex<'_> {
     /// `p(wi)` for `material` seen from `wo`.
     pub fn pdf<'m>(&self, material: impl Into<MaterialAt<'m>>, wo: Vec3, wi: Vec3) -> f64 {
         let material = material.into();
-        let brdf_pdf = brdf::pdf(material, self.frame, wo, wi);
+        let brdf_pdf = bsdf::pdf(material, self.frame, wo, wi);
         self.pdf_with(wi.as_dvec3(), brdf_pdf, guide_share(&material))
     }
 
@@ -126,7 +126,7 @@ impl Vertex<'_> {
         let share = guide_share(&material);
         let wi = match self.sampler {
             VertexSampler::Brdf => {
-                let s = brdf::sample(material, n, wo, rest)?;
+                let s = bsdf::sample(material, n, wo, rest)?;
                 return Some(GuideSample {
                     wi: s.wi,
                     pdf: s.pdf,
@@ -139,7 +139,7 @@ impl Vertex<'_> {
                     let (wi, pdf) = s.sample(cell, rest);
                     (wi, Some(pdf))
                 } else {
-                    (brdf::sample_direction(material, n, wo, rest)?, None)
+                    (bsdf::sample_direction(material, n, wo, rest)?, None)
                 };
                 return self.finish_sample(material, wo, wi, |brdf_pdf| {
                     self.spatial_mix(share, guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
@@ -151,7 +151,7 @@ impl Vertex<'_> {
                     _ if target >= 0.0 => level.sample(self.x, target, rest),
                     // The BRDF share as the spatial guide samples: `u[0] / brdf` picks.
                     Some((s, cell)) if u[0] < share * level.brdf => s.sample(cell, rest).0,
-                    _ => brdf::sample_direction(material, n, wo, rest)?,
+                    _ => bsdf::sample_direction(material, n, wo, rest)?,
                 }
             }
         };
@@ -172,12 +172,12 @@ impl Vertex<'_> {
         let n = self.frame;
         // The guide covers the sphere; the material says where light goes (above the
         // surface, or through it for a rough dielectric) and with which cosine.
-        let cos = brdf::cosine(&material, n, wi)?;
-        let f = brdf::eval(material, n, wo, wi);
+        let cos = bsdf::cosine(&material, n, wi)?;
+        let f = bsdf::eval(material, n, wo, wi);
         if f.max_element() <= 0.0 {
             return None;
         }
-        let pdf = pdf(brdf::pdf(material, n, wo, wi));
+        let pdf = pdf(bsdf::pdf(material, n, wo, wi));
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -327,7 +327,7 @@ mod tests {
         // On a surface facing another way, where nothing was recorded: BRDF sampling alone.
         let (n, wo) = (Vec3::X, Vec3::new(1.0, 0.3, 0.1).normalize());
         let wi = Vec3::new(0.5, 0.5, 0.0).normalize();
-        let brdf_pdf = brdf::pdf(&material, Frame::new(n, Vec3::ZERO), wo, wi);
+        let brdf_pdf = bsdf::pdf(&material, Frame::new(n, Vec3::ZERO), wo, wi);
         assert_eq!(
             guide.pdf(2, &material, Vec3::ZERO, Frame::new(n, Vec3::ZERO), wo, wi),
             brdf_pdf
@@ -367,7 +367,7 @@ mod tests {
                     s.wi,
                 );
                 assert!((s.pdf - p).abs() <= 1e-9 * p, "{} vs {p}", s.pdf);
-                let expected = brdf::eval(&material, Frame::new(n, Vec3::ZERO), wo, s.wi)
+                let expected = bsdf::eval(&material, Frame::new(n, Vec3::ZERO), wo, s.wi)
                     * (n.dot(s.wi) / p as f32);
                 assert!((s.weight - expected).length() <= 1e-5 * expected.length());
                 anchored += usize::from(s.wi.dot(Vec3::new(1.0, 2.0, 0.0).normalize()) > 0.98);

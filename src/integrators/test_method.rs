@@ -11,8 +11,9 @@ use crate::accel::Ray;
 use crate::film::{PixelEstimator, Splats};
 use crate::path::pt::LightCandidate;
 use crate::path::{emitted, RayCounts, SceneView};
-use crate::sampling::brdf::{self, Frame};
-use crate::sampling::{specular, uniform, Rng};
+use crate::sampling::{uniform, Rng};
+use crate::scene::material::bsdf::{self, Frame};
+use crate::scene::material::specular;
 use crate::scene::MaterialAt;
 use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
@@ -51,7 +52,7 @@ fn light_sample(
     let u = [uniform(rng), uniform(rng), uniform(rng)];
     match LightCandidate::sample(view, (x, &material, frame), u) {
         Some(l) if l.visible(view, x, rng, counts) => {
-            brdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
+            bsdf::eval(material, frame, wo, l.wi) * l.le * (l.cos_x / l.pdf(1.0))
         }
         _ => Vec3::ZERO,
     }
@@ -97,7 +98,7 @@ impl PixelEstimator for NeeOnly {
             let s = if material.mirror {
                 specular::sample(material, x.ns, wo, u[0])
             } else {
-                brdf::sample(material, frame, wo, u)
+                bsdf::sample(material, frame, wo, u)
             };
             let Some(s) = s else {
                 break;

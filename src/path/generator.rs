@@ -5,7 +5,7 @@
 //! light-point sampler. It samples an eye path vertex by vertex, as a `Walk` (`walk.rs`: a state
 //! machine that stops at each ray it needs traced, so that one implementation serves single
 //! rays, [`PathGenerator::sample_path`], and packets). Delta vertices (mirrors, glass:
-//! [`crate::sampling::specular`]) consume no sampler and never absorb; glass's choice
+//! [`crate::scene::material::specular`]) consume no sampler and never absorb; glass's choice
 //! between reflection and refraction is the material's, left out of every density. Where the estimator does next-event estimation is its [`Nee`]:
 //!
 //! * [`Nee::End`], the paper's: at the k-th non-delta vertex the path absorbs with
@@ -32,9 +32,9 @@
 
 use super::SceneView;
 use crate::sampling::anchor::{AnchorSampler, AnchorShape};
-use crate::sampling::brdf;
 use crate::sampling::light_point::{LightDensity, LightPointSampler, PointCells};
 use crate::sampling::patch::{PatchSampler, PatchShape};
+use crate::scene::material::bsdf;
 use crate::scene::SurfacePoint;
 use glam::{DVec3, Vec3};
 
@@ -261,7 +261,7 @@ pub struct PathVertex {
     pub wo: Vec3,
     /// The shading frame the vertex scatters in, `Frame::facing(point, wo)`: built once by
     /// the walk, read by every generator's density.
-    pub frame: brdf::Frame,
+    pub frame: bsdf::Frame,
     /// Unit direction sampled out of this vertex (zero at the path's end).
     pub wi: Vec3,
     /// A delta vertex (a mirror, glass): its direction was determined by the material (or
@@ -554,7 +554,7 @@ impl PathDensities {
 /// The BSDF density of unit `wi` out of vertex `v`.
 fn brdf_pdf(view: &SceneView, v: &PathVertex, wi: Vec3) -> f64 {
     let m = view.scattering_material(&v.point, v.wo);
-    brdf::pdf(m, v.frame, v.wo, wi)
+    bsdf::pdf(m, v.frame, v.wo, wi)
 }
 
 impl PathGenerator {

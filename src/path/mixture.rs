@@ -6,8 +6,8 @@ use super::generator::{
     Prefix,
 };
 use super::{RayCounts, SceneView};
-use crate::sampling::brdf::Frame;
 use crate::sampling::{uniform, Rng};
+use crate::scene::material::bsdf::Frame;
 use crate::scene::{Glossy, SurfacePoint};
 use glam::{DVec3, Vec3};
 use std::borrow::Cow;

@@ -26,10 +26,10 @@
 
 use super::{emitted, EndPoint, RayCounts, SceneView};
 use crate::accel::Ray;
-use crate::sampling::brdf::{self, Frame};
-use crate::sampling::specular;
-use crate::sampling::BrdfSample;
 use crate::sampling::{uniform, Rng};
+use crate::scene::material::bsdf::{self, Frame};
+use crate::scene::material::specular;
+use crate::scene::material::BrdfSample;
 use crate::scene::{LightPick, Material, MaterialAt, SurfacePoint, RR_START};
 use glam::Vec3;
 
@@ -52,7 +52,7 @@ pub trait VertexBsdf {
 }
 
 /// The BSDF of `material` at a vertex whose shading frame faces `wo` ([`Frame::facing`]):
-/// [`brdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
+/// [`bsdf`]'s evaluation, density and sampling, and [`specular`]'s sampling of a delta BSDF.
 #[derive(Clone, Copy)]
 pub struct Bsdf<'a> {
     pub material: MaterialAt<'a>,
@@ -65,14 +65,14 @@ pub struct Bsdf<'a> {
 
 impl VertexBsdf for Bsdf<'_> {
     fn eval(&self, wi: Vec3) -> Vec3 {
-        brdf::eval(self.material, self.frame, self.wo, wi)
+        bsdf::eval(self.material, self.frame, self.wo, wi)
     }
 
     fn pdf(&self, wi: Vec3) -> f64 {
-        brdf::pdf(self.material, self.frame, self.wo, wi)
+        bsdf::pdf(self.material, self.frame, self.wo, wi)
     }
 
-    /// [`brdf::sample`] from three uniform numbers ([`specular::sample`] from the first of
+    /// [`bsdf::sample`] from three uniform numbers ([`specular::sample`] from the first of
     /// them for a delta BSDF).
     fn sample(&self, rng: &mut Rng) -> Option<BrdfSample> {
         let u = [
@@ -83,7 +83,7 @@ impl VertexBsdf for Bsdf<'_> {
         if self.material.mirror {
             specular::sample(self.material, self.ns, self.wo, u[0])
         } else {
-            brdf::sample(self.material, self.frame, self.wo, u)
+            bsdf::sample(self.material, self.frame, self.wo, u)
         }
     }
 }
@@ -195,7 +195,7 @@ pub struct LightPoint {
     /// The unit direction from `x` to `y`, and their squared distance.
     pub wi: Vec3,
     pub dist2: f32,
-    /// `|cos|` at `x` (against its facing normal, [`brdf::cosine`]) and `cos` at `y`
+    /// `|cos|` at `x` (against its facing normal, [`bsdf::cosine`]) and `cos` at `y`
     /// (against `y`'s normal, towards `x`).
     pub cos_x: f32,
     pub cos_light: f32,
@@ -205,7 +205,7 @@ pub struct LightPoint {
 
 /// Where a light sample is taken: the surface point, the material that scatters there
 /// towards the path's `wo`, and its shading frame facing `wo`. Which lights can reach it is
-/// the material's to say ([`brdf::cosine`]): those above the surface, or on either side for
+/// the material's to say ([`bsdf::cosine`]): those above the surface, or on either side for
 /// a material that transmits.
 pub type Receiver<'a> = (&'a SurfacePoint, &'a Material, Frame);
 
@@ -237,7 +237,7 @@ impl LightPoint {
         let d = y.p - x.p;
         let dist2 = d.length_squared();
         let wi = d / dist2.sqrt();
-        let cos_x = brdf::cosine(material, frame, wi)?;
+        let cos_x = bsdf::cosine(material, frame, wi)?;
         let cos_light = -y.ng.dot(wi);
         (cos_light > 0.0 && dist2 > 0.0).then_some(Self {
             y,
@@ -305,7 +305,7 @@ enum Density {
 #[derive(Clone, Copy, Debug)]
 pub struct LightCandidate {
     /// Unit direction from `x` towards the light, with `|cos|` against `x`'s facing normal
-    /// (positive: [`brdf::cosine`]).
+    /// (positive: [`bsdf::cosine`]).
     pub wi: Vec3,
     pub cos_x: f32,
     /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
@@ -348,7 +348,7 @@ impl LightCandidate {
                 (l.wi, le, density, Target::Point(l.y))
             }
         };
-        let cos_x = brdf::cosine(material, frame, wi)?;
+        let cos_x = bsdf::cosine(material, frame, wi)?;
         let density_positive = match density {
             Density::Environment(pdf) => pdf > 0.0,
             _ => true,

@@ -8,9 +8,9 @@ use super::generator::{
 use super::pt::Receiver;
 use super::{emitted, EndPoint, RayCounts, SceneView};
 use crate::accel::Ray;
-use crate::sampling::brdf::{self, Frame};
-use crate::sampling::specular;
 use crate::sampling::{uniform, Rng};
+use crate::scene::material::bsdf::{self, Frame};
+use crate::scene::material::specular;
 use crate::scene::{LightPick, MaterialAt, SurfacePoint};
 use glam::{DVec3, Vec3};
 
@@ -305,7 +305,7 @@ impl Walk {
                 wi: drawn.wi,
                 pdf_sampled: absorption * drawn.pdf,
             });
-            let f = brdf::eval(material, frame, wo, drawn.wi).as_dvec3() * drawn.le;
+            let f = bsdf::eval(material, frame, wo, drawn.wi).as_dvec3() * drawn.le;
             if f.max_element() > 0.0 {
                 // In the light sample's own measure: area for an emitter point.
                 self.nee = self.throughput * f * drawn.geometry;
@@ -392,7 +392,7 @@ impl Walk {
             uniform(rng) as f64,
         ];
         let drawn = LightDraw::sample(g, view, (&self.x, &material, frame), u)?;
-        let f = brdf::eval(material, frame, self.wo, drawn.wi).as_dvec3() * drawn.le;
+        let f = bsdf::eval(material, frame, self.wo, drawn.wi).as_dvec3() * drawn.le;
         // Also false for a NaN.
         let carries = f.max_element() > 0.0;
         if !carries {
@@ -444,7 +444,7 @@ impl Walk {
         ];
         let (at, bsdf) = (x.p.as_dvec3(), (material, frame, wo));
         let s = match &g.steps[self.k].sampler {
-            DirectionSampler::Brdf => brdf::sample_scattered(material, frame, wo, u)?,
+            DirectionSampler::Brdf => bsdf::sample_scattered(material, frame, wo, u)?,
             DirectionSampler::Anchor(a) => {
                 let wi = a.sample(at, u).as_vec3().normalize();
                 scattered(bsdf, wi, a.pdf(at, wi.as_dvec3()))?
@@ -471,12 +471,12 @@ fn scattered(
     (material, frame, wo): (MaterialAt, Frame, Vec3),
     wi: Vec3,
     pdf: f64,
-) -> Option<brdf::Scattered> {
-    Some(brdf::Scattered {
+) -> Option<bsdf::Scattered> {
+    Some(bsdf::Scattered {
         wi,
         pdf,
-        cos: brdf::cosine(&material, frame, wi)?,
-        f: brdf::eval(material, frame, wo, wi),
+        cos: bsdf::cosine(&material, frame, wi)?,
+        f: bsdf::eval(material, frame, wo, wi),
     })
 }
 
@@ -487,7 +487,7 @@ fn scattered(
 struct LightDraw {
     end: LightEnd,
     /// Unit direction from `x` towards it, and its `|cos|` with the facing normal
-    /// ([`brdf::cosine`], positive).
+    /// ([`bsdf::cosine`], positive).
     wi: Vec3,
     cos_x: f32,
     /// What arrives along `wi`: radiance, or a delta light's intensity / d² or irradiance.
@@ -550,7 +550,7 @@ impl LightDraw {
                 (end, wi, le, (cos_y, dist2), shadow)
             }
         };
-        let cos_x = brdf::cosine(material, frame, wi)?;
+        let cos_x = bsdf::cosine(material, frame, wi)?;
         let (cos_y, dist2) = area;
         let (area_to_solid_angle, geometry) = match end {
             LightEnd::Area { .. } => (

@@ -5,14 +5,11 @@
 //! order, and a single pixel can be re-rendered alone.
 
 pub mod anchor;
-pub mod brdf;
 pub mod light_point;
 pub mod patch;
-pub mod specular;
 
 use crate::accel::Ray;
 use crate::scene::Camera;
-use glam::Vec3;
 use rand::Rng as _;
 use rand_pcg::Pcg32;
 
@@ -118,34 +115,6 @@ pub fn uniform(rng: &mut Rng) -> f32 {
 /// inside the pixel (a box filter), from two uniform numbers, horizontal first.
 pub fn camera_ray(camera: &Camera, (x, y): (u32, u32), rng: &mut Rng) -> Ray {
     camera.ray(x as f32 + uniform(rng), y as f32 + uniform(rng))
-}
-
-// The vector helpers and the sample type that both the non-delta BSDF (`brdf`) and the
-// delta one (`specular`) use: here, so that `brdf` may call `specular` without a circle.
-
-/// The (shading) normal `ns` turned towards `wo`: the side a two-sided surface scatters on.
-pub fn facing_normal(ns: Vec3, wo: Vec3) -> Vec3 {
-    if ns.dot(wo) >= 0.0 {
-        ns
-    } else {
-        -ns
-    }
-}
-
-/// Mirror reflection of `wo` about `n`.
-pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
-    2.0 * n.dot(wo) * n - wo
-}
-
-/// A sampled direction.
-#[derive(Clone, Copy, Debug)]
-pub struct BrdfSample {
-    pub wi: Vec3,
-    /// Solid-angle density; 1 for a delta (it then cancels in `weight`).
-    pub pdf: f64,
-    /// `f · |cos| / pdf` (for a mirror: its reflectance).
-    pub weight: Vec3,
-    pub delta: bool,
 }
 
 #[cfg(test)]

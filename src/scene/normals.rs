@@ -9,9 +9,9 @@
 //! frame. Mitsuba then turns it per direction `wo` towards `wo` (its
 //! `flip_invalid_normals`: the normal rotated by π about the unperturbed one where `wo` lies
 //! on the other side of it), and a `twosided` around the map mirrors a `wo` behind the
-//! surface first ([`resolve`]). The BSDF's `sampling::brdf::Frame` carries the
+//! surface first ([`resolve`]). The BSDF's `sampling::bsdf::Frame` carries the
 //! result as its normal and the unperturbed normal beside it (`base`), and
-//! `sampling::brdf` applies Mitsuba's two rules: nothing scatters into a `wi` on
+//! `scene::material::bsdf` applies Mitsuba's two rules: nothing scatters into a `wi` on
 //! different sides of the two normals, and what scatters is attenuated by the microfacet
 //! shadowing term of Estévez et al., "A Microfacet-Based Shadowing Function to Solve the
 //! Bump Terminator Problem" (Ray Tracing Gems, 2019; [`shadow_terminator`]). Every method

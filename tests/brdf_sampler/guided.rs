@@ -89,7 +89,7 @@ pub(crate) fn check_guided(name: &str, k: usize, samplers: usize, seed: u64) {
         let s = bsdf.sample(&mut rng)?;
         let p = bsdf.pdf(s.wi);
         mismatched += usize::from((s.pdf - p).abs() > 1e-9 * p);
-        assert!(!s.delta && bsdf.eval(s.wi) == brdf::eval(&g.v.m, g.v.frame(), g.v.wo, s.wi));
+        assert!(!s.delta && bsdf.eval(s.wi) == bsdf::eval(&g.v.m, g.v.frame(), g.v.wo, s.wi));
         Some(s.wi.as_dvec3().normalize()).filter(|d| d.dot(nd) > 0.0)
     };
     let pdf = |d: DVec3| bsdf.pdf(d.as_vec3());

@@ -5,9 +5,9 @@
 //! not use the samplers; Mitsuba's smooth `plastic` against Mitsuba's values (`plastic`).
 //! Run with `cargo test --profile release-tests --test brdf_sampler` (`-- --nocapture` prints every statistic).
 //!
-//! The outcome of a draw: `brdf::pdf` is the density, over the full sphere, of the direction
+//! The outcome of a draw: `bsdf::pdf` is the density, over the full sphere, of the direction
 //! the sampler *generates*; the Phong lobe about the mirror direction can put some of it below
-//! the surface, and `brdf::sample` returns `None` for those draws (they carry no energy). The
+//! the surface, and `bsdf::sample` returns `None` for those draws (they carry no energy). The
 //! sampler does not hand the rejected directions out, so the honest event space is: a
 //! direction above the surface, binned, or "no direction", one more bin whose expected
 //! probability is `∫ pdf` over the lower hemisphere — computed by its own quadrature, not as
@@ -38,9 +38,9 @@ use genpath::path::generator::{DirectionSampler, PathGenerator, Step};
 use genpath::path::mixture::Mixture as GenMixture;
 use genpath::path::pt::{Bsdf, PathGuide, VertexBsdf};
 use genpath::sampling::anchor::AnchorSampler;
-use genpath::sampling::brdf::{self, Frame};
 use genpath::sampling::light_point::LightPointSampler;
 use genpath::sampling::{sample_rng, uniform};
+use genpath::scene::material::bsdf::{self, Frame};
 use genpath::scene::{Glossy, Material};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_PI_2, PI};

@@ -1,5 +1,5 @@
 //! The microfacet lobes (Mitsuba's `roughconductor` and `roughplastic`,
-//! `genpath::scene::microfacet`) through the one BSDF interface (`brdf`): χ² of their
+//! `genpath::scene::material::microfacet`) through the one BSDF interface (`brdf`): χ² of their
 //! samples, GGX and Beckmann, isotropic and anisotropic, visible normals and the whole
 //! distribution, each with must-reject twins (roughness 3 % off, the other distribution, the
 //! anisotropy along the wrong tangent, the other sampling mode, the rough plastic's lobe
@@ -13,7 +13,9 @@
 //! `1 − Σ(other bins)`.
 
 use super::*;
-use genpath::scene::microfacet::{Distribution, Microfacet, RoughConductor, RoughPlastic};
+use genpath::scene::material::microfacet::{
+    Distribution, Microfacet, RoughConductor, RoughPlastic,
+};
 
 /// One-sided material of a single glossy lobe.
 fn lobe(glossy: Glossy) -> Material {
@@ -105,7 +107,7 @@ fn rejected(v: &Vertex) -> f64 {
 }
 
 /// The outcomes at `v`: directions above the surface in `above`'s bins, with densities
-/// `brdf::pdf`, and "no direction" with probability [`rejected`].
+/// `bsdf::pdf`, and "no direction" with probability [`rejected`].
 struct MicrofacetOutcomes {
     outcomes: Outcomes,
     none: f64,
@@ -155,7 +157,7 @@ fn bins_for(v: &Vertex, alpha: f64) -> SphereBins {
     lobe_bins(v.lobe_axis(), 2.0 / (alpha * alpha))
 }
 
-/// χ² of the BSDF's samples at `v` against `brdf::pdf` and [`rejected`] (must accept),
+/// χ² of the BSDF's samples at `v` against `bsdf::pdf` and [`rejected`] (must accept),
 /// then against each wrong material's (must reject).
 fn check(name: &str, v: &Vertex, alpha: f64, seed: u64, wrong: &[(&str, Material)]) {
     let outcomes = MicrofacetOutcomes::new(v, bins_for(v, alpha));
@@ -324,7 +326,7 @@ fn sampled_weights_are_mitsubas_closed_forms() {
                     (i as f64 + 0.5) / 2e4,
                     ((i * 7919) % 10_007) as f64 / 10_007.0,
                 ];
-                let Some(s) = brdf::sample(&v.m, v.frame(), v.wo, u) else {
+                let Some(s) = bsdf::sample(&v.m, v.frame(), v.wo, u) else {
                     continue;
                 };
                 let (wo, wi) = (
@@ -393,7 +395,7 @@ fn white_furnace_loses_only_what_masking_loses() {
         let mut rng = sample_rng(seed, 0, 0);
         for _ in 0..count {
             let u = [0; 3].map(|_| f64::from(uniform(&mut rng)));
-            let w = brdf::sample(&v.m, v.frame(), v.wo, u).map_or(0.0, |s| f64::from(s.weight.x));
+            let w = bsdf::sample(&v.m, v.frame(), v.wo, u).map_or(0.0, |s| f64::from(s.weight.x));
             sum += w;
             sum2 += w * w;
         }
@@ -401,7 +403,7 @@ fn white_furnace_loses_only_what_masking_loses() {
         let se = ((sum2 / count as f64 - mean * mean) / count as f64).sqrt();
         let wo = v.local(v.wo.as_dvec3().normalize());
         let with_masking = albedo_by_quadrature(&v, |d| {
-            f64::from(brdf::eval(&v.m, v.frame(), v.wo, d.as_vec3()).x)
+            f64::from(bsdf::eval(&v.m, v.frame(), v.wo, d.as_vec3()).x)
         });
         let d = &c.microfacet;
         let without = albedo_by_quadrature(&v, |dir| {
@@ -448,8 +450,8 @@ fn eval_is_reciprocal() {
             };
             let (a, b) = (dir(), dir());
             let (f, g) = (
-                brdf::eval(&w.m, w.frame(), a, b),
-                brdf::eval(&w.m, w.frame(), b, a),
+                bsdf::eval(&w.m, w.frame(), a, b),
+                bsdf::eval(&w.m, w.frame(), b, a),
             );
             assert!(
                 (f - g).abs().max_element() <= 1e-5 * f.max_element().max(1e-3),
@@ -665,8 +667,8 @@ fn eval_and_pdf_are_mitsubas() {
     for (name, m, rows) in cases {
         for (a, b, f, pdf) in rows {
             let (wo, wi) = (dir(a), dir(b));
-            let got = brdf::eval(&m, frame, wo, wi);
-            let got_pdf = brdf::pdf(&m, frame, wo, wi);
+            let got = bsdf::eval(&m, frame, wo, wi);
+            let got_pdf = bsdf::pdf(&m, frame, wo, wi);
             let want = DVec3::from(f).as_vec3();
             let rel = ((got - want).abs() / want).max_element();
             println!("{name} {a:?} {b:?}: eval {got} against {want} ({rel:.1e}), pdf {got_pdf:.6} against {pdf:.6}");

@@ -6,7 +6,7 @@
 //! vertex (the diffuse lobe's times its probability) as the must-reject twin.
 
 use super::*;
-use genpath::sampling::specular;
+use genpath::scene::material::specular;
 use genpath::scene::SmoothPlastic;
 
 /// A one-sided smooth plastic.
@@ -67,7 +67,7 @@ fn close(a: f64, b: f64, what: &str) {
 }
 
 /// Mitsuba's `eval`, `pdf`, `prob_specular` and the delta's sampled weight, as genpath
-/// makes them from a hit's choice: `brdf::eval` and `brdf::pdf` of the diffuse choice times
+/// makes them from a hit's choice: `bsdf::eval` and `bsdf::pdf` of the diffuse choice times
 /// its probability, the choice of the delta for a uniform number just below `P_s` and of
 /// the diffuse lobe just above it, and the delta's `specular::sample` weight.
 #[test]
@@ -87,8 +87,8 @@ fn plastic_matches_mitsubas_values() {
         assert!(below.mirror && !above.mirror);
         let s = specular::sample(below, Vec3::Z, wo32, 0.0).unwrap();
         assert!(s.delta && (s.wi - Vec3::new(-wo32.x, -wo32.y, wo32.z)).length() < 1e-6);
-        let ours_f = brdf::eval(above, frame, wo32, wi32).as_dvec3() * (1.0 - p);
-        let ours_pdf = brdf::pdf(above, frame, wo32, wi32) * (1.0 - p);
+        let ours_f = bsdf::eval(above, frame, wo32, wi32).as_dvec3() * (1.0 - p);
+        let ours_pdf = bsdf::pdf(above, frame, wo32, wi32) * (1.0 - p);
         for c in 0..3 {
             close(f64::from(s.weight[c]), weight[c], "delta weight");
             close(ours_f[c], f[c], "f");
@@ -99,7 +99,7 @@ fn plastic_matches_mitsubas_values() {
     println!("plastic against Mitsuba: worst relative difference of f {worst:.2e}");
 }
 
-/// The diffuse choice samples its cosine density, as `brdf::pdf` says, at normal and grazing
+/// The diffuse choice samples its cosine density, as `bsdf::pdf` says, at normal and grazing
 /// incidence; the density of Mitsuba's vertex before the choice (the cosine times the
 /// diffuse lobe's probability, which a method taking the choice at the hit must leave out)
 /// is rejected by the same histograms.

@@ -101,15 +101,15 @@ pub(crate) fn lobe_splits(ns: f64) -> Vec<f64> {
 
 /// For diffuse and diffuse + Phong at normal and grazing incidence, asserts:
 /// * the quadrature is exact for the f64 model: `∫ model = 1` to 1e-12;
-/// * `∫ brdf::pdf = 1` over the sphere, to 1e-7 (both lobes are normalised over the sphere);
-/// * `∫ brdf::pdf` over the upper hemisphere `= 1 − P(Phong)·B` to 1e-7, `B` the mass of the
+/// * `∫ bsdf::pdf = 1` over the sphere, to 1e-7 (both lobes are normalised over the sphere);
+/// * `∫ bsdf::pdf` over the upper hemisphere `= 1 − P(Phong)·B` to 1e-7, `B` the mass of the
 ///   normalised lobe `(ns+1)/(2π) cos^ns` below the surface, integrated on its own from the
 ///   model (so the upper and lower parts add up to 1 from two different integrands);
 /// * the same quadrature sees the `(ns+2)/(2π)` normalisation: `∫ = 1 + P(Phong)/(ns+1)`,
 ///   more than 100 × 1e-7 off even at ns = 1e4.
 #[test]
 pub(crate) fn brdf_pdf_integrates_to_one() {
-    // `brdf::pdf` takes f32 directions: rounding one by 6e-8 rad moves `cos^ns` by up to
+    // `bsdf::pdf` takes f32 directions: rounding one by 6e-8 rad moves `cos^ns` by up to
     // ~1e-5 relative at ns = 1e4, noise that leaves ~1e-8 on the integral (the f64 model's
     // integral is exact to 1e-13 with the same nodes).
     const TOL: f64 = 1e-7;

@@ -1,4 +1,4 @@
-//! Mitsuba's `roughdielectric` (`genpath::scene::microfacet::RoughDielectric`) through the
+//! Mitsuba's `roughdielectric` (`genpath::scene::material::microfacet::RoughDielectric`) through the
 //! one BSDF interface (`brdf`), the first non-delta lobe that transmits: χ² of its samples
 //! over the whole sphere (reflection and refraction, GGX and Beckmann, seen from outside
 //! (`η > 1`) and from inside (`η < 1`, total internal reflection included), anisotropic,
@@ -19,8 +19,8 @@
 //! ([`Glass::rejected`]), not `1 − Σ(other bins)`.
 
 use super::*;
-use genpath::scene::fresnel::fresnel_dielectric;
-use genpath::scene::microfacet::{Distribution, Microfacet, RoughDielectric};
+use genpath::scene::material::fresnel::fresnel_dielectric;
+use genpath::scene::material::microfacet::{Distribution, Microfacet, RoughDielectric};
 
 /// A material of one rough dielectric lobe, white unless told.
 fn glass(distribution: Distribution, alpha: (f64, f64), visible: bool, eta: f32) -> Material {
@@ -127,16 +127,16 @@ impl Glass {
     }
 
     fn pdf(&self, d: DVec3) -> f64 {
-        brdf::pdf(&self.m, self.frame, self.wo, d.as_vec3())
+        bsdf::pdf(&self.m, self.frame, self.wo, d.as_vec3())
     }
 
-    /// One draw: a direction, or `None`. A sample whose own `pdf` differs from `brdf::pdf`
+    /// One draw: a direction, or `None`. A sample whose own `pdf` differs from `bsdf::pdf`
     /// (what every density re-evaluates) is a bug.
     fn sample(&self, u: [f64; 3]) -> Option<DVec3> {
-        let s = brdf::sample(&self.m, self.frame, self.wo, u)?;
+        let s = bsdf::sample(&self.m, self.frame, self.wo, u)?;
         assert_eq!(
             s.pdf,
-            brdf::pdf(&self.m, self.frame, self.wo, s.wi),
+            bsdf::pdf(&self.m, self.frame, self.wo, s.wi),
             "{s:?}"
         );
         assert!(!s.delta);
@@ -264,7 +264,7 @@ fn pdf_without_eta2(g: &Glass, d: DVec3) -> f64 {
     right / (eta * eta)
 }
 
-/// χ² of the BSDF's samples at `g` against `brdf::pdf` and [`Glass::rejected`] (must
+/// χ² of the BSDF's samples at `g` against `bsdf::pdf` and [`Glass::rejected`] (must
 /// accept), then against each wrong material's (must reject) and a density without the
 /// refraction Jacobian's `η²`.
 fn check(name: &str, g: &Glass, alpha: f64, seed: u64, wrong: &[(&str, Material)]) {
@@ -484,8 +484,8 @@ fn white_furnace_conserves_energy_and_loses_only_what_masking_loses() {
         let ns = if back { -g.frame.n } else { g.frame.n };
         for _ in 0..count {
             let u = [0; 3].map(|_| f64::from(uniform(&mut rng)));
-            let w = brdf::sample(&g.m, g.frame, g.wo, u).map_or(0.0, |s| {
-                let undo = genpath::sampling::specular::radiance_scale(&g.m, ns, g.wo, s.wi);
+            let w = bsdf::sample(&g.m, g.frame, g.wo, u).map_or(0.0, |s| {
+                let undo = genpath::scene::material::specular::radiance_scale(&g.m, ns, g.wo, s.wi);
                 f64::from(s.weight.x / undo)
             });
             sum += w;
@@ -495,7 +495,7 @@ fn white_furnace_conserves_energy_and_loses_only_what_masking_loses() {
         let se = ((sum2 / count as f64 - mean * mean) / count as f64).sqrt();
         let eta = g.eta();
         let quadrature = albedo_by_quadrature(&g, |d| {
-            let f = f64::from(brdf::eval(&g.m, g.frame, g.wo, d.as_vec3()).x);
+            let f = f64::from(bsdf::eval(&g.m, g.frame, g.wo, d.as_vec3()).x);
             if d.dot(g.nd()) < 0.0 {
                 f * eta * eta
             } else {
@@ -555,11 +555,11 @@ fn transmission_is_reciprocal_up_to_eta_squared() {
         // `a` outside (on the stored normal's side), `b` on either side.
         let side = if i % 2 == 0 { 1.0 } else { -1.0 };
         let (a, b) = (dir(1.0), dir(side));
-        let from_a = brdf::eval(&m, Frame::new(n, s), a, b);
+        let from_a = bsdf::eval(&m, Frame::new(n, s), a, b);
         let from_b = if side > 0.0 {
-            brdf::eval(&m, Frame::new(n, s), b, a)
+            bsdf::eval(&m, Frame::new(n, s), b, a)
         } else {
-            brdf::eval(&m, Frame::behind(-n, s), b, a)
+            bsdf::eval(&m, Frame::behind(-n, s), b, a)
         };
         let eta2 = if side > 0.0 { 1.0 } else { 1.5f32 * 1.5 };
         let want = from_a * eta2;
@@ -632,8 +632,8 @@ fn eval_and_pdf_are_mitsubas() {
             } else {
                 Frame::behind(-Vec3::Z, Vec3::X)
             };
-            let got = brdf::eval(m, frame, wo, wi).as_dvec3();
-            let got_pdf = brdf::pdf(m, frame, wo, wi);
+            let got = bsdf::eval(m, frame, wo, wi).as_dvec3();
+            let got_pdf = bsdf::pdf(m, frame, wo, wi);
             let want = DVec3::from(*f);
             println!(
                 "{name} {wo} {wi}: eval {got} against {want}, pdf {got_pdf:.7e} against {pdf:.7e}"

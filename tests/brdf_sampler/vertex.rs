@@ -78,7 +78,7 @@ impl Vertex {
 
     /// The Phong lobe's axis, the mirror direction of `wo`, as `brdf` computes it.
     pub(crate) fn lobe_axis(&self) -> DVec3 {
-        genpath::sampling::reflect(self.wo, self.n)
+        genpath::scene::material::reflect(self.wo, self.n)
             .as_dvec3()
             .normalize()
     }
@@ -95,16 +95,16 @@ impl Vertex {
     }
 
     pub(crate) fn pdf(&self, d: DVec3) -> f64 {
-        brdf::pdf(&self.m, self.frame(), self.wo, d.as_vec3())
+        bsdf::pdf(&self.m, self.frame(), self.wo, d.as_vec3())
     }
 
     /// One draw: the direction above the surface, or `None` for a rejected one. A sample
-    /// whose own `pdf` differs from `brdf::pdf` (what `pdf_path` re-evaluates) is a bug.
+    /// whose own `pdf` differs from `bsdf::pdf` (what `pdf_path` re-evaluates) is a bug.
     pub(crate) fn sample(&self, u: [f64; 3]) -> Option<DVec3> {
-        let s = brdf::sample(&self.m, self.frame(), self.wo, u)?;
+        let s = bsdf::sample(&self.m, self.frame(), self.wo, u)?;
         assert_eq!(
             s.pdf,
-            brdf::pdf(&self.m, self.frame(), self.wo, s.wi),
+            bsdf::pdf(&self.m, self.frame(), self.wo, s.wi),
             "{s:?}"
         );
         assert!(!s.delta);
@@ -234,7 +234,7 @@ pub(crate) fn lobe_bins(axis: DVec3, ns: f64) -> SphereBins {
     SphereBins::new(axis, edges, 16)
 }
 
-/// Draws from the BRDF sampler at `v` and accepts `brdf::pdf`; returns what the wrong
+/// Draws from the BRDF sampler at `v` and accepts `bsdf::pdf`; returns what the wrong
 /// densities need.
 pub(crate) fn check_brdf(
     name: &str,
@@ -301,7 +301,7 @@ pub(crate) fn assert_model_is_the_pdf(v: &Vertex) {
             ((i * 37) % 101) as f64 / 101.0,
             0.37,
         ];
-        if let Some(s) = brdf::sample(&v.m, v.frame(), v.wo, u) {
+        if let Some(s) = bsdf::sample(&v.m, v.frame(), v.wo, u) {
             let (want, got) = (s.pdf, model.pdf(v, s.wi.as_dvec3().normalize()));
             assert!((got - want).abs() <= 1e-6 * want, "{got} {want}");
             checked += 1;

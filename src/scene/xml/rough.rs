@@ -5,7 +5,7 @@
 
 use super::props::Props;
 use super::textures::{material_textures, Textures};
-use crate::scene::microfacet::{
+use crate::scene::material::microfacet::{
     Distribution, Microfacet, RoughConductor, RoughDielectric, RoughPlastic,
 };
 use crate::scene::{Glossy, Material, MaterialTextures, SceneError, SmoothPlastic};

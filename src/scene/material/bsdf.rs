@@ -1,7 +1,7 @@
 //! The BSDF of genpath's materials and its sampler: a two-sided Lambertian lobe plus a
 //! glossy lobe ([`Glossy`]: normalised modified Phong, Mitsuba's rough conductor, rough
-//! plastic or rough dielectric, [`crate::scene::microfacet`], or a smooth plastic's diffuse choice,
-//! [`crate::scene::SmoothPlastic`]), the Lambertian one chosen by albedo;
+//! plastic or rough dielectric, [`super::microfacet`], or a smooth plastic's diffuse choice,
+//! [`super::SmoothPlastic`]), the Lambertian one chosen by albedo;
 //! or a delta BSDF (an ideal mirror or conductor here; smooth dielectrics, which tell their
 //! sides apart, in [`super::specular`]). This is the one BSDF interface of every method:
 //! `pt`, `pg`, `srt`, `mixture`, `ga` and `ga-pt` evaluate, weigh and sample every non-delta
@@ -22,7 +22,8 @@
 //! next-event estimation, the guide's samples).
 
 use super::{facing_normal, reflect, specular, BrdfSample};
-use crate::scene::{normals, Glossy, Material, MaterialAt, SurfacePoint};
+use super::{Glossy, Material, MaterialAt};
+use crate::scene::{normals, SurfacePoint};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{FRAC_1_PI, PI};
 

@@ -1,8 +1,7 @@
 //! The Fresnel equations of the interfaces genpath's materials model: a conductor's, of a
 //! complex index of refraction, a dielectric's, and Mitsuba's fit of a dielectric's diffuse
-//! reflectance. Here, with the materials, because the materials (a smooth conductor's
-//! mirror, the microfacet lobes, the smooth plastic) need them as much as the delta sampler
-//! in `sampling::specular` does, and the scene may not import the samplers.
+//! reflectance: what a smooth conductor's mirror, the microfacet lobes, the smooth plastic
+//! and the delta sampler ([`super::specular`]) share.
 
 use glam::Vec3;
 

@@ -1,6 +1,20 @@
-//! Materials: what a surface is made of (a Lambertian albedo, a glossy or delta BSDF, an
-//! emission), their textured parameters, and Mitsuba's smooth plastic, which holds a
-//! material of its own for its delta choice (so the two types live in one file).
+//! Materials and their BSDFs, in one module: what a surface is made of (a Lambertian
+//! albedo, a glossy or delta BSDF, an emission), their textured parameters, and Mitsuba's
+//! smooth plastic, which holds a material of its own for its delta choice (so the two types
+//! live in one file); and how they scatter:
+//!
+//! * [`bsdf`]: the one BSDF interface of every method for a non-delta vertex — `eval`,
+//!   `pdf`, `eval_pdf` (both at once, their shared work done once, Mitsuba's `eval_pdf`) and
+//!   `sample` in a shading [`bsdf::Frame`], in either [`TransportMode`];
+//! * [`specular`]: the delta BSDFs (mirrors, smooth conductors and dielectrics) and their
+//!   sampler;
+//! * [`microfacet`]: Mitsuba's microfacet lobes (rough conductor, plastic, dielectric);
+//! * [`fresnel`]: the Fresnel equations they share.
+//!
+//! Directions follow pbrt-v4's and Mitsuba's convention in both transport modes: `wo` is the
+//! direction the path arrived from (the frame faces it) and `wi` the one it continues along
+//! or is connected along; in [`TransportMode::Importance`] (a path started at a light) the
+//! BSDF value is the adjoint's (see there).
 //!
 //! # How a textured material is evaluated at a hit
 //!
@@ -12,8 +26,7 @@
 //! ([`Resolved`]: the Lambertian albedo, the delta BSDF's reflectance, the glossy lobe's
 //! specular and diffuse reflectances, a dielectric's transmittance; a smooth plastic's
 //! look-up also takes its choice of lobe there, [`Material::scattering_at`]). The BSDF code
-//! (`sampling::brdf`, `sampling::specular`) reads those parameters
-//! through [`MaterialAt`]'s accessors,
+//! ([`bsdf`], [`specular`]) reads those parameters through [`MaterialAt`]'s accessors,
 //! which return the material's own field where nothing is textured. So an untextured
 //! scene allocates nothing, clones no name and computes exactly what it computed before
 //! (bit-identical renders), and a textured one costs a texture lookup per material look-up
@@ -26,12 +39,61 @@
 //! the textures' means, as Mitsuba computes it; roughness (`alpha`) is a constant (a
 //! textured one is refused when the scene is loaded).
 
-use super::fresnel::{fresnel_conductor, fresnel_dielectric, fresnel_diffuse_reflectance};
-use super::microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
+pub mod bsdf;
+pub mod fresnel;
+pub mod microfacet;
+pub mod specular;
+
 use super::normals::Perturbation;
 use super::texture::Texture;
+use fresnel::{fresnel_conductor, fresnel_dielectric, fresnel_diffuse_reflectance};
 use glam::{Vec2, Vec3};
+use microfacet::{RoughConductor, RoughDielectric, RoughPlastic};
 use std::f64::consts::FRAC_1_PI;
+
+// The vector helpers and the sample type that both the non-delta BSDF (`bsdf`) and the
+// delta one (`specular`) use: here, so that `bsdf` may call `specular` without a circle.
+
+/// The (shading) normal `ns` turned towards `wo`: the side a two-sided surface scatters on.
+pub fn facing_normal(ns: Vec3, wo: Vec3) -> Vec3 {
+    if ns.dot(wo) >= 0.0 {
+        ns
+    } else {
+        -ns
+    }
+}
+
+/// Mirror reflection of `wo` about `n`.
+pub fn reflect(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * n.dot(wo) * n - wo
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BrdfSample {
+    pub wi: Vec3,
+    /// Solid-angle density; 1 for a delta (it then cancels in `weight`).
+    pub pdf: f64,
+    /// `f · |cos| / pdf` (for a mirror: its reflectance).
+    pub weight: Vec3,
+    pub delta: bool,
+}
+
+/// Which way a path carries light through a BSDF (pbrt-v4's and Mitsuba's
+/// `TransportMode`). `wo` is the direction the path arrived from in both.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TransportMode {
+    /// A path started at the camera: it carries radiance, `wo` towards the camera. The BSDF
+    /// is `f(wo, wi)`, and radiance refracted through an interface is scaled by `1/η²`.
+    #[default]
+    Radiance,
+    /// A path started at a light: it carries importance (light flows along the path), `wo`
+    /// towards the light. The BSDF is the adjoint `f*(wo, wi) = f(wi, wo)`, times the
+    /// shading-normal correction `|wo·ns| |wi·ng| / (|wo·ng| |wi·ns|)` (Veach's thesis
+    /// §5.3, pbrt-v4's `CorrectShadingNormal`), and nothing scales refracted light: the
+    /// `1/η²` of radiance is not importance's.
+    Importance,
+}
 
 /// A surface material: a two-sided Lambertian lobe plus a glossy lobe ([`Glossy`]: a
 /// normalised modified-Phong lobe, or Mitsuba's rough conductor, rough plastic or rough
@@ -61,7 +123,7 @@ pub struct Material {
     pub conductor: Option<[Vec3; 2]>,
     /// A smooth (or thin) dielectric (Mitsuba's `dielectric`, `thindielectric`): with
     /// `mirror`, a delta BSDF that reflects with reflectance `ks` or transmits (see
-    /// `sampling::specular`).
+    /// [`specular`]).
     pub dielectric: Option<Dielectric>,
     /// The textured parameters, if any (see [`super::texture`]): they override the fields above
     /// at each hit, through [`Material::at`].
@@ -69,7 +131,7 @@ pub struct Material {
 }
 
 /// The glossy (non-delta, non-Lambertian) lobe of a [`Material`], evaluated, weighed and
-/// sampled by `sampling::brdf` in the shading frame.
+/// sampled by [`bsdf`] in the shading frame.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Glossy {
     None,

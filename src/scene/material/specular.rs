@@ -20,9 +20,9 @@
 //! ratios that multiple importance sampling and the genetic algorithm's fitness take are
 //! those of the full densities.
 
+use super::fresnel::fresnel_dielectric;
 use super::{facing_normal, reflect, BrdfSample};
-use crate::scene::fresnel::fresnel_dielectric;
-use crate::scene::{Dielectric, Material, MaterialAt};
+use super::{Dielectric, Material, MaterialAt};
 use glam::{DVec3, Vec3};
 
 /// The probability that `d` reflects light arriving at `cos_theta_i` against its shading
@@ -54,7 +54,7 @@ fn transmitted(d: &Dielectric, ns: DVec3, wo: DVec3) -> (DVec3, f64) {
 /// The factor `η_ti²` by which `m`'s weight scales radiance that crossed its interface
 /// from `wi` to `wo` (shading normal `ns`): for a refraction through a smooth dielectric or
 /// a rough one (whose transmission carries the same `1/η²`,
-/// [`crate::scene::microfacet::RoughDielectric`]), 1 otherwise. A path tracer's Russian
+/// [`super::microfacet::RoughDielectric`]), 1 otherwise. A path tracer's Russian
 /// roulette undoes it (as Mitsuba's does with its `eta`), so that a path inside glass is
 /// not ended for the compression alone.
 pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {

@@ -319,7 +319,7 @@ impl RoughConductor {
 /// `1/eta` from behind, as Mitsuba selects `m_eta` or `m_inv_eta` by the sign of `cos θ_i`;
 /// mirroring Mitsuba's frame so that `wo` lies above changes nothing else, since its
 /// distribution is symmetric. Transmitted radiance is scaled by `1/η²` (Mitsuba's radiance
-/// mode, the smooth `dielectric`'s `η_ti²` of `sampling::specular`), which makes the
+/// mode, the smooth `dielectric`'s `η_ti²` of [`super::specular`]), which makes the
 /// transmission `(1 − F) D G |wo·h| |wi·h| / (|cos θ_o| |cos θ_i| (wo·h + η wi·h)²)`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
