@@ -173,11 +173,11 @@ impl Vertex<'_> {
         // The guide covers the sphere; the material says where light goes (above the
         // surface, or through it for a rough dielectric) and with which cosine.
         let cos = bsdf::cosine(&material, n, wi)?;
-        let f = bsdf::eval(material, n, wo, wi);
+        let (f, bsdf_pdf) = bsdf::eval_pdf(material, n, wo, wi);
         if f.max_element() <= 0.0 {
             return None;
         }
-        let pdf = pdf(bsdf::pdf(material, n, wo, wi));
+        let pdf = pdf(bsdf_pdf);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -41,6 +41,11 @@ pub trait VertexBsdf {
     fn eval(&self, wi: Vec3) -> Vec3;
     /// The solid-angle density with which [`Self::sample`] draws unit `wi`.
     fn pdf(&self, wi: Vec3) -> f64;
+    /// [`Self::eval`] and [`Self::pdf`] at once, bit for bit theirs (Mitsuba's `eval_pdf`);
+    /// a BSDF whose two share work overrides it to do that work once.
+    fn eval_pdf(&self, wi: Vec3) -> (Vec3, f64) {
+        (self.eval(wi), self.pdf(wi))
+    }
     /// A direction drawn with the next uniform numbers of `rng`; `None` where the direction
     /// carries nothing (the path ends).
     fn sample(&self, rng: &mut Rng) -> Option<BrdfSample>;
@@ -72,8 +77,12 @@ impl VertexBsdf for Bsdf<'_> {
         bsdf::pdf(self.material, self.frame, self.wo, wi)
     }
 
-    /// [`bsdf::sample`] from three uniform numbers ([`specular::sample`] from the first of
-    /// them for a delta BSDF).
+    fn eval_pdf(&self, wi: Vec3) -> (Vec3, f64) {
+        bsdf::eval_pdf(self.material, self.frame, self.wo, wi)
+    }
+
+    /// [`bsdf::sample`] from three uniform numbers ([`specular::sample_in`] from the first of
+    /// them for a delta BSDF), in the frame's transport mode.
     fn sample(&self, rng: &mut Rng) -> Option<BrdfSample> {
         let u = [
             uniform(rng) as f64,
@@ -81,7 +90,8 @@ impl VertexBsdf for Bsdf<'_> {
             uniform(rng) as f64,
         ];
         if self.material.mirror {
-            specular::sample(self.material, self.ns, self.wo, u[0])
+            let (mode, ng) = (self.frame.mode, self.frame.ng);
+            specular::sample_in(self.material, self.ns, self.wo, u[0], mode, ng)
         } else {
             bsdf::sample(self.material, self.frame, self.wo, u)
         }
@@ -408,14 +418,18 @@ fn next_event<B: VertexBsdf>(
     let x = at.0;
     let u = [uniform(rng), uniform(rng), uniform(rng)];
     let light = LightCandidate::sample(view, at, u)?;
-    let f = bsdf.eval(light.wi);
+    // A delta light's weight needs no density of the BSDF's.
+    let (f, pdf_bsdf) = match light.delta {
+        true => (bsdf.eval(light.wi), 0.0),
+        false => bsdf.eval_pdf(light.wi),
+    };
     if !(f.max_element() > 0.0 && light.visible(view, x, rng, counts)) {
         return None;
     }
     let pdf_light = light.pdf(light_share);
     let weight = match light.delta {
         true => 1.0,
-        false => power_heuristic(pdf_light, bsdf.pdf(light.wi) as f32),
+        false => power_heuristic(pdf_light, pdf_bsdf as f32),
     };
     Some(LightHit {
         wi: light.wi,

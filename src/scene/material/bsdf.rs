@@ -21,10 +21,12 @@
 //! cosine, for every caller (the samplers here, the path tracer's and the generators'
 //! next-event estimation, the guide's samples).
 
+use super::microfacet::{Crossing, Halfway, Microfacet, RoughDielectric};
 use super::{facing_normal, reflect, specular, BrdfSample};
-use super::{Glossy, Material, MaterialAt};
+use super::{Glossy, Material, MaterialAt, TransportMode};
 use crate::scene::{normals, SurfacePoint};
 use glam::{DVec3, Vec3};
+use std::cell::OnceCell;
 use std::f64::consts::{FRAC_1_PI, PI};
 
 /// The shading frame a BSDF scatters in at one vertex.
@@ -44,6 +46,13 @@ pub struct Frame {
     /// into a `wi` on different sides of `n` and `base`, and what scatters is attenuated by
     /// Mitsuba's shadowing term ([`crate::scene::normals`]).
     pub base: Vec3,
+    /// The geometric normal (either orientation), read only in
+    /// [`TransportMode::Importance`] for the shading-normal correction; zero where there is
+    /// none to correct for (the shading normal is the geometric one).
+    pub ng: Vec3,
+    /// Which way the path that scatters here carries light: the BSDF's value and a sample's
+    /// weight are the adjoint's in [`TransportMode::Importance`].
+    pub mode: TransportMode,
 }
 
 impl Frame {
@@ -54,6 +63,8 @@ impl Frame {
             s,
             back: false,
             base: Vec3::ZERO,
+            ng: Vec3::ZERO,
+            mode: TransportMode::Radiance,
         }
     }
 
@@ -61,11 +72,19 @@ impl Frame {
     /// surface), tangent `s`.
     pub fn behind(n: Vec3, s: Vec3) -> Self {
         Self {
-            n,
-            s,
             back: true,
-            base: Vec3::ZERO,
+            ..Self::new(n, s)
         }
+    }
+
+    /// This frame for a path that carries light in `mode` (see [`Frame::mode`]).
+    pub fn with_mode(self, mode: TransportMode) -> Self {
+        Self { mode, ..self }
+    }
+
+    /// This frame at a point of geometric normal `ng` (see [`Frame::ng`]).
+    pub fn with_geometric_normal(self, ng: Vec3) -> Self {
+        Self { ng, ..self }
     }
 
     /// The frame at `x` seen from `wo`: about its shading normal, or about its normal or
@@ -85,6 +104,8 @@ impl Frame {
                 s: Vec3::ZERO,
                 back: false,
                 base,
+                ng: x.ng,
+                mode: TransportMode::Radiance,
             };
         }
         let n = facing_normal(x.ns, wo);
@@ -93,7 +114,15 @@ impl Frame {
             s: x.ts,
             back: n != x.ns,
             base: Vec3::ZERO,
+            ng: x.ng,
+            mode: TransportMode::Radiance,
         }
+    }
+
+    /// The shading-normal correction of [`TransportMode::correction`], about this frame's
+    /// normal and geometric normal, in its mode.
+    pub fn adjoint_correction(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.mode.correction(self.n, self.ng, wo, wi)
     }
 
     /// The orthonormal basis (s, t, n) in `f64`: `s` made orthogonal to `n`, or any tangent
@@ -179,35 +208,126 @@ pub fn cosine(m: &Material, frame: Frame, wi: Vec3) -> Option<f32> {
     }
 }
 
+/// What [`eval`] and [`pdf`] both compute at one `(wo, wi)`, each part when first asked
+/// for: [`eval_pdf`] computes it once for both, with the arithmetic each does alone.
+struct Shared {
+    frame: Frame,
+    wo: Vec3,
+    wi: Vec3,
+    /// `wo` and `wi` in the frame's basis (`f64`).
+    local: OnceCell<(DVec3, DVec3)>,
+    /// Phong's `cos^ns α` about the mirror direction, `None` where `cos α ≤ 0`.
+    phong: OnceCell<Option<f64>>,
+    /// A microfacet reflection's half vector, or a rough dielectric's crossing.
+    halfway: OnceCell<Option<Halfway>>,
+    crossing: OnceCell<Option<Crossing>>,
+}
+
+impl Shared {
+    fn new(frame: Frame, wo: Vec3, wi: Vec3) -> Self {
+        Self {
+            frame,
+            wo,
+            wi,
+            local: OnceCell::new(),
+            phong: OnceCell::new(),
+            halfway: OnceCell::new(),
+            crossing: OnceCell::new(),
+        }
+    }
+
+    fn local(&self) -> (DVec3, DVec3) {
+        *self.local.get_or_init(|| {
+            let b = self.frame.basis();
+            (Frame::to_local(&b, self.wo), Frame::to_local(&b, self.wi))
+        })
+    }
+
+    /// Phong's `cos^ns α` for a lobe of specular reflectance `ks` (`cos α` is taken as 0
+    /// where `ks` is black).
+    fn phong(&self, ks: Vec3, ns: f32) -> Option<f64> {
+        *self.phong.get_or_init(|| {
+            let c = if ks.max_element() > 0.0 {
+                cos_lobe(self.frame.n, self.wo, self.wi)
+            } else {
+                0.0
+            };
+            (c > 0.0).then(|| c.powf(ns as f64))
+        })
+    }
+
+    fn halfway(&self, distr: &Microfacet) -> Option<Halfway> {
+        *self.halfway.get_or_init(|| {
+            let (wo, wi) = self.local();
+            Halfway::of(distr, wo, wi)
+        })
+    }
+
+    fn crossing(&self, d: &RoughDielectric) -> Option<Crossing> {
+        *self.crossing.get_or_init(|| {
+            let (wo, wi) = self.local();
+            d.crossing(wo, wi, self.frame.back)
+        })
+    }
+}
+
 /// BSDF value `f(wo, wi)` (no cosine); zero for mirrors (a delta), and below the surface
 /// for every lobe but a rough dielectric's. `m` is a material at a hit ([`MaterialAt`]), or
 /// a plain `&Material` (its constant parameters), as for every function here. In a frame
 /// that a normal or bump map perturbs ([`Frame::base`]): zero for a `wi` on different sides
-/// of the two normals, else attenuated by Mitsuba's shadowing term.
+/// of the two normals, else attenuated by Mitsuba's shadowing term. In
+/// [`TransportMode::Importance`] the adjoint's value (see [`TransportMode`]).
 pub fn eval<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    eval_shared(m.into(), &Shared::new(frame, wo, wi))
+}
+
+/// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
+/// In a frame that a normal or bump map perturbs, the nested BSDF's in the perturbed frame,
+/// also for the directions whose value [`eval`] zeroes (Mitsuba zeroes their density: they
+/// carry nothing either way). The same in either [`TransportMode`].
+pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
+    pdf_shared(m.into(), &Shared::new(frame, wo, wi))
+}
+
+/// [`eval`] and [`pdf`] at once (Mitsuba's `eval_pdf`), bit for bit theirs, the work they
+/// share done once: the local frame's directions, Phong's power, a microfacet lobe's half
+/// vector and distribution.
+pub fn eval_pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> (Vec3, f64) {
     let m = m.into();
+    let shared = Shared::new(frame, wo, wi);
+    (eval_shared(m, &shared), pdf_shared(m, &shared))
+}
+
+/// [`eval`] through `shared`.
+#[inline]
+fn eval_shared(m: MaterialAt, shared: &Shared) -> Vec3 {
+    let (frame, wo, wi) = (shared.frame, shared.wo, shared.wi);
     let base = frame.base;
-    if base == Vec3::ZERO {
-        return eval_in_frame(m, frame, wo, wi);
-    }
-    if base.dot(wi) * frame.n.dot(wi) <= 0.0 {
+    let f = if base == Vec3::ZERO {
+        eval_in_frame(m, shared)
+    } else if base.dot(wi) * frame.n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
+    } else {
+        eval_in_frame(m, shared) * normals::shadow_terminator(frame.n, base, wi)
+    };
+    match frame.mode {
+        TransportMode::Radiance => f,
+        TransportMode::Importance => f * frame.adjoint_correction(wo, wi),
     }
-    eval_in_frame(m, frame, wo, wi) * normals::shadow_terminator(frame.n, base, wi)
 }
 
 /// [`eval`] in the frame, whether or not a map perturbs it.
 #[inline]
-fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+fn eval_in_frame(m: MaterialAt, shared: &Shared) -> Vec3 {
+    let (frame, wo, wi) = (shared.frame, shared.wo, shared.wi);
     let n = frame.n;
     if m.mirror || n.dot(wo) <= 0.0 {
         return Vec3::ZERO;
     }
     if let Glossy::RoughDielectric(d) = &m.glossy {
-        let b = frame.basis();
-        let local = |w| Frame::to_local(&b, w);
+        let (lo, li) = shared.local();
         let reflectances = (m.glossy_reflectances().0, m.transmittance());
-        return d.eval_with(reflectances, local(wo), local(wi), frame.back);
+        return d.eval_at(reflectances, lo, li, shared.crossing(d), frame.mode);
     }
     if n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
@@ -219,29 +339,22 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     let (ks, diffuse) = m.glossy_reflectances();
     match &m.glossy {
         Glossy::None => f,
-        Glossy::Phong { ns, .. } => {
-            let c = if ks.max_element() > 0.0 {
-                cos_lobe(n, wo, wi)
-            } else {
-                0.0
-            };
-            if c > 0.0 {
+        Glossy::Phong { ns, .. } => match shared.phong(ks, *ns) {
+            Some(power) => {
                 let ns = *ns as f64;
-                f + ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * c.powf(ns)) as f32
-            } else {
-                f
+                f + ks * ((ns + 2.0) * 0.5 * FRAC_1_PI * power) as f32
             }
-        }
+            None => f,
+        },
         Glossy::RoughConductor(c) => {
-            let b = frame.basis();
-            f + c.eval_with(ks, Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+            let (lo, li) = shared.local();
+            f + c.eval_at(ks, lo, li, shared.halfway(&c.microfacet))
         }
         Glossy::RoughPlastic(p) => {
-            let b = frame.basis();
-            let (wo, wi) = (Frame::to_local(&b, wo), Frame::to_local(&b, wi));
-            f + p.eval_with((ks, diffuse), wo, wi)
+            let (lo, li) = shared.local();
+            f + p.eval_at((ks, diffuse), lo, li, shared.halfway(&p.microfacet))
         }
-        // A smooth plastic's diffuse choice (see `crate::scene::SmoothPlastic`).
+        // A smooth plastic's diffuse choice (see `super::SmoothPlastic`).
         Glossy::Plastic(p) => {
             let (cos_o, cos_i) = (f64::from(n.dot(wo)), f64::from(n.dot(wi)));
             f + p.eval_chosen(diffuse, cos_o, cos_i)
@@ -250,62 +363,61 @@ fn eval_in_frame(m: MaterialAt, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
     }
 }
 
-/// Solid-angle density of [`sample`] for `wi`; zero for mirrors (a delta is no density).
-/// In a frame that a normal or bump map perturbs, the nested BSDF's in the perturbed frame,
-/// also for the directions whose value [`eval`] zeroes (Mitsuba zeroes their density: they
-/// carry nothing either way).
-pub fn pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> f64 {
-    let m = m.into();
+/// [`pdf`] through `shared`.
+#[inline]
+fn pdf_shared(m: MaterialAt, shared: &Shared) -> f64 {
     if m.mirror {
         return 0.0;
     }
-    let n = frame.n;
+    let n = shared.frame.n;
     let p_diffuse = diffuse_probability(&m);
     // Both are unit vectors: their `f32` dot is the cosine to rounding (no renormalising).
-    let cos = n.dot(wi);
+    let cos = n.dot(shared.wi);
     let diffuse = if cos > 0.0 {
         p_diffuse * f64::from(cos) * FRAC_1_PI
     } else {
         0.0
     };
-    let p_glossy = 1.0 - p_diffuse;
-    let glossy = match &m.glossy {
-        Glossy::None => return diffuse,
-        Glossy::Phong { ns, .. } => {
-            let c = if m.glossy_reflectances().0.max_element() > 0.0 {
-                cos_lobe(n, wo, wi)
-            } else {
-                0.0
-            };
-            if c > 0.0 {
+    if matches!(m.glossy, Glossy::None) {
+        return diffuse;
+    }
+    diffuse + pdf_glossy(m, shared, 1.0 - p_diffuse, cos)
+}
+
+/// The glossy lobe's part of [`pdf`], chosen with probability `p_glossy`; `cos` is `wi`'s
+/// against the normal.
+#[inline]
+fn pdf_glossy(m: MaterialAt, shared: &Shared, p_glossy: f64, cos: f32) -> f64 {
+    let (n, wo, wi) = (shared.frame.n, shared.wo, shared.wi);
+    match &m.glossy {
+        Glossy::None => 0.0,
+        Glossy::Phong { ns, .. } => match shared.phong(m.glossy_reflectances().0, *ns) {
+            Some(power) => {
                 let ns = *ns as f64;
-                p_glossy * (ns + 1.0) * 0.5 * FRAC_1_PI * c.powf(ns)
-            } else {
-                0.0
+                p_glossy * (ns + 1.0) * 0.5 * FRAC_1_PI * power
             }
-        }
+            None => 0.0,
+        },
         // Seen from below, no microfacet lobe scatters.
         _ if n.dot(wo) <= 0.0 => 0.0,
         // The rough dielectric transmits: its density covers the sphere.
         Glossy::RoughDielectric(d) => {
-            let b = frame.basis();
-            let local = |w| Frame::to_local(&b, w);
-            p_glossy * d.pdf(local(wo), local(wi), frame.back)
+            let (lo, li) = shared.local();
+            p_glossy * d.pdf_at(lo, li, shared.crossing(d))
         }
         // The others reflect only: nothing below the surface.
         _ if n.dot(wi) <= 0.0 => 0.0,
         Glossy::RoughConductor(c) => {
-            let b = frame.basis();
-            p_glossy * c.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+            let (lo, li) = shared.local();
+            p_glossy * c.pdf_at(lo, li, shared.halfway(&c.microfacet))
         }
         Glossy::RoughPlastic(p) => {
-            let b = frame.basis();
-            p_glossy * p.pdf(Frame::to_local(&b, wo), Frame::to_local(&b, wi))
+            let (lo, li) = shared.local();
+            p_glossy * p.pdf_at(lo, li, shared.halfway(&p.microfacet))
         }
         // A smooth plastic's diffuse choice: its cosine (the choice itself is no density).
         Glossy::Plastic(_) => p_glossy * f64::from(cos) * FRAC_1_PI,
-    };
-    diffuse + glossy
+    }
 }
 
 /// A unit direction around unit `axis` with `cos θ = c` and azimuth `phi`.
@@ -397,17 +509,12 @@ pub fn sample_scattered<'a>(
 ) -> Option<Scattered> {
     let m = m.into();
     let wi = sample_direction(m, frame, wo, u)?;
-    let pdf = pdf(m, frame, wo, wi);
+    let (f, pdf) = eval_pdf(m, frame, wo, wi);
     let cos = cosine(&m, frame, wi)?;
     if pdf <= 0.0 {
         return None;
     }
-    Some(Scattered {
-        wi,
-        pdf,
-        cos,
-        f: eval(m, frame, wo, wi),
-    })
+    Some(Scattered { wi, pdf, cos, f })
 }
 
 /// Samples `wi` from three uniform numbers; `None` when the sample carries no energy
@@ -424,7 +531,7 @@ pub fn sample<'a>(
     if m.mirror {
         return match m.dielectric {
             Some(_) => None,
-            None => specular::sample(m, frame.n, wo, u[0]),
+            None => specular::sample_in(m, frame.n, wo, u[0], frame.mode, frame.ng),
         };
     }
     let s = sample_scattered(m, frame, wo, u)?;

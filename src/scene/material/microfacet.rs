@@ -11,6 +11,7 @@
 //! cosine (Mitsuba's `eval` divided by `|cos θ_i|`).
 
 use super::fresnel::{fresnel_conductor, fresnel_dielectric};
+use super::TransportMode;
 use crate::math::trig;
 use glam::{DVec2, DVec3, Vec3};
 use statrs::function::erf::{erf, erf_inv};
@@ -122,10 +123,15 @@ impl Microfacet {
 
     /// The density of [`Self::sample`]'s normal `m` seen from `wo`, per solid angle of `m`.
     pub fn pdf(&self, wo: DVec3, m: DVec3) -> f64 {
+        self.pdf_of(self.d(m), wo, m)
+    }
+
+    /// [`Self::pdf`] where `d` is `D(m)`, computed already.
+    fn pdf_of(&self, d: f64, wo: DVec3, m: DVec3) -> f64 {
         if self.sample_visible {
-            self.d(m) * self.smith_g1(wo, m) * wo.dot(m).abs() / wo.z
+            d * self.smith_g1(wo, m) * wo.dot(m).abs() / wo.z
         } else {
-            self.d(m) * m.z
+            d * m.z
         }
     }
 
@@ -242,33 +248,51 @@ fn reflect(wo: DVec3, m: DVec3) -> DVec3 {
     2.0 * wo.dot(m) * m - wo
 }
 
-/// The unit half vector of `wo` and `wi`, and whether both lie above the surface and on
-/// its front side (Mitsuba's conditions for a reflection's density).
-fn half_vector(wo: DVec3, wi: DVec3) -> Option<DVec3> {
-    let h = (wo + wi).normalize();
-    (wo.z > 0.0 && wi.z > 0.0 && wo.dot(h) > 0.0 && wi.dot(h) > 0.0).then_some(h)
+/// What a microfacet reflection's value and density share at one pair of directions, both
+/// above the surface: the unit half vector `h` of `wo` and `wi` and `D(h)`. Computed once
+/// for both by an `eval_pdf`; `None` (nothing reflects) where either lies below.
+#[derive(Clone, Copy, Debug)]
+pub struct Halfway {
+    h: DVec3,
+    d: f64,
 }
 
-/// The density in `wi` of reflecting `wo` about a normal drawn by `distr`.
-fn reflection_pdf(distr: &Microfacet, wo: DVec3, wi: DVec3) -> f64 {
-    let Some(h) = half_vector(wo, wi) else {
+impl Halfway {
+    /// The half vector of `wo` and `wi` under `distr`.
+    pub fn of(distr: &Microfacet, wo: DVec3, wi: DVec3) -> Option<Self> {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return None;
+        }
+        let h = (wo + wi).normalize();
+        Some(Self { h, d: distr.d(h) })
+    }
+}
+
+/// The density in `wi` of reflecting `wo` about a normal drawn by `distr` (zero unless both
+/// lie above the surface and on the front side of their half vector: Mitsuba's conditions).
+fn reflection_pdf(distr: &Microfacet, wo: DVec3, wi: DVec3, half: Option<Halfway>) -> f64 {
+    let Some(Halfway { h, d }) = half else {
         return 0.0;
     };
+    if !(wo.dot(h) > 0.0 && wi.dot(h) > 0.0) {
+        return 0.0;
+    }
     if distr.sample_visible {
-        distr.d(h) * distr.smith_g1(wo, h) / (4.0 * wo.z)
+        d * distr.smith_g1(wo, h) / (4.0 * wo.z)
     } else {
-        distr.pdf(wo, h) / (4.0 * wi.dot(h))
+        distr.pdf_of(d, wo, h) / (4.0 * wi.dot(h))
     }
 }
 
 /// `D G / (4 cos θ_o cos θ_i)` and the half vector: the microfacet reflection without its
 /// Fresnel factor.
-fn reflection(distr: &Microfacet, wo: DVec3, wi: DVec3) -> Option<(f64, DVec3)> {
-    if wo.z <= 0.0 || wi.z <= 0.0 {
-        return None;
-    }
-    let h = (wo + wi).normalize();
-    let d = distr.d(h);
+fn reflection(
+    distr: &Microfacet,
+    wo: DVec3,
+    wi: DVec3,
+    half: Option<Halfway>,
+) -> Option<(f64, DVec3)> {
+    let Halfway { h, d } = half?;
     (d != 0.0).then(|| (d * distr.g(wo, wi, h) / (4.0 * wo.z * wi.z), h))
 }
 
@@ -291,15 +315,26 @@ impl RoughConductor {
     /// [`Self::eval`] with `specular_reflectance` in place of the lobe's own (a texture's
     /// value at the hit).
     pub fn eval_with(&self, specular_reflectance: Vec3, wo: DVec3, wi: DVec3) -> Vec3 {
-        let Some((value, h)) = reflection(&self.microfacet, wo, wi) else {
+        let half = Halfway::of(&self.microfacet, wo, wi);
+        self.eval_at(specular_reflectance, wo, wi, half)
+    }
+
+    /// [`Self::eval_with`] at the half vector `half` of `wo` and `wi` ([`Halfway::of`]).
+    pub fn eval_at(&self, specular: Vec3, wo: DVec3, wi: DVec3, half: Option<Halfway>) -> Vec3 {
+        let Some((value, h)) = reflection(&self.microfacet, wo, wi, half) else {
             return Vec3::ZERO;
         };
         let fresnel = fresnel_conductor(wo.dot(h) as f32, self.eta, self.k);
-        fresnel * specular_reflectance * value as f32
+        fresnel * specular * value as f32
     }
 
     pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
-        reflection_pdf(&self.microfacet, wo, wi)
+        self.pdf_at(wo, wi, Halfway::of(&self.microfacet, wo, wi))
+    }
+
+    /// [`Self::pdf`] at the half vector `half` of `wo` and `wi` ([`Halfway::of`]).
+    pub fn pdf_at(&self, wo: DVec3, wi: DVec3, half: Option<Halfway>) -> f64 {
+        reflection_pdf(&self.microfacet, wo, wi, half)
     }
 
     /// A direction from two uniform numbers; it may lie below the surface (no energy).
@@ -393,24 +428,61 @@ impl RoughDielectric {
         wi: DVec3,
         back: bool,
     ) -> Vec3 {
+        let crossing = self.crossing(wo, wi, back);
+        let reflectances = (specular_reflectance, specular_transmittance);
+        self.eval_at(reflectances, wo, wi, crossing, TransportMode::Radiance)
+    }
+
+    /// What [`Self::eval_with`] and [`Self::pdf`] share at `wo`, `wi` (`None` where neither
+    /// scatters).
+    pub fn crossing(&self, wo: DVec3, wi: DVec3, back: bool) -> Option<Crossing> {
         let eta = self.eta_seen(back);
-        let Some((h, reflect)) = Self::half(wo, wi, eta) else {
+        let (h, reflect) = Self::half(wo, wi, eta)?;
+        Some(Crossing {
+            eta,
+            h,
+            reflect,
+            d: self.microfacet.d(h),
+            fresnel: fresnel_dielectric(wo.dot(h), eta).0,
+        })
+    }
+
+    /// [`Self::eval_with`] at the [`Crossing`] of `wo` and `wi`, carrying light in `mode`:
+    /// the transmission is scaled by `1/η²` for radiance and not for importance (see the
+    /// type's documentation).
+    pub fn eval_at(
+        &self,
+        (specular_reflectance, specular_transmittance): (Vec3, Vec3),
+        wo: DVec3,
+        wi: DVec3,
+        crossing: Option<Crossing>,
+        mode: TransportMode,
+    ) -> Vec3 {
+        let Some(Crossing {
+            eta,
+            h,
+            reflect,
+            d,
+            fresnel,
+        }) = crossing
+        else {
             return Vec3::ZERO;
         };
-        let distr = &self.microfacet;
-        let d = distr.d(h);
         if d == 0.0 {
             return Vec3::ZERO;
         }
-        let g = distr.g(wo, wi, h);
+        let g = self.microfacet.g(wo, wi, h);
         let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
-        let fresnel = fresnel_dielectric(cos_o, eta).0;
         if reflect {
             specular_reflectance * (fresnel * d * g / (4.0 * wo.z * wi.z)) as f32
         } else {
             let denom = cos_o + eta * cos_i;
             let value = (1.0 - fresnel) * d * g * (cos_o * cos_i).abs()
                 / (wo.z * wi.z.abs() * denom * denom);
+            let value = match mode {
+                TransportMode::Radiance => value,
+                TransportMode::Importance => value * (eta * eta),
+            };
             specular_transmittance * value as f32
         }
     }
@@ -420,13 +492,28 @@ impl RoughDielectric {
     /// the half-vector map, `1 / (4 |wi · h|)` for a reflection and `η² |wi · h| / (wo · h +
     /// η wi · h)²` for a refraction.
     pub fn pdf(&self, wo: DVec3, wi: DVec3, back: bool) -> f64 {
-        let eta = self.eta_seen(back);
-        let Some((h, reflect)) = Self::half(wo, wi, eta) else {
+        self.pdf_at(wo, wi, self.crossing(wo, wi, back))
+    }
+
+    /// [`Self::pdf`] at the [`Crossing`] of `wo` and `wi`.
+    pub fn pdf_at(&self, wo: DVec3, wi: DVec3, crossing: Option<Crossing>) -> f64 {
+        let Some(Crossing {
+            eta,
+            h,
+            reflect,
+            d,
+            fresnel,
+        }) = crossing
+        else {
             return 0.0;
         };
-        let p = self.sampling_distribution(wo).pdf(wo, h);
+        let distr = self.sampling_distribution(wo);
+        // With visible normals the sampling distribution is the lobe's own: `D(h)` is known.
+        let p = match distr.sample_visible {
+            true => distr.pdf_of(d, wo, h),
+            false => distr.pdf(wo, h),
+        };
         let (cos_o, cos_i) = (wo.dot(h), wi.dot(h));
-        let fresnel = fresnel_dielectric(cos_o, eta).0;
         if reflect {
             p * fresnel / (4.0 * cos_i)
         } else {
@@ -460,6 +547,18 @@ impl RoughDielectric {
             (wi.z < 0.0).then_some(wi)
         }
     }
+}
+
+/// What a rough dielectric's value and density share at one pair of directions
+/// ([`RoughDielectric::crossing`]): the relative index seen from `wo`, the microfacet normal
+/// that joins them and whether it reflects, `D` there and the Fresnel reflectance at `wo · h`.
+#[derive(Clone, Copy, Debug)]
+pub struct Crossing {
+    eta: f64,
+    h: DVec3,
+    reflect: bool,
+    d: f64,
+    fresnel: f64,
 }
 
 /// Entries of the table of the coating's transmittance against `cos θ` (Mitsuba's
@@ -557,12 +656,24 @@ impl RoughPlastic {
     /// [`Self::eval`] with the (specular, diffuse) reflectances `reflectances` in place of
     /// the lobe's own (textures' values at the hit). The share of specular sampling stays
     /// the one of the lobe's reflectances (a texture's mean, as in Mitsuba).
-    pub fn eval_with(&self, (specular, kd): (Vec3, Vec3), wo: DVec3, wi: DVec3) -> Vec3 {
+    pub fn eval_with(&self, reflectances: (Vec3, Vec3), wo: DVec3, wi: DVec3) -> Vec3 {
+        let half = Halfway::of(&self.microfacet, wo, wi);
+        self.eval_at(reflectances, wo, wi, half)
+    }
+
+    /// [`Self::eval_with`] at the half vector `half` of `wo` and `wi` ([`Halfway::of`]).
+    pub fn eval_at(
+        &self,
+        (specular, kd): (Vec3, Vec3),
+        wo: DVec3,
+        wi: DVec3,
+        half: Option<Halfway>,
+    ) -> Vec3 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Vec3::ZERO;
         }
         let mut f = Vec3::ZERO;
-        if let Some((value, h)) = reflection(&self.microfacet, wo, wi) {
+        if let Some((value, h)) = reflection(&self.microfacet, wo, wi, half) {
             let fresnel = fresnel_dielectric(wo.dot(h), f64::from(self.eta)).0;
             f += specular * (fresnel * value) as f32;
         }
@@ -578,11 +689,16 @@ impl RoughPlastic {
     }
 
     pub fn pdf(&self, wo: DVec3, wi: DVec3) -> f64 {
+        self.pdf_at(wo, wi, Halfway::of(&self.microfacet, wo, wi))
+    }
+
+    /// [`Self::pdf`] at the half vector `half` of `wo` and `wi` ([`Halfway::of`]).
+    pub fn pdf_at(&self, wo: DVec3, wi: DVec3, half: Option<Halfway>) -> f64 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
         let p = self.specular_probability(wo);
-        p * reflection_pdf(&self.microfacet, wo, wi) + (1.0 - p) * wi.z * FRAC_1_PI
+        p * reflection_pdf(&self.microfacet, wo, wi, half) + (1.0 - p) * wi.z * FRAC_1_PI
     }
 
     /// A direction from three uniform numbers: `u[0]` picks the lobe.

@@ -95,6 +95,28 @@ pub enum TransportMode {
     Importance,
 }
 
+impl TransportMode {
+    /// The shading-normal correction `|wo·ns| |wi·ng| / (|wo·ng| |wi·ns|)` that the adjoint
+    /// BSDF carries at a point of shading normal `ns` and geometric normal `ng` (Veach's
+    /// thesis §5.3, pbrt-v4's `CorrectShadingNormal`): 1 for [`TransportMode::Radiance`] or
+    /// where `ng` is zero (no geometric normal to tell apart), 0 where `wo` or `wi` grazes a
+    /// normal it is divided by.
+    pub fn correction(self, ns: Vec3, ng: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        if self == TransportMode::Radiance || ng == Vec3::ZERO {
+            return 1.0;
+        }
+        let (ns, ng) = (ns.as_dvec3(), ng.as_dvec3());
+        let (wo, wi) = (wo.as_dvec3(), wi.as_dvec3());
+        let num = wo.dot(ns).abs() * wi.dot(ng).abs();
+        let denom = wo.dot(ng).abs() * wi.dot(ns).abs();
+        if denom > 0.0 {
+            (num / denom) as f32
+        } else {
+            0.0
+        }
+    }
+}
+
 /// A surface material: a two-sided Lambertian lobe plus a glossy lobe ([`Glossy`]: a
 /// normalised modified-Phong lobe, or Mitsuba's rough conductor, rough plastic or rough
 /// dielectric), or a delta BSDF (an ideal mirror, a smooth conductor, a smooth or thin

@@ -22,7 +22,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::{facing_normal, reflect, BrdfSample};
-use super::{Dielectric, Material, MaterialAt};
+use super::{Dielectric, Material, MaterialAt, TransportMode};
 use glam::{DVec3, Vec3};
 
 /// The probability that `d` reflects light arriving at `cos_theta_i` against its shading
@@ -73,14 +73,33 @@ pub fn radiance_scale(m: &Material, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 /// reflection (`u < F`) or transmission; a mirror does not use it. The sample's `pdf` is 1
 /// (see the module documentation); `None` where it carries nothing.
 pub fn sample<'a>(m: impl Into<MaterialAt<'a>>, ns: Vec3, wo: Vec3, u: f64) -> Option<BrdfSample> {
+    sample_in(m, ns, wo, u, TransportMode::Radiance, Vec3::ZERO)
+}
+
+/// [`sample`] for a path that carries light in `mode`, at a point of geometric normal `ng`
+/// (zero: none apart from `ns`): in [`TransportMode::Importance`] the weight is the
+/// adjoint's — no `η_ti²` through a refraction, and the shading-normal correction
+/// ([`TransportMode::correction`]).
+pub fn sample_in<'a>(
+    m: impl Into<MaterialAt<'a>>,
+    ns: Vec3,
+    wo: Vec3,
+    u: f64,
+    mode: TransportMode,
+    ng: Vec3,
+) -> Option<BrdfSample> {
     let m = m.into();
     let n = facing_normal(ns, wo);
     let Some(d) = &m.dielectric else {
-        return (m.ks().max_element() > 0.0).then(|| BrdfSample {
-            wi: reflect(wo, n).normalize(),
-            pdf: 1.0,
-            weight: m.mirror_reflectance(n.dot(wo)),
-            delta: true,
+        return (m.ks().max_element() > 0.0).then(|| {
+            let wi = reflect(wo, n).normalize();
+            let weight = m.mirror_reflectance(n.dot(wo));
+            BrdfSample {
+                wi,
+                pdf: 1.0,
+                weight: adjoint(weight, mode, (n, ng), wo, wi),
+                delta: true,
+            }
         });
     };
     let (ns64, wo64) = (ns.as_dvec3().normalize(), wo.as_dvec3().normalize());
@@ -88,14 +107,27 @@ pub fn sample<'a>(m: impl Into<MaterialAt<'a>>, ns: Vec3, wo: Vec3, u: f64) -> O
         (reflect(wo, n).normalize(), m.ks())
     } else {
         let (wi, scale) = transmitted(d, ns64, wo64);
-        (wi.as_vec3(), m.transmittance() * scale as f32)
+        let weight = match mode {
+            TransportMode::Radiance => m.transmittance() * scale as f32,
+            TransportMode::Importance => m.transmittance(),
+        };
+        (wi.as_vec3(), weight)
     };
     (weight.max_element() > 0.0).then_some(BrdfSample {
         wi,
         pdf: 1.0,
-        weight,
+        weight: adjoint(weight, mode, (n, ng), wo, wi),
         delta: true,
     })
+}
+
+/// `weight` with the shading-normal correction of `mode` at normals `(ns, ng)`; untouched in
+/// [`TransportMode::Radiance`].
+fn adjoint(weight: Vec3, mode: TransportMode, (ns, ng): (Vec3, Vec3), wo: Vec3, wi: Vec3) -> Vec3 {
+    match mode {
+        TransportMode::Radiance => weight,
+        TransportMode::Importance => weight * mode.correction(ns, ng, wo, wi),
+    }
 }
 
 #[cfg(test)]
