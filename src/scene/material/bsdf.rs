@@ -301,19 +301,80 @@ pub fn eval_pdf<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Ve
 /// [`eval`] through `shared`.
 #[inline]
 fn eval_shared(m: MaterialAt, shared: &Shared) -> Vec3 {
-    let (frame, wo, wi) = (shared.frame, shared.wo, shared.wi);
+    in_frame(shared.frame, shared.wo, shared.wi, || {
+        eval_in_frame(m, shared)
+    })
+}
+
+/// The value `f` of the lobes in the frame (the nested BSDF's under a map), with what the
+/// frame adds: a map's refusal and shadowing term, and the adjoint's correction.
+#[inline]
+fn in_frame(frame: Frame, wo: Vec3, wi: Vec3, f: impl FnOnce() -> Vec3) -> Vec3 {
     let base = frame.base;
     let f = if base == Vec3::ZERO {
-        eval_in_frame(m, shared)
+        f()
     } else if base.dot(wi) * frame.n.dot(wi) <= 0.0 {
         return Vec3::ZERO;
     } else {
-        eval_in_frame(m, shared) * normals::shadow_terminator(frame.n, base, wi)
+        f() * normals::shadow_terminator(frame.n, base, wi)
     };
     match frame.mode {
         TransportMode::Radiance => f,
         TransportMode::Importance => f * frame.adjoint_correction(wo, wi),
     }
+}
+
+/// The probability that a path arriving from `w` at a point of stored shading normal `ns`
+/// meets `m`'s delta part: for a material that chooses its lobe at the hit (a smooth
+/// plastic), the choice [`Material::scattering_at`] makes, from `|ns · w|`; 1 for a delta
+/// BSDF, 0 for the others. A function of the direction the path arrives from, either of the
+/// two: a camera path arrives from `wo`, a path started at a light from the direction a
+/// camera path would leave along, so the two techniques' densities of one vertex differ by
+/// it (for every other material it is the same for both).
+pub fn delta_choice(m: &Material, ns: Vec3, w: Vec3) -> f64 {
+    match &m.glossy {
+        _ if m.mirror => 1.0,
+        Glossy::Plastic(p) => p.specular_probability(f64::from(ns.dot(w).abs())),
+        _ => 0.0,
+    }
+}
+
+/// The non-delta part of `m`'s BSDF before any choice at the hit, for any `(wo, wi)` (no
+/// cosine): a smooth plastic's diffuse lobe `f_d(wo, wi)` (Mitsuba's `eval`, which the
+/// diffuse choice's [`eval`] is over `1 − P_s`), [`eval`] for every other material (zero for
+/// a delta BSDF). In the frame's transport mode.
+pub fn eval_non_delta<'a>(m: impl Into<MaterialAt<'a>>, frame: Frame, wo: Vec3, wi: Vec3) -> Vec3 {
+    let m = m.into();
+    let Glossy::Plastic(p) = &m.glossy else {
+        return eval(m, frame, wo, wi);
+    };
+    in_frame(frame, wo, wi, || {
+        let (cos_o, cos_i) = (frame.n.dot(wo), frame.n.dot(wi));
+        if m.mirror || cos_o <= 0.0 || cos_i <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let diffuse = m.glossy_reflectances().1;
+        p.eval_diffuse(diffuse, f64::from(cos_o), f64::from(cos_i))
+    })
+}
+
+/// The density with which a path arriving from `wo` at a point of stored shading normal
+/// `ns` samples `wi` out of `m`'s non-delta part, the choice at the hit included:
+/// `(1 − `[`delta_choice`]`(m, ns, wo)) · `[`pdf`] (Mitsuba's smooth plastic's `pdf`); for
+/// a material that makes no choice, [`pdf`]. A light-started path arriving from `wi` has
+/// `pdf_non_delta(m, frame, ns, wi, wo)`, with the frame facing `wi`.
+pub fn pdf_non_delta<'a>(
+    m: impl Into<MaterialAt<'a>>,
+    frame: Frame,
+    ns: Vec3,
+    wo: Vec3,
+    wi: Vec3,
+) -> f64 {
+    let m = m.into();
+    if !m.chooses_lobe() {
+        return pdf(m, frame, wo, wi);
+    }
+    (1.0 - delta_choice(&m, ns, wo)) * pdf(m, frame, wo, wi)
 }
 
 /// [`eval`] in the frame, whether or not a map perturbs it.

@@ -355,7 +355,9 @@ impl RoughConductor {
 /// mirroring Mitsuba's frame so that `wo` lies above changes nothing else, since its
 /// distribution is symmetric. Transmitted radiance is scaled by `1/η²` (Mitsuba's radiance
 /// mode, the smooth `dielectric`'s `η_ti²` of [`super::specular`]), which makes the
-/// transmission `(1 − F) D G |wo·h| |wi·h| / (|cos θ_o| |cos θ_i| (wo·h + η wi·h)²)`.
+/// transmission `(1 − F) D G |wo·h| |wi·h| / (|cos θ_o| |cos θ_i| (wo·h + η wi·h)²)`;
+/// transmitted importance ([`super::TransportMode::Importance`]) is not, and is `η²` times
+/// that.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughDielectric {
     pub microfacet: Microfacet,

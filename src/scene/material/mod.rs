@@ -577,10 +577,15 @@ impl MaterialAt<'_> {
 /// choice at the same vertex, as it sees glass's choice between reflection and refraction:
 /// a delta choice has no light sample, no generator step and no guide, and the emission its
 /// direction finds counts in full; a diffuse choice takes its light sample, its generator's
-/// step or its guide with the diffuse lobe's value and density. The choice's probability is
-/// the same for every generator and technique that reaches the vertex (it depends on `wo`
-/// alone), so it is left out of every density, as glass's Fresnel choice is, and only its
-/// weight (`1 / P_s` or `1 / (1 − P_s)`) enters the path's value.
+/// step or its guide with the diffuse lobe's value and density. For paths that all arrive
+/// from the camera's side the choice's probability is the same for every generator and
+/// technique that reaches the vertex (it depends on `wo` alone), so it is left out of their
+/// densities, as glass's Fresnel choice is, and only its weight (`1 / P_s` or
+/// `1 / (1 − P_s)`) enters the path's value. A path started at a light arrives from the
+/// other direction, and makes its choice from that one: the choice's probability as a
+/// function of either direction is [`bsdf::delta_choice`], and the diffuse lobe before the
+/// choice, for any `(wo, wi)`, is [`bsdf::eval_non_delta`] with its density
+/// [`bsdf::pdf_non_delta`] (Mitsuba's unchosen `eval` and `pdf`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SmoothPlastic {
     /// `int_ior / ext_ior`, in single precision as Mitsuba computes it.
@@ -686,26 +691,4 @@ impl SmoothPlastic {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_choice_probabilities_and_weights_make_mitsubas_expectation() {
-        let p = SmoothPlastic::new(1.5, Vec3::splat(0.5), Vec3::ONE, false);
-        for c in [1.0, 0.6, 0.1] {
-            let ps = p.specular_probability(c);
-            assert!(ps > 0.0 && ps < 1.0);
-            // P_s × the delta's weight is the Fresnel reflectance.
-            let w = p.specular_weight(Vec3::ONE, c);
-            assert!((ps * f64::from(w.x) - p.fresnel(c)).abs() < 1e-6);
-            // (1 − P_s) × the chosen lobe is the lobe.
-            let (a, b) = (
-                p.eval_chosen(Vec3::ONE, c, 0.7),
-                p.eval_diffuse(Vec3::ONE, c, 0.7),
-            );
-            assert!(((1.0 - ps) * f64::from(a.x) - f64::from(b.x)).abs() < 1e-6);
-        }
-        // Grazing: the coating reflects more, and is chosen more often.
-        assert!(p.specular_probability(0.05) > p.specular_probability(1.0));
-    }
-}
+mod tests;

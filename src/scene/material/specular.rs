@@ -8,7 +8,9 @@
 //! interface (`η_ti` the index of refraction on `wo`'s side over that on `wi`'s: Mitsuba's
 //! `eta_ti`, whose `si.wi` is genpath's `wo`). A thin dielectric reflects with
 //! `R' = 2R / (1 + R)` (its internal reflections, `R + T²R / (1 − R²)`) and otherwise lets
-//! the light through unbent, weighted by its transmittance.
+//! the light through unbent, weighted by its transmittance. A path started at a light
+//! ([`super::TransportMode::Importance`], [`sample_in`]) carries no `η_ti²`, and its weight
+//! takes the shading-normal correction.
 //!
 //! # Densities
 //!
