@@ -43,16 +43,9 @@ fn the_choice_probabilities_and_weights_make_mitsubas_expectation() {
 /// A material of `kd`, `glossy` and nothing else (two-sided, no delta part).
 fn with_glossy(kd: Vec3, glossy: Glossy) -> Material {
     Material {
-        name: String::new(),
         kd,
-        ks: Vec3::ZERO,
         glossy,
-        mirror: false,
-        ke: Vec3::ZERO,
-        two_sided: true,
-        conductor: None,
-        dielectric: None,
-        textures: None,
+        ..BLACK.clone()
     }
 }
 
