@@ -20,6 +20,15 @@
 //! place that says which directions a material can send light into, and with which
 //! cosine, for every caller (the samplers here, the path tracer's and the generators'
 //! next-event estimation, the guide's samples).
+//!
+//! The interface: [`eval`], [`pdf`], [`eval_pdf`] (both at once, bit for bit theirs, with
+//! the work they share done once: Mitsuba's `eval_pdf`), [`sample`] (and its parts,
+//! [`sample_direction`], [`sample_scattered`]) and [`cosine`], in the [`Frame`]'s
+//! [`TransportMode`]: for a path started at a light, [`TransportMode::Importance`] makes
+//! the value and a sample's weight the adjoint's. For a material that chooses its lobe at
+//! the hit (a smooth plastic), the choice's probability seen from either direction
+//! ([`delta_choice`]) and the non-delta part before the choice ([`eval_non_delta`],
+//! [`pdf_non_delta`]).
 
 use super::microfacet::{Crossing, Halfway, Microfacet, RoughDielectric};
 use super::{facing_normal, reflect, specular, BrdfSample};
