@@ -49,6 +49,14 @@ impl<'a> GuidedBsdf<'a> {
         &self.bsdf
     }
 
+    /// The density of the mixture at `wi` where the BSDF's own is `bsdf_pdf`.
+    fn mixed(&self, wi: Vec3, bsdf_pdf: f64) -> f64 {
+        match &self.guide {
+            Some(v) => v.pdf_with(wi.as_dvec3(), bsdf_pdf, guide_share(&self.bsdf.material)),
+            None => bsdf_pdf,
+        }
+    }
+
     /// Whether the guide samples directions here: if not, this is the BSDF alone.
     pub fn guided(&self) -> bool {
         self.guide.is_some()
@@ -61,14 +69,14 @@ impl VertexBsdf for GuidedBsdf<'_> {
     }
 
     fn pdf(&self, wi: Vec3) -> f64 {
-        match &self.guide {
-            Some(v) => v.pdf_with(
-                wi.as_dvec3(),
-                self.bsdf.pdf(wi),
-                guide_share(&self.bsdf.material),
-            ),
-            None => self.bsdf.pdf(wi),
-        }
+        self.mixed(wi, self.bsdf.pdf(wi))
+    }
+
+    /// The BSDF's value and the mixture's density, the BSDF's work shared
+    /// ([`VertexBsdf::eval_pdf`] of [`Bsdf`]).
+    fn eval_pdf(&self, wi: Vec3) -> (Vec3, f64) {
+        let (f, pdf) = self.bsdf.eval_pdf(wi);
+        (f, self.mixed(wi, pdf))
     }
 
     fn sample(&self, rng: &mut Rng) -> Option<BrdfSample> {
