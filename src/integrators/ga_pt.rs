@@ -33,7 +33,7 @@ pub const METHOD: MethodInfo = MethodInfo {
     prepare_learned: Some(prepare_learned),
     splits_learning: true,
     explains: true,
-    settings: &["srt", "ga", "plan", "gate", "spatial"],
+    settings: &["srt", "ga", "plan", "gate", "spatial", "lights"],
     ..MethodInfo::plain(prepare)
 };
 
