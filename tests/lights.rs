@@ -72,9 +72,7 @@ fn emitted(scene: &Scene, emitter: Emitter, origin: bool, u: [f64; 3]) -> Emissi
         true => [u[0], u[1], 0.37, 0.61],
         false => [0.37, 0.61, u[0], u[1]],
     };
-    scene
-        .emit(emitter, 1.0, u)
-        .expect("an emission sample")
+    scene.emit(emitter, 1.0, u).expect("an emission sample")
 }
 
 fn area_prims(scene: &Scene) -> (Vec<u32>, u32, u32) {
@@ -102,7 +100,10 @@ fn accept_reject<B: Binning>(
     wrong: impl Fn(&B::Point) -> f64,
 ) {
     FAMILY.accept(name, hist, &chi2_of(bins, hist, right));
-    FAMILY.reject(&format!("{name} (wrong density)"), &chi2_of(bins, hist, wrong));
+    FAMILY.reject(
+        &format!("{name} (wrong density)"),
+        &chi2_of(bins, hist, wrong),
+    );
 }
 
 /// Directions `w` about unit `axis` taken to its frame's +z.
@@ -120,14 +121,23 @@ fn a_triangle_emits_uniformly_by_area_and_by_cosine() {
     let area = scene.mesh.area(prim);
     let bins = TriangleBins::new(vec![(prim, [a, b, c])], 8);
     let pdf = |&(_, p): &(u32, DVec3)| {
-        let pdf = scene.pdf_emission(Emitter::Area(prim), p.as_vec3(), Vec3::Y).unwrap();
+        let pdf = scene
+            .pdf_emission(Emitter::Area(prim), p.as_vec3(), Vec3::Y)
+            .unwrap();
         pdf.pos
     };
     let hist = histogram(
         &bins,
         SAMPLES,
         1,
-        |u| (prim, emitted(&scene, Emitter::Area(prim), true, u).origin.as_dvec3()),
+        |u| {
+            // The origin in f32, put back on the triangle's plane for the binning.
+            let p = emitted(&scene, Emitter::Area(prim), true, u)
+                .origin
+                .as_dvec3();
+            let n = (b - a).cross(c - a).normalize();
+            (prim, p - n * (p - a).dot(n))
+        },
         pdf,
     );
     // Wrong: a density rising linearly towards the first vertex.
@@ -137,15 +147,26 @@ fn a_triangle_emits_uniformly_by_area_and_by_cosine() {
     };
     accept_reject("triangle origin", &bins, &hist, pdf, wrong);
 
-    let n = scene.mesh.normals[prim as usize].as_dvec3();
+    let n = scene.mesh.normals[prim as usize].as_dvec3().normalize();
     let bins = SphereBins::equal_area(n, 16, 32);
-    let origin = emitted(&scene, Emitter::Area(prim), false, [0.0; 3]).origin;
+    let origin = emitted(&scene, Emitter::Area(prim), false, [0.5; 3]).origin;
     let pdf = |w: &DVec3| {
         (scene.pdf_emission(Emitter::Area(prim), origin, w.as_vec3()))
             .unwrap()
             .dir
     };
-    let hist = histogram(&bins, SAMPLES, 2, |u| emitted(&scene, Emitter::Area(prim), false, u).dir.as_dvec3(), pdf);
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        2,
+        |u| {
+            emitted(&scene, Emitter::Area(prim), false, u)
+                .dir
+                .as_dvec3()
+                .normalize()
+        },
+        pdf,
+    );
     let uniform = |w: &DVec3| f64::from(u8::from(w.dot(n) > 0.0)) / (2.0 * PI);
     accept_reject("triangle direction", &bins, &hist, pdf, uniform);
 }
@@ -162,13 +183,24 @@ fn a_sphere_and_a_disk_emit_uniformly_by_area_and_by_cosine() {
     let bins = SphereBins::equal_area(DVec3::Y, 16, 32);
     let pdf = |w: &DVec3| {
         let p = (center + *w * radius).as_vec3();
-        scene.pdf_emission(Emitter::Area(sphere), p, Vec3::Y).unwrap().pos * radius * radius
+        scene
+            .pdf_emission(Emitter::Area(sphere), p, Vec3::Y)
+            .unwrap()
+            .pos
+            * radius
+            * radius
     };
     let hist = histogram(
         &bins,
         SAMPLES,
         3,
-        |u| (emitted(&scene, Emitter::Area(sphere), true, u).origin.as_dvec3() - center).normalize(),
+        |u| {
+            (emitted(&scene, Emitter::Area(sphere), true, u)
+                .origin
+                .as_dvec3()
+                - center)
+                .normalize()
+        },
         pdf,
     );
     let wrong = |w: &DVec3| (1.0 + 0.3 * w.y) / (4.0 * PI);
@@ -182,7 +214,10 @@ fn a_sphere_and_a_disk_emit_uniformly_by_area_and_by_cosine() {
         4,
         |u| {
             let s = emitted(&scene, Emitter::Area(sphere), false, u);
-            local(s.normal.as_dvec3(), s.dir.as_dvec3())
+            local(
+                s.normal.as_dvec3().normalize(),
+                s.dir.as_dvec3().normalize(),
+            )
         },
         cosine,
     );
@@ -191,8 +226,11 @@ fn a_sphere_and_a_disk_emit_uniformly_by_area_and_by_cosine() {
 
     // The disk's origin, its local (x, y) lifted to the hemisphere (x, y, √(1 − ρ²)): a
     // density `pdf_pos · πr²` on the unit disk is `pdf · cos θ / π` in solid angle.
-    let genpath::accel::Analytic::Disk { frame, to_local, normal } =
-        scene.mesh.analytic(disk).unwrap().clone()
+    let genpath::accel::Analytic::Disk {
+        frame,
+        to_local,
+        normal,
+    } = scene.mesh.analytic(disk).unwrap().clone()
     else {
         panic!("a disk")
     };
@@ -204,15 +242,49 @@ fn a_sphere_and_a_disk_emit_uniformly_by_area_and_by_cosine() {
     let bins = SphereBins::equal_area(DVec3::Z, 16, 32);
     let pdf = |w: &DVec3| {
         let p = frame.transform_point3(DVec3::new(w.x, w.y, 0.0)).as_vec3();
-        scene.pdf_emission(Emitter::Area(disk), p, Vec3::Y).unwrap().pos * area * w.z.max(0.0) / PI
+        scene
+            .pdf_emission(Emitter::Area(disk), p, Vec3::Y)
+            .unwrap()
+            .pos
+            * area
+            * w.z.max(0.0)
+            / PI
     };
-    let hist = histogram(&bins, SAMPLES, 5, |u| lift(emitted(&scene, Emitter::Area(disk), true, u).origin.as_dvec3()), pdf);
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        5,
+        |u| {
+            lift(
+                emitted(&scene, Emitter::Area(disk), true, u)
+                    .origin
+                    .as_dvec3(),
+            )
+        },
+        pdf,
+    );
     let wrong = |w: &DVec3| (1.0 + 0.3 * w.x) * w.z.max(0.0) / PI;
     accept_reject("disk origin", &bins, &hist, pdf, wrong);
     let bins = SphereBins::equal_area(normal, 16, 32);
-    let origin = emitted(&scene, Emitter::Area(disk), false, [0.0; 3]).origin;
-    let pdf = |w: &DVec3| scene.pdf_emission(Emitter::Area(disk), origin, w.as_vec3()).unwrap().dir;
-    let hist = histogram(&bins, SAMPLES, 6, |u| emitted(&scene, Emitter::Area(disk), false, u).dir.as_dvec3(), pdf);
+    let origin = emitted(&scene, Emitter::Area(disk), false, [0.5; 3]).origin;
+    let pdf = |w: &DVec3| {
+        scene
+            .pdf_emission(Emitter::Area(disk), origin, w.as_vec3())
+            .unwrap()
+            .dir
+    };
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        6,
+        |u| {
+            emitted(&scene, Emitter::Area(disk), false, u)
+                .dir
+                .as_dvec3()
+                .normalize()
+        },
+        pdf,
+    );
     let uniform = |w: &DVec3| f64::from(u8::from(w.dot(normal) > 0.0)) / (2.0 * PI);
     accept_reject("disk direction", &bins, &hist, pdf, uniform);
 }
@@ -220,13 +292,26 @@ fn a_sphere_and_a_disk_emit_uniformly_by_area_and_by_cosine() {
 #[test]
 fn point_and_spot_lights_emit_from_their_place_over_the_sphere_and_the_cone() {
     let scene = scene();
-    let point = Emitter::Delta(delta_index(&scene, |l| matches!(l, DeltaLight::Point { .. })));
+    let point = Emitter::Delta(delta_index(&scene, |l| {
+        matches!(l, DeltaLight::Point { .. })
+    }));
     let s = emitted(&scene, point, false, [0.2, 0.3, 0.0]);
     assert!(s.delta_pos && !s.delta_dir && s.pdf_pos == 1.0);
     assert_eq!(s.origin, Vec3::new(1.0, 2.0, 0.0));
     let bins = SphereBins::equal_area(DVec3::Y, 16, 32);
-    let pdf = |w: &DVec3| scene.pdf_emission(point, s.origin, w.as_vec3()).unwrap().dir;
-    let hist = histogram(&bins, SAMPLES, 7, |u| emitted(&scene, point, false, u).dir.as_dvec3(), pdf);
+    let pdf = |w: &DVec3| {
+        scene
+            .pdf_emission(point, s.origin, w.as_vec3())
+            .unwrap()
+            .dir
+    };
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        7,
+        |u| emitted(&scene, point, false, u).dir.as_dvec3().normalize(),
+        pdf,
+    );
     let wrong = |w: &DVec3| (1.0 + 0.3 * w.y) / (4.0 * PI);
     accept_reject("point direction", &bins, &hist, pdf, wrong);
 
@@ -238,8 +323,24 @@ fn point_and_spot_lights_emit_from_their_place_over_the_sphere_and_the_cone() {
     let axis = spot.axis.as_dvec3();
     let h_cut = 1.0 - f64::from(spot.cos_cutoff);
     let bins = SphereBins::split_at(axis, h_cut, 16, 2, 32);
-    let pdf = |w: &DVec3| scene.pdf_emission(emitter, spot.position, w.as_vec3()).unwrap().dir;
-    let hist = histogram(&bins, SAMPLES, 8, |u| emitted(&scene, emitter, false, u).dir.as_dvec3(), pdf);
+    let pdf = |w: &DVec3| {
+        scene
+            .pdf_emission(emitter, spot.position, w.as_vec3())
+            .unwrap()
+            .dir
+    };
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        8,
+        |u| {
+            emitted(&scene, emitter, false, u)
+                .dir
+                .as_dvec3()
+                .normalize()
+        },
+        pdf,
+    );
     // Wrong: the cone of a cutoff 3 % wider.
     let wide = 1.0 - (f64::from(spot.cutoff_angle) * 1.03).cos();
     let wrong = |w: &DVec3| f64::from(u8::from(1.0 - w.dot(axis) <= wide)) / (2.0 * PI * wide);
@@ -256,7 +357,9 @@ fn point_and_spot_lights_emit_from_their_place_over_the_sphere_and_the_cone() {
 fn directional_and_environment_light_enters_through_a_disk_covering_the_scene() {
     let scene = scene();
     let (center, radius) = scene.bounding_sphere();
-    let sun = Emitter::Delta(delta_index(&scene, |l| matches!(l, DeltaLight::Directional { .. })));
+    let sun = Emitter::Delta(delta_index(&scene, |l| {
+        matches!(l, DeltaLight::Directional { .. })
+    }));
     let DeltaLight::Directional { direction, .. } = scene.delta_lights[sun_index(sun)] else {
         unreachable!()
     };
@@ -273,11 +376,17 @@ fn directional_and_environment_light_enters_through_a_disk_covering_the_scene() 
         let pos = scene.pdf_emission(sun, Vec3::ZERO, direction).unwrap().pos;
         pos * PI * radius * radius * l.z.max(0.0) / PI
     };
-    let hist = histogram(&bins, SAMPLES, 9, |u| {
-        let s = emitted(&scene, sun, true, u);
-        assert_eq!(s.dir, direction);
-        lift(s.origin.as_dvec3(), w)
-    }, pdf);
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        9,
+        |u| {
+            let s = emitted(&scene, sun, true, u);
+            assert_eq!(s.dir, direction);
+            lift(s.origin.as_dvec3(), w)
+        },
+        pdf,
+    );
     let wrong = |l: &DVec3| (1.0 + 0.3 * l.x) * l.z.max(0.0) / PI;
     accept_reject("directional origin", &bins, &hist, pdf, wrong);
     // Every origin lies outside the bounding sphere, upstream of it.
@@ -289,8 +398,19 @@ fn directional_and_environment_light_enters_through_a_disk_covering_the_scene() 
 
     let env = Emitter::Environment;
     let bins = SphereBins::equal_area(DVec3::Y, 16, 32);
-    let pdf = |d: &DVec3| scene.pdf_emission(env, Vec3::ZERO, d.as_vec3()).unwrap().dir;
-    let hist = histogram(&bins, SAMPLES, 10, |u| emitted(&scene, env, false, u).dir.as_dvec3(), pdf);
+    let pdf = |d: &DVec3| {
+        scene
+            .pdf_emission(env, Vec3::ZERO, d.as_vec3())
+            .unwrap()
+            .dir
+    };
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        10,
+        |u| emitted(&scene, env, false, u).dir.as_dvec3().normalize(),
+        pdf,
+    );
     let wrong = |d: &DVec3| (1.0 + 0.3 * d.y) / (4.0 * PI);
     accept_reject("environment direction", &bins, &hist, pdf, wrong);
     let dir = emitted(&scene, env, true, [0.1, 0.2, 0.0]).dir;
@@ -299,7 +419,18 @@ fn directional_and_environment_light_enters_through_a_disk_covering_the_scene() 
         pos * PI * radius * radius * l.z.max(0.0) / PI
     };
     let bins = SphereBins::equal_area(DVec3::Z, 16, 32);
-    let hist = histogram(&bins, SAMPLES, 11, |u| lift(emitted(&scene, env, true, u).origin.as_dvec3(), dir.as_dvec3()), pdf);
+    let hist = histogram(
+        &bins,
+        SAMPLES,
+        11,
+        |u| {
+            lift(
+                emitted(&scene, env, true, u).origin.as_dvec3(),
+                dir.as_dvec3(),
+            )
+        },
+        pdf,
+    );
     accept_reject("environment origin", &bins, &hist, pdf, wrong_disk);
 }
 
@@ -332,13 +463,25 @@ fn emitters_are_picked_by_power() {
         if let Some(s) = scene.sample_emission(u) {
             let i = emitters.iter().position(|&e| e == s.emitter).unwrap();
             let expected = power[i] / total;
-            assert!((s.pick - expected).abs() <= 1e-12 * expected, "{:?}", s.emitter);
+            assert!(
+                (s.pick - expected).abs() <= 1e-12 * expected,
+                "{:?}",
+                s.emitter
+            );
             counts[i] += 1;
         }
     }
     let bins = Discrete(emitters.len());
-    let hist = Histogram { counts, samples: 0, unbinned: 0, bad_pdf: 0 };
-    let hist = Histogram { samples: hist.counts.iter().sum(), ..hist };
+    let hist = Histogram {
+        counts,
+        samples: 0,
+        unbinned: 0,
+        bad_pdf: 0,
+    };
+    let hist = Histogram {
+        samples: hist.counts.iter().sum(),
+        ..hist
+    };
     let right = |&i: &usize| power[i] / total;
     let uniform = |_: &usize| 1.0 / emitters.len() as f64;
     accept_reject("pick by power", &bins, &hist, right, uniform);
@@ -378,23 +521,40 @@ fn the_light_tree_picks_each_light_with_the_probability_it_claims() {
     ];
     let mut rng = rand_pcg::Pcg64::new(13, 0);
     use rand::Rng;
+    // The last bin: no light picked (where every light of a subtree the walk entered
+    // faces away, pbrt-v4's tree gives up, and so does genpath's: those lights send nothing).
+    let none = emitters.len();
     for (k, &(p, n)) in points.iter().enumerate() {
-        let mut counts = vec![0u64; emitters.len()];
-        let mut samples = 0;
+        let mut counts = vec![0u64; emitters.len() + 1];
         for _ in 0..SAMPLES {
-            if let Some((e, pmf, _)) = bvh.sample(p, n, rng.random()) {
-                assert_eq!(pmf, bvh.pmf(&scene, p, n, e), "{e:?} at {p}");
-                counts[emitters.iter().position(|&x| x == e).unwrap()] += 1;
-                samples += 1;
+            match bvh.sample(p, n, rng.random()) {
+                Some((e, pmf, _)) => {
+                    assert_eq!(pmf, bvh.pmf(&scene, p, n, e), "{e:?} at {p}");
+                    counts[emitters.iter().position(|&x| x == e).unwrap()] += 1;
+                }
+                None => counts[none] += 1,
             }
         }
-        assert_eq!(samples, SAMPLES, "the tree failed to pick at {p}");
-        let hist = Histogram { counts, samples, unbinned: 0, bad_pdf: 0 };
-        let bins = Discrete(emitters.len());
-        let right = |&i: &usize| bvh.pmf(&scene, p, n, emitters[i]);
+        let hist = Histogram {
+            counts,
+            samples: SAMPLES,
+            unbinned: 0,
+            bad_pdf: 0,
+        };
+        let bins = Discrete(emitters.len() + 1);
+        let pmf_at = |q: Vec3, m: Vec3| {
+            let picks: Vec<f64> = emitters.iter().map(|&e| bvh.pmf(&scene, q, m, e)).collect();
+            let fail = (1.0 - picks.iter().sum::<f64>()).max(0.0);
+            move |&i: &usize| if i == none { fail } else { picks[i] }
+        };
         let (q, m) = points[(k + 1) % points.len()];
-        let elsewhere = |&i: &usize| bvh.pmf(&scene, q, m, emitters[i]);
-        accept_reject(&format!("light tree at {p}"), &bins, &hist, right, elsewhere);
+        accept_reject(
+            &format!("light tree at {p}"),
+            &bins,
+            &hist,
+            pmf_at(p, n),
+            pmf_at(q, m),
+        );
     }
 }
 

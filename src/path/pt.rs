@@ -30,7 +30,9 @@ use crate::sampling::brdf::{self, Frame};
 use crate::sampling::specular;
 use crate::sampling::BrdfSample;
 use crate::sampling::{uniform, Rng};
-use crate::scene::{DirectPick, Emitter, LightSampler, Material, MaterialAt, SurfacePoint, RR_START};
+use crate::scene::{
+    DirectPick, Emitter, LightSampler, Material, MaterialAt, SurfacePoint, RR_START,
+};
 use glam::Vec3;
 
 /// The BSDF at one path vertex, as the path tracer uses it: its value for next-event
@@ -259,7 +261,9 @@ impl LightPoint {
         u: (f32, f32),
     ) -> Option<Self> {
         let scene = view.scene;
-        let ls = scene.emitters.sample_prim_seen_from(&scene.mesh, prim, x.p, u);
+        let ls = scene
+            .emitters
+            .sample_prim_seen_from(&scene.mesh, prim, x.p, u);
         let y = EndPoint {
             p: ls.point,
             ng: ls.normal,
@@ -480,12 +484,16 @@ fn emission_weight(
             let scene = view.scene;
             let sampler = view.light_sampler;
             let pdf_area = match sampler {
-                LightSampler::Uniform => scene
-                    .emitters
-                    .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim),
-                LightSampler::Bvh => scene
-                    .emitters
-                    .pdf_prim_seen_from(&scene.mesh, x.p, y.p, y.prim),
+                LightSampler::Uniform => {
+                    scene
+                        .emitters
+                        .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim)
+                }
+                LightSampler::Bvh => {
+                    scene
+                        .emitters
+                        .pdf_prim_seen_from(&scene.mesh, x.p, y.p, y.prim)
+                }
             };
             let pick = scene.pmf_direct(sampler, x.p, n, Emitter::Area(y.prim));
             let share = light_share * pick;

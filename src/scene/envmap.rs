@@ -213,7 +213,10 @@ impl EnvMap {
         for (row, texels) in self.texels.chunks(self.width).enumerate() {
             let theta = PI * (row as f64 + 0.5) / self.height as f64;
             let w = theta.sin();
-            let mean: f64 = texels.iter().map(|t| f64::from(t.x + t.y + t.z) / 3.0).sum();
+            let mean: f64 = texels
+                .iter()
+                .map(|t| f64::from(t.x + t.y + t.z) / 3.0)
+                .sum();
             sum += w * mean / self.width as f64;
             weight += w;
         }

@@ -465,11 +465,13 @@ impl Scene {
             .lights
             .iter()
             .enumerate()
-            .map(|(i, l)| toml_light(l).map_err(|message| SceneError::Field {
-                path: path.to_path_buf(),
-                field: "lights",
-                message: format!("light {}: {message}", i + 1),
-            }))
+            .map(|(i, l)| {
+                toml_light(l).map_err(|message| SceneError::Field {
+                    path: path.to_path_buf(),
+                    field: "lights",
+                    message: format!("light {}: {message}", i + 1),
+                })
+            })
             .collect::<Result<Vec<_>, _>>()?;
         if (emitters.prims.is_empty() || emitters.total_area <= 0.0) && delta_lights.is_empty() {
             return Err(SceneError::NoEmitter { path: obj_path });

@@ -150,8 +150,7 @@ impl LightBounds {
         let sin_o = safe_sqrt(1.0 - self.cos_o * self.cos_o);
         let m_omega = 2.0 * PI * (1.0 - self.cos_o)
             + PI / 2.0
-                * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos()
-                    - 2.0 * theta_o * sin_o
+                * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o
                     + self.cos_o);
         let d = self.hi - self.lo;
         let area = 2.0 * (d.x * d.y + d.y * d.z + d.z * d.x);
@@ -216,7 +215,11 @@ impl LightBvh {
                 items.push((b, Bounded::Area(prim)));
             }
         }
-        let mut infinite: Vec<Emitter> = scene.environment.iter().map(|_| Emitter::Environment).collect();
+        let mut infinite: Vec<Emitter> = scene
+            .environment
+            .iter()
+            .map(|_| Emitter::Environment)
+            .collect();
         let mut delta_index = Vec::with_capacity(scene.delta_lights.len());
         for (i, light) in scene.delta_lights.iter().enumerate() {
             delta_index.push(u32::MAX);
@@ -247,7 +250,13 @@ impl LightBvh {
 
     /// Builds the subtree of `order`'s lights at `depth`, their trails so far `trail`;
     /// returns its root's bounds.
-    fn build(&mut self, bounds: &[LightBounds], order: &mut [u32], depth: usize, trail: u64) -> LightBounds {
+    fn build(
+        &mut self,
+        bounds: &[LightBounds],
+        order: &mut [u32],
+        depth: usize,
+        trail: u64,
+    ) -> LightBounds {
         let at = self.nodes.len();
         if order.len() == 1 {
             let light = order[0];
@@ -298,7 +307,11 @@ impl LightBvh {
             let k = self.infinite.len();
             let x = u / p_inf * k as f64;
             let i = (x as usize).min(k - 1);
-            return Some((self.infinite[i], p_inf / k as f64, (x - i as f64).clamp(0.0, ONE_BELOW)));
+            return Some((
+                self.infinite[i],
+                p_inf / k as f64,
+                (x - i as f64).clamp(0.0, ONE_BELOW),
+            ));
         }
         if self.nodes.is_empty() {
             return None;
@@ -310,7 +323,11 @@ impl LightBvh {
             let node = &self.nodes[at];
             if node.leaf {
                 let light = self.lights[node.index as usize];
-                return (at > 0 || node.bounds.importance(p, n) > 0.0).then_some((light.into(), pmf, u));
+                return (at > 0 || node.bounds.importance(p, n) > 0.0).then_some((
+                    light.into(),
+                    pmf,
+                    u,
+                ));
             }
             let children = [at + 1, node.index as usize];
             let ci = children.map(|c| self.nodes[c].bounds.importance(p, n));
@@ -433,9 +450,12 @@ fn split(bounds: &[LightBounds], order: &mut [u32], median: bool) -> usize {
         *b = Some(b.map_or(light, |x| x.union(&light)));
     }
     let union = |range: &[Option<LightBounds>]| {
-        range.iter().flatten().fold(None, |acc: Option<LightBounds>, b| {
-            Some(acc.map_or(*b, |a| a.union(b)))
-        })
+        range
+            .iter()
+            .flatten()
+            .fold(None, |acc: Option<LightBounds>, b| {
+                Some(acc.map_or(*b, |a| a.union(b)))
+            })
     };
     let best = (1..BUCKETS)
         .filter_map(|s| {
@@ -483,7 +503,13 @@ fn area_bounds(scene: &Scene, prim: u32) -> Option<LightBounds> {
         }
         None => {
             let [a, b, c] = scene.mesh.vertices(prim);
-            (a.min(b).min(c), a.max(b).max(c), scene.mesh.normals[prim as usize], 1.0, area)
+            (
+                a.min(b).min(c),
+                a.max(b).max(c),
+                scene.mesh.normals[prim as usize],
+                1.0,
+                area,
+            )
         }
     };
     Some(LightBounds {

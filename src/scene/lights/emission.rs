@@ -210,7 +210,9 @@ impl Scene {
                     let local = uniform_cone(u[3], u[4], f64::from(s.cos_cutoff));
                     let axis = s.axis.as_dvec3();
                     let (t, b) = basis(axis);
-                    let dir = (t * local.x + b * local.y + axis * local.z).normalize().as_vec3();
+                    let dir = (t * local.x + b * local.y + axis * local.z)
+                        .normalize()
+                        .as_vec3();
                     EmissionSample {
                         emitter,
                         origin: s.position,
@@ -286,7 +288,10 @@ impl Scene {
                 DeltaLight::Point { .. } => (1.0, 1.0 / (4.0 * PI)),
                 DeltaLight::Spot(s) => {
                     let inside = f64::from(dir.dot(s.axis)) >= f64::from(s.cos_cutoff);
-                    (1.0, f64::from(u8::from(inside)) * uniform_cone_pdf(f64::from(s.cos_cutoff)))
+                    (
+                        1.0,
+                        f64::from(u8::from(inside)) * uniform_cone_pdf(f64::from(s.cos_cutoff)),
+                    )
                 }
                 DeltaLight::Directional { .. } => (disk, 1.0),
             },
