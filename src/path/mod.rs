@@ -44,6 +44,11 @@ pub struct SceneView<'a> {
     /// if it were opaque, while the directions that find light pass through it.
     #[cfg(feature = "testing")]
     pub fault_masks_block_shadows: bool,
+    /// Fault injection (feature `testing`): the light sampler's probability of an emitter
+    /// that a sampled direction found is taken as half of what it is, in that direction's
+    /// multiple importance weight only.
+    #[cfg(feature = "testing")]
+    pub fault_light_pick_halved: bool,
 }
 
 /// The most masked surfaces one ray passes through; the next one stops it (a bound on the
@@ -91,6 +96,8 @@ impl<'a> SceneView<'a> {
             light_sampler: LightSampler::default(),
             #[cfg(feature = "testing")]
             fault_masks_block_shadows: false,
+            #[cfg(feature = "testing")]
+            fault_light_pick_halved: false,
         }
     }
 

@@ -496,6 +496,13 @@ fn emission_weight(
                 }
             };
             let pick = scene.pmf_direct(sampler, x.p, n, Emitter::Area(y.prim));
+            #[cfg(feature = "testing")]
+            let pick = pick
+                * if view.fault_light_pick_halved {
+                    0.5
+                } else {
+                    1.0
+                };
             let share = light_share * pick;
             let pdf_light = share as f32 * light_pdf_solid_angle(pdf_area, dist2, cos_light);
             power_heuristic(bs.pdf as f32, pdf_light)
