@@ -10,18 +10,16 @@
 #   bash scripts/quickstart.sh
 #   cargo test --profile release-tests --workspace --all-features
 #
-# Usage: bash scripts/readme_blocks.sh [README.md]   (builds genpath in release mode first
-# when target/release/genpath is missing). Exits non-zero if a block fails or if the file
-# has no block left to run.
+# Usage: bash scripts/readme_blocks.sh [README.md]. It builds genpath in release mode first
+# (nothing to do after the quickstart, which CI runs before it), so that the blocks run the
+# code as it is. Exits non-zero if a block fails or if the file has no block left to run.
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)
 readme=$(realpath "${1:-$repo/README.md}")
 skip=("bash scripts/quickstart.sh" "cargo test --profile release-tests --workspace --all-features")
 
 export PATH="$HOME/.cargo/bin:$PATH"
-if [[ ! -x $repo/target/release/genpath ]]; then
-    cargo build --release --manifest-path "$repo/Cargo.toml"
-fi
+cargo build --release --manifest-path "$repo/Cargo.toml"
 export PATH="$repo/target/release:$PATH"
 
 work=$(mktemp -d /tmp/genpath-readme.XXXXXX)
