@@ -295,8 +295,8 @@ pub struct Scene {
     pub files: Vec<PathBuf>,
 }
 
-/// What a scene contains, reported beside what the GA left out (docs/methods.md, "Leaving
-/// out what the scene does not need").
+/// What a scene contains, reported beside what the GA left out (docs/methods/ga.md,
+/// "Leaving out what the scene does not need").
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SceneAnalysis {
     /// Primitives: triangles and analytic shapes (the counts below too).
