@@ -16,14 +16,16 @@ impl AliasTable {
     /// to something not finite).
     pub fn new(weights: &[f64]) -> Option<Self> {
         let total: f64 = weights.iter().sum();
-        if !(total.is_finite() && total > 0.0) || weights.iter().any(|w| !(*w >= 0.0)) {
+        if !(total.is_finite() && total > 0.0) || weights.iter().any(|w| w.is_nan() || *w < 0.0) {
             return None;
         }
         let n = weights.len();
         let pmf: Vec<f64> = weights.iter().map(|w| w / total).collect();
         let mut bins: Vec<(f64, u32)> = (0..n as u32).map(|i| (1.0, i)).collect();
         let scaled: Vec<f64> = pmf.iter().map(|p| p * n as f64).collect();
-        let (mut small, mut large): (Vec<(u32, f64)>, Vec<(u32, f64)>) = (Vec::new(), Vec::new());
+        // (item, scaled probability) below 1 and at or above it.
+        let mut small: Vec<(u32, f64)> = Vec::new();
+        let mut large: Vec<(u32, f64)> = Vec::new();
         for (i, &s) in scaled.iter().enumerate() {
             match s < 1.0 {
                 true => small.push((i as u32, s)),

@@ -113,7 +113,10 @@ impl LightBounds {
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         let pc = self.centroid();
         let diag = self.hi - self.lo;
-        let d2 = p.distance_squared(pc).max(0.5 * diag.length());
+        let d2 = p
+            .distance_squared(pc)
+            .max(0.5 * diag.length())
+            .max(f32::MIN_POSITIVE);
         let wi = (p - pc).normalize_or_zero();
         let cos_w = self.w.dot(wi);
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
@@ -138,7 +141,8 @@ impl LightBounds {
             let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
             importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
         }
-        importance.max(0.0)
+        // Finite, so that two children's sum is (in f64, [`LightBvh::sample`]).
+        importance.clamp(0.0, f32::MAX)
     }
 
     /// pbrt-v4's cost of a node for the build: power × the solid angle its normal and
@@ -330,18 +334,12 @@ impl LightBvh {
                 ));
             }
             let children = [at + 1, node.index as usize];
-            let ci = children.map(|c| self.nodes[c].bounds.importance(p, n));
-            let total = ci[0] + ci[1];
-            if !(total > 0.0) {
-                return None;
-            }
-            let p0 = f64::from(ci[0] / total);
+            let [p0, p1] = child_shares(children.map(|c| self.nodes[c].bounds.importance(p, n)))?;
             if u < p0 {
                 u = (u / p0).clamp(0.0, ONE_BELOW);
                 pmf *= p0;
                 at = children[0];
             } else {
-                let p1 = f64::from(ci[1] / total);
                 u = ((u - p0) / (1.0 - p0)).clamp(0.0, ONE_BELOW);
                 pmf *= p1;
                 at = children[1];
@@ -382,17 +380,13 @@ impl LightBvh {
                 };
             }
             let children = [at + 1, node.index as usize];
-            let ci = children.map(|c| self.nodes[c].bounds.importance(p, n));
-            let total = ci[0] + ci[1];
-            if !(total > 0.0) {
+            let Some(shares) =
+                child_shares(children.map(|c| self.nodes[c].bounds.importance(p, n)))
+            else {
                 return 0.0;
-            }
-            let second = trail & 1 == 1;
-            let p0 = f64::from(ci[0] / total);
-            pmf *= match second {
-                false => p0,
-                true => f64::from(ci[1] / total),
             };
+            let second = trail & 1 == 1;
+            pmf *= shares[usize::from(second)];
             at = children[usize::from(second)];
             trail >>= 1;
         }
@@ -406,6 +400,13 @@ impl LightBvh {
     pub fn is_empty(&self) -> bool {
         self.lights.is_empty()
     }
+}
+
+/// The probabilities of descending into each of two children of importances `ci`; `None`
+/// where neither can reach the point.
+fn child_shares(ci: [f32; 2]) -> Option<[f64; 2]> {
+    let total = f64::from(ci[0]) + f64::from(ci[1]);
+    (total > 0.0).then(|| ci.map(|c| f64::from(c) / total))
 }
 
 /// The largest `f64` below 1.
@@ -435,7 +436,7 @@ fn split(bounds: &[LightBounds], order: &mut [u32], median: bool) -> usize {
         order.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
         mid
     };
-    if median || !(extent[axis] > 0.0) {
+    if median || extent[axis].is_nan() || extent[axis] <= 0.0 {
         return at_median(order);
     }
     const BUCKETS: usize = 12;
