@@ -449,7 +449,7 @@ mod tests {
         let tables: Vec<&str> = (super::settings::tables().into_iter())
             .map(|(name, _)| name)
             .collect();
-        assert_eq!(tables.len(), 6, "{tables:?}");
+        assert_eq!(tables.len(), 7, "{tables:?}");
         assert_eq!(settings_mismatches(&methods, &tables), Vec::<String>::new());
         let mut wrong = methods.clone();
         wrong.push(("made-up".into(), &["srt", "gaa"]));
