@@ -7,7 +7,7 @@ itself. Run by hand, never by the build or CI:
 Writes scenes/mitsuba/<name>.ref.exr (float32 RGB) for each named scene (default: every
 scenes/mitsuba/*.xml with a sensor), rendered with the `scalar_rgb` variant (the box filter and independent
 sampler the scenes name) at the scene's reference samples and size: 64 × its test's samples
-(box, smooth, rough, roughglass and plastic: 16384 spp at 64², glass, env, spheres and lights: 16384 spp at 128², legacy and params:
+(box, smooth, rough, roughglass and plastic: 16384 spp at 64², glass, env, spheres, lights and spot: 16384 spp at 128², legacy and params:
 16384 spp at their own 64 × 48; the tests' 256 spp). --spp, --res and --seed (default 1) override them, and --out (one scene) writes elsewhere:
 e.g. Mitsuba's own render at the test's samples, to compare genpath's error with, or
 sunroom.xml's reference for the GA's reports (reports/refs/sunroom_ref.exr: its .json says
@@ -30,6 +30,7 @@ REFERENCES = {
     "env": (16384, 128),
     "spheres": (16384, 128),
     "lights": (16384, 128),
+    "spot": (16384, 128),
     "smooth": (16384, 64),
     "rough": (16384, 64),
     "roughglass": (16384, 64),

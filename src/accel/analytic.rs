@@ -374,7 +374,7 @@ pub fn uniform_sphere(u1: f64, u2: f64) -> DVec3 {
 
 /// Shirley–Chiu's concentric map of the unit square onto the unit disk (Mitsuba's
 /// `square_to_uniform_disk_concentric`).
-fn concentric_disk(u1: f64, u2: f64) -> (f64, f64) {
+pub fn concentric_disk(u1: f64, u2: f64) -> (f64, f64) {
     let (x, y) = (2.0 * u1 - 1.0, 2.0 * u2 - 1.0);
     if x == 0.0 && y == 0.0 {
         return (0.0, 0.0);

@@ -17,7 +17,7 @@ mod bvh;
 #[allow(unsafe_code)]
 mod embree;
 
-pub use analytic::{Analytic, AnalyticError, AnalyticShapes, SphereCone};
+pub use analytic::{concentric_disk, Analytic, AnalyticError, AnalyticShapes, SphereCone};
 #[cfg(feature = "obvhs")]
 pub use bvh::BvhAccel;
 #[cfg(feature = "embree")]

@@ -417,7 +417,7 @@ fn mixture_pdf(densities: &[&[f64]], weights: &[f64], pdf: &mut [f64]) {
 /// while `V` stays within `1 + tolerance` of `v`, the full mixture's. The multiplicative
 /// steps never set a weight to 0, and every component costs the render its densities on
 /// every path of every pixel whose mixture holds it, however small its weight (many evolved
-/// components end far below 10⁻³: docs/methods.md, "Convex mixture weights"). Returns the
+/// components end far below 10⁻³: docs/methods/ga.md, "Convex mixture weights"). Returns the
 /// kept components' indices, in order, and their weights.
 pub fn prune_components(
     (f2_over_q, sampled): (&[f64], usize),

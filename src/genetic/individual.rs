@@ -311,7 +311,7 @@ impl<'a> GenePool<'a> {
     /// root, which lowered `ga`'s error on glossy (reports/README.md, "Measurements
     /// formerly in code comments (2026-12-07)"); `ga-pt`'s guides, which place from the
     /// paths they are measured on, keep `F²/q`, since the root let fig5's pilot fail
-    /// (docs/methods.md, "Held-out placement").
+    /// (docs/methods/ga.md, "Held-out placement").
     fn pick_path(&self, rng: &mut crate::sampling::Rng) -> Option<(&'a TestPaths, usize)> {
         let (paths, cdf) = self.paths.as_ref()?;
         let total = cdf.last().copied().unwrap_or(0.0);

@@ -1,4 +1,4 @@
-//! The genetic algorithm of the paper (§4–5; docs/methods.md): per pixel, a population of
+//! The genetic algorithm of the paper (§4–5; docs/methods/ga.md): per pixel, a population of
 //! individuals — weighted sets of path generators — evolves towards the set whose mixture
 //! density (eq. 7) gives the estimator of eq. 8 the smallest variance, measured by eq. 10
 //! on a fixed set of test paths.

@@ -93,7 +93,7 @@ pub const GUIDE_SHARE: f64 = 0.5;
 /// reflection, and `1 − F` of the time the refraction, as narrow as its roughness, on
 /// either side of the surface), so its samples mostly land where the BSDF sends little: on
 /// `scenes/mitsuba/roughglass.xml` `pg`'s error falls monotonically as the share does, to
-/// about `pt`'s at 0, at every roughness tried (docs/methods.md, "`pg`'s guide-vs-BSDF
+/// about `pt`'s at 0, at every roughness tried (docs/methods/pg.md, "`pg`'s guide-vs-BSDF
 /// fraction").
 pub fn guide_share(m: &Material) -> f64 {
     if m.transmits() {

@@ -33,7 +33,7 @@ pub const METHOD: MethodInfo = MethodInfo {
     prepare_learned: Some(prepare_learned),
     splits_learning: true,
     explains: true,
-    settings: &["srt", "ga", "plan", "gate"],
+    settings: &["srt", "ga", "plan", "gate", "lights"],
     ..MethodInfo::plain(prepare)
 };
 

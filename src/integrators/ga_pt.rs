@@ -33,7 +33,7 @@ pub const METHOD: MethodInfo = MethodInfo {
     prepare_learned: Some(prepare_learned),
     splits_learning: true,
     explains: true,
-    settings: &["srt", "ga", "plan", "gate", "spatial"],
+    settings: &["srt", "ga", "plan", "gate", "spatial", "lights"],
     ..MethodInfo::plain(prepare)
 };
 
@@ -98,7 +98,7 @@ impl PixelIntegrator for GaPt {
 /// the control arm's mean relative variance times mean cost per sample (then the guides go),
 /// or less than its inverse (then they stay and trials stop); in between, they stay for the
 /// next pass, which tries again. The cost counts because the guides' cones and patches make
-/// a sample dearer (docs/methods.md, "The trial against the spatial guide", has the
+/// a sample dearer (docs/methods/ga-pt.md, "The trial against the spatial guide", has the
 /// measurements behind the band).
 pub const LEVELS_KEEP_RATIO: f64 = 1.15;
 
@@ -112,7 +112,7 @@ pub const MIN_TRIAL_PIXELS: usize = 256;
 /// A trial weighs a pixel's variance by its mean over the passes before in the
 /// `(2r + 1)²` pixels around it (`r` this radius), not at the pixel alone: early passes
 /// hold a few samples per pixel, and the pixels whose own mean happens to be near 0 would
-/// decide the trial (docs/methods.md, "The trial against the spatial guide").
+/// decide the trial (docs/methods/ga-pt.md, "The trial against the spatial guide").
 pub const TRIAL_MEAN_RADIUS: u32 = 1;
 
 /// `ga-pt`'s trial of its plan's guides in the spatial guide's training passes: from pass

@@ -98,12 +98,14 @@ pub fn prepare_learned(
     let Some(prepare) = method.info().prepare_learned else {
         return Err(mismatch("the method learns nothing".into()));
     };
-    prepare(
-        &Context {
-            view,
-            config,
-            settings,
-        },
-        learned,
-    )
+    super::lit(view, config, |view| {
+        prepare(
+            &Context {
+                view,
+                config,
+                settings,
+            },
+            learned,
+        )
+    })
 }

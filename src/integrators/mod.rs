@@ -147,7 +147,55 @@ pub fn prepare(
     if !settings.shard.is_whole() && settings.method.learns() {
         return Err(PrepareError::ShardLearns(settings.method));
     }
-    (settings.method.info().prepare)(&context)
+    lit(view, config, |view| {
+        (settings.method.info().prepare)(&Context { view, ..context })
+    })
+}
+
+/// Prepares a method with `view` as `config`'s light sampling sees it
+/// ([`crate::path::SceneView::light_sampler`]), and has it render with that view too.
+pub(crate) fn lit(
+    view: &SceneView,
+    config: &Settings,
+    prepare: impl FnOnce(&SceneView) -> Result<Box<dyn Integrator>, PrepareError>,
+) -> Result<Box<dyn Integrator>, PrepareError> {
+    let sampler = config.lights.light_sampler;
+    let inner = prepare(&view.with_light_sampler(sampler))?;
+    Ok(match sampler {
+        crate::scene::LightSampler::Uniform => inner,
+        _ => Box::new(Lit { inner, sampler }),
+    })
+}
+
+/// A prepared method that renders with its own light sampler ([`lit`]).
+struct Lit {
+    inner: Box<dyn Integrator>,
+    sampler: crate::scene::LightSampler,
+}
+
+impl Integrator for Lit {
+    fn render(&self, view: &SceneView, settings: &RenderSettings) -> Film {
+        self.inner
+            .render(&view.with_light_sampler(self.sampler), settings)
+    }
+    fn render_more(&self, view: &SceneView, settings: &RenderSettings, spp: u32) -> Film {
+        (self.inner).render_more(&view.with_light_sampler(self.sampler), settings, spp)
+    }
+    fn samples_taken(&self) -> u32 {
+        self.inner.samples_taken()
+    }
+    fn learned(&self) -> Option<Learned> {
+        self.inner.learned()
+    }
+    fn describe(&self, config: &Settings) -> Description {
+        self.inner.describe(config)
+    }
+    fn explain(&self, camera: &Camera, image: &Image) -> Option<Result<String, ExplainError>> {
+        self.inner.explain(camera, image)
+    }
+    fn self_check(&self) -> SelfCheck<'_> {
+        self.inner.self_check()
+    }
 }
 
 impl Method {
@@ -401,7 +449,7 @@ mod tests {
         let tables: Vec<&str> = (super::settings::tables().into_iter())
             .map(|(name, _)| name)
             .collect();
-        assert_eq!(tables.len(), 6, "{tables:?}");
+        assert_eq!(tables.len(), 7, "{tables:?}");
         assert_eq!(settings_mismatches(&methods, &tables), Vec::<String>::new());
         let mut wrong = methods.clone();
         wrong.push(("made-up".into(), &["srt", "gaa"]));

@@ -31,7 +31,7 @@ use std::time::Instant;
 /// `pg` learns a spatial guide (its training passes run in one job).
 pub const METHOD: MethodInfo = MethodInfo {
     prepare_learned: Some(prepare_learned),
-    settings: &["spatial"],
+    settings: &["spatial", "lights"],
     ..MethodInfo::plain(prepare)
 };
 

@@ -13,7 +13,10 @@ pub struct PathTracing {
     pub max_bounces: u32,
 }
 
-pub const METHOD: MethodInfo = MethodInfo::plain(prepare);
+pub const METHOD: MethodInfo = MethodInfo {
+    settings: &["lights"],
+    ..MethodInfo::plain(prepare)
+};
 
 fn prepare(context: &Context) -> Result<Box<dyn Integrator>, PrepareError> {
     Ok(Box::new(PathTracing {

@@ -15,6 +15,7 @@ use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
 use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
+use crate::scene::LightSampler;
 use crate::settings_table::{Interval, Kind, OutOfRange, Setting, Table};
 use clap::builder::ValueParser;
 use clap::ArgMatches;
@@ -30,6 +31,7 @@ pub struct Settings {
     pub plan: PlanConfig,
     pub gate: GateConfig,
     pub spatial: SpatialConfig,
+    pub lights: LightsConfig,
     /// The mixture of `mixture.generators`, loaded for the scene (`--method mixture`).
     #[serde(skip)]
     pub loaded_mixture: Option<Mixture>,
@@ -81,6 +83,40 @@ impl Kind for Nee {
     fn from_matches(matches: &ArgMatches, id: &str) -> Self {
         matches
             .get_one::<Nee>(id)
+            .copied()
+            .expect("a flag given on the command line has its parsed value")
+    }
+}
+
+crate::settings_table! {
+    /// How path tracing's next-event estimation picks a light, table `[lights]`.
+    #[derive(Clone, Debug, PartialEq)]
+    pub struct LightsConfig {
+        table: "lights",
+        heading: "Light sampling (--method pt, pg, ga-pt)",
+        settings: {
+            /// How next-event estimation picks the light it samples: `uniform`, Mitsuba 3's
+            /// uniform pick among the environment, each delta light and the area emitters
+            /// taken as one (their points by area); `bvh`, a light tree that picks each light
+            /// by an estimate of what it sends to the point (pbrt-v4's BVH light sampler).
+            /// The mixtures of srt, mixture and ga keep the paper's light-point sampler.
+            pub light_sampler: LightSampler = LightSampler::default(),
+        },
+    }
+}
+
+/// `--light-sampler uniform|bvh`, its values named as [`LightSampler`]'s `clap::ValueEnum`
+/// names them.
+impl Kind for LightSampler {
+    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
+        clap::builder::EnumValueParser::<LightSampler>::new().into()
+    }
+    fn default_text(&self) -> Option<String> {
+        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
+    }
+    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
+        matches
+            .get_one::<LightSampler>(id)
             .copied()
             .expect("a flag given on the command line has its parsed value")
     }
@@ -174,12 +210,13 @@ pub fn tables() -> Vec<(&'static str, Vec<&'static str>)> {
         table::<PlanConfig>(),
         table::<GateConfig>(),
         table::<SpatialConfig>(),
+        table::<LightsConfig>(),
     ]
 }
 
 /// Every setting as its table declares it, in the order of the flags (which the help
-/// shows): the mixture's file first, then `srt`'s, the GA's, its plan's, the gate's and the
-/// spatial guide's.
+/// shows): the mixture's file first, then `srt`'s, the GA's, its plan's, the gate's, the
+/// spatial guide's and light sampling's.
 pub fn declarations() -> Vec<Setting> {
     [
         MixtureConfig::settings(),
@@ -188,6 +225,7 @@ pub fn declarations() -> Vec<Setting> {
         PlanConfig::settings(),
         GateConfig::settings(),
         SpatialConfig::settings(),
+        LightsConfig::settings(),
     ]
     .concat()
 }
@@ -295,6 +333,7 @@ impl Settings {
         self.plan.check()?;
         self.gate.check()?;
         self.spatial.check()?;
+        self.lights.check()?;
         self.ga.validate()?;
         self.spatial.validate()
     }
@@ -314,6 +353,7 @@ impl Settings {
         self.plan.read_flags(matches);
         self.gate.read_flags(matches);
         self.spatial.read_flags(matches);
+        self.lights.read_flags(matches);
         self.validate()
     }
 

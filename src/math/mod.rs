@@ -4,6 +4,7 @@
 //! so that scenes and acceleration structures share these helpers without reaching up into
 //! the samplers.
 
+pub mod alias;
 pub mod trig;
 
 use glam::{DVec3, Vec3};

@@ -1,5 +1,5 @@
-//! Path generators and their weighted sets (paper §5.1–5.3; docs/methods.md, "Path
-//! generators and mixtures").
+//! Path generators and their weighted sets (paper §5.1–5.3; docs/methods/mixture.md,
+//! "Path generators and mixtures").
 //!
 //! A [`PathGenerator`] is a sequence of (directional sampler, absorption) pairs plus a
 //! light-point sampler. It samples an eye path vertex by vertex, as a `Walk` (`walk.rs`: a state
@@ -54,8 +54,8 @@ pub const SRT_ABSORPTION_NEE_EVERY: f64 = 0.1;
 /// With [`Nee::Every`], the `srt` generator's steps before this one do not absorb (their
 /// absorption is [`ABSORPTION_MIN`]), as `pt`'s Russian roulette starts at bounce
 /// [`RR_START`](crate::scene::RR_START). Absorbing from the first vertex made `srt` noisier
-/// than `pt` per sample (docs/methods.md, "The `srt` generator's absorption with NEE at
-/// every vertex").
+/// than `pt` per sample (docs/methods/srt.md, "The `srt` generator's absorption with NEE
+/// at every vertex").
 pub const SRT_ROULETTE_FROM: usize = crate::scene::RR_START as usize;
 
 /// The `srt` generator's absorption: `per_vertex` at each step from step `from` on, and

@@ -9,7 +9,7 @@ pub mod walk;
 
 use crate::accel::{Accel, Coherence, Hit, Ray, PACKET_SIZE};
 use crate::sampling::{uniform, Rng};
-use crate::scene::{normals, Material, MaterialAt, Opacity, Scene, SurfacePoint};
+use crate::scene::{normals, LightSampler, Material, MaterialAt, Opacity, Scene, SurfacePoint};
 use glam::DVec3;
 use glam::{Vec2, Vec3};
 use mixture::{Mixture, MixtureScratch};
@@ -25,6 +25,7 @@ pub struct EndPoint {
 }
 
 /// A scene together with the ray queries over it.
+#[derive(Clone, Copy)]
 pub struct SceneView<'a> {
     pub scene: &'a Scene,
     pub accel: &'a dyn Accel,
@@ -37,10 +38,17 @@ pub struct SceneView<'a> {
     /// Whether some material chooses its lobe where a ray meets it (a smooth plastic):
     /// [`SceneView::trace_through`] then draws the choice's uniform number at such a hit.
     choices: bool,
+    /// How next-event estimation picks its light (`pt`, `pg`, `ga-pt`).
+    pub light_sampler: LightSampler,
     /// Fault injection (feature `testing`): shadow rays stop at every masked surface, as
     /// if it were opaque, while the directions that find light pass through it.
     #[cfg(feature = "testing")]
     pub fault_masks_block_shadows: bool,
+    /// Fault injection (feature `testing`): the light sampler's probability of an emitter
+    /// that a sampled direction found is taken as half of what it is, in that direction's
+    /// multiple importance weight only.
+    #[cfg(feature = "testing")]
+    pub fault_light_pick_halved: bool,
 }
 
 /// The most masked surfaces one ray passes through; the next one stops it (a bound on the
@@ -85,9 +93,18 @@ impl<'a> SceneView<'a> {
             epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE),
             masks: scene.materials.iter().any(|m| m.opacity().is_some()),
             choices: scene.materials.iter().any(Material::chooses_lobe),
+            light_sampler: LightSampler::default(),
             #[cfg(feature = "testing")]
             fault_masks_block_shadows: false,
+            #[cfg(feature = "testing")]
+            fault_light_pick_halved: false,
         }
+    }
+
+    /// This view with next-event estimation picking lights by `sampler`.
+    pub fn with_light_sampler(mut self, sampler: LightSampler) -> Self {
+        self.light_sampler = sampler;
+        self
     }
 
     /// Whether some surface of the scene has a `mask`.

@@ -30,7 +30,9 @@ use crate::sampling::{uniform, Rng};
 use crate::scene::material::bsdf::{self, Frame};
 use crate::scene::material::specular;
 use crate::scene::material::BrdfSample;
-use crate::scene::{LightPick, Material, MaterialAt, SurfacePoint, RR_START};
+use crate::scene::{
+    DirectPick, Emitter, LightSampler, Material, MaterialAt, SurfacePoint, RR_START,
+};
 use glam::Vec3;
 
 /// The BSDF at one path vertex, as the path tracer uses it: its value for next-event
@@ -260,6 +262,38 @@ impl LightPoint {
         })
     }
 
+    /// A point on emitting primitive `prim` alone (the light tree picked it), from two
+    /// uniform numbers; `None` as for [`Self::from_uniforms`].
+    pub fn on_prim(
+        view: &SceneView,
+        (x, material, frame): Receiver,
+        prim: u32,
+        u: (f32, f32),
+    ) -> Option<Self> {
+        let scene = view.scene;
+        let ls = scene
+            .emitters
+            .sample_prim_seen_from(&scene.mesh, prim, x.p, u);
+        let y = EndPoint {
+            p: ls.point,
+            ng: ls.normal,
+        };
+        let d = y.p - x.p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let cos_x = bsdf::cosine(material, frame, wi)?;
+        let cos_light = -y.ng.dot(wi);
+        (cos_light > 0.0 && dist2 > 0.0).then_some(Self {
+            y,
+            prim,
+            wi,
+            dist2,
+            cos_x,
+            cos_light,
+            pdf_area: ls.pdf_area,
+        })
+    }
+
     /// The density of `y` in solid angle at `x`.
     pub fn pdf_solid_angle(&self) -> f32 {
         light_pdf_solid_angle(self.pdf_area, self.dist2, self.cos_light)
@@ -335,15 +369,15 @@ impl LightCandidate {
     pub fn sample(view: &SceneView, at: Receiver, u: [f32; 3]) -> Option<Self> {
         let (x, material, frame) = at;
         let scene = view.scene;
-        let (pick, u0) = scene.pick_light(f64::from(u[0]))?;
-        let pmf = scene.light_pmf();
+        let (pick, pmf, u0) =
+            scene.pick_direct(view.light_sampler, x.p, frame.n, f64::from(u[0]))?;
         let (wi, le, density, target) = match pick {
-            LightPick::Environment => {
+            DirectPick::Environment => {
                 let env = scene.environment.as_ref()?;
                 let (wi, le, pdf) = env.sample(u[1], u[2]);
                 (wi, le, Density::Environment(pdf), Target::Infinity)
             }
-            LightPick::Delta(i) => {
+            DirectPick::Delta(i) => {
                 let a = scene.delta_lights[i].arrival(x.p)?;
                 let target = match a.position {
                     Some(p) => Target::Point(EndPoint { p, ng: Vec3::ZERO }),
@@ -351,8 +385,14 @@ impl LightCandidate {
                 };
                 (a.wi, a.value, Density::Delta, target)
             }
-            LightPick::Area => {
+            DirectPick::AreaGroup => {
                 let l = LightPoint::from_uniforms(view, at, [u0 as f32, u[1], u[2]])?;
+                let le = view.material(l.prim).ke;
+                let density = Density::Area(l.pdf_solid_angle());
+                (l.wi, le, density, Target::Point(l.y))
+            }
+            DirectPick::Prim(prim) => {
+                let l = LightPoint::on_prim(view, at, prim, (u[1], u[2]))?;
                 let le = view.material(l.prim).ke;
                 let density = Density::Area(l.pdf_solid_angle());
                 (l.wi, le, density, Target::Point(l.y))
@@ -445,7 +485,7 @@ fn next_event<B: VertexBsdf>(
 /// from `x`.
 fn emission_weight(
     view: &SceneView,
-    (x, y): (&SurfacePoint, &SurfacePoint),
+    (x, n, y): (&SurfacePoint, Vec3, &SurfacePoint),
     bs: &BrdfSample,
     light_share: f64,
 ) -> Option<f32> {
@@ -456,10 +496,28 @@ fn emission_weight(
         } else {
             let dist2 = (y.p - x.p).length_squared();
             let scene = view.scene;
-            let pdf_area = scene
-                .emitters
-                .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim);
-            let share = light_share * scene.area_light_pmf();
+            let sampler = view.light_sampler;
+            let pdf_area = match sampler {
+                LightSampler::Uniform => {
+                    scene
+                        .emitters
+                        .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim)
+                }
+                LightSampler::Bvh => {
+                    scene
+                        .emitters
+                        .pdf_prim_seen_from(&scene.mesh, x.p, y.p, y.prim)
+                }
+            };
+            let pick = scene.pmf_direct(sampler, x.p, n, Emitter::Area(y.prim));
+            #[cfg(feature = "testing")]
+            let pick = pick
+                * if view.fault_light_pick_halved {
+                    0.5
+                } else {
+                    1.0
+                };
+            let share = light_share * pick;
             let pdf_light = share as f32 * light_pdf_solid_angle(pdf_area, dist2, cos_light);
             power_heuristic(bs.pdf as f32, pdf_light)
         })
@@ -468,9 +526,15 @@ fn emission_weight(
     }
 }
 
-/// The environment's radiance that the direction `bs` found by escaping the scene, MIS
-/// weighted against next-event estimation (which ran with probability `light_share`).
-fn escape_radiance(view: &SceneView, bs: &BrdfSample, light_share: f64) -> Vec3 {
+/// The environment's radiance that the direction `bs` sampled at `x` (normal `n`) found by
+/// escaping the scene, MIS weighted against next-event estimation (which ran with
+/// probability `light_share`).
+fn escape_radiance(
+    view: &SceneView,
+    (x, n): (&SurfacePoint, Vec3),
+    bs: &BrdfSample,
+    light_share: f64,
+) -> Vec3 {
     let Some(env) = &view.scene.environment else {
         return Vec3::ZERO;
     };
@@ -478,7 +542,8 @@ fn escape_radiance(view: &SceneView, bs: &BrdfSample, light_share: f64) -> Vec3 
     let weight = if bs.delta {
         1.0
     } else {
-        let pdf_light = (light_share * view.scene.environment_share() * pdf) as f32;
+        let pick = (view.scene).pmf_direct(view.light_sampler, x.p, n, Emitter::Environment);
+        let pdf_light = (light_share * pick * pdf) as f32;
         power_heuristic(bs.pdf as f32, pdf_light)
     };
     radiance * weight
@@ -579,13 +644,13 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             // The environment's light stays in a diffuse vertex's record (unlike an area
             // emitter's): its light samples, uniform over the sphere, do not sample it well.
             if view.scene.environment.is_some() {
-                radiance += beta * escape_radiance(view, &bs, light_share);
+                radiance += beta * escape_radiance(view, (&x, n), &bs, light_share);
             }
             break;
         };
         let y_material = view.material(y.prim);
         if y_material.is_emitter() {
-            if let Some(weight) = emission_weight(view, (&x, &y), &bs, light_share) {
+            if let Some(weight) = emission_weight(view, (&x, n, &y), &bs, light_share) {
                 radiance += beta * emitted(y_material, &y, -wi) * weight;
                 if let Some(r) = recorder.as_deref_mut().filter(|_| diffuse && !bs.delta) {
                     r.emission_seen(radiance);

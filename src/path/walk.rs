@@ -11,7 +11,7 @@ use crate::accel::Ray;
 use crate::sampling::{uniform, Rng};
 use crate::scene::material::bsdf::{self, Frame};
 use crate::scene::material::specular;
-use crate::scene::{LightPick, MaterialAt, SurfacePoint};
+use crate::scene::{DirectPick, LightSampler, MaterialAt, SurfacePoint};
 use glam::{DVec3, Vec3};
 
 /// The ray a [`Walk`] waits on before it can go on.
@@ -514,14 +514,17 @@ impl LightDraw {
         u: [f64; 3],
     ) -> Option<Self> {
         let scene = view.scene;
-        let (pick, u0) = scene.pick_light(u[0])?;
+        // The paper's light technique: the uniform pick (whatever `pt`'s light sampler), so
+        // that every generator's density of a light end is the same but for its light-point
+        // sampler ([`super::generator::fixed_light_pdf`]).
+        let (pick, _, u0) = scene.pick_direct(LightSampler::Uniform, x.p, frame.n, u[0])?;
         let (end, wi, le, area, shadow) = match pick {
-            LightPick::Environment => {
+            DirectPick::Environment => {
                 let env = scene.environment.as_ref()?;
                 let (wi, le, _) = env.sample(u[1] as f32, u[2] as f32);
                 (LightEnd::Environment, wi, le, (1.0, 1.0), view.spawn(x, wi))
             }
-            LightPick::Delta(i) => {
+            DirectPick::Delta(i) => {
                 let a = scene.delta_lights[i].arrival(x.p)?;
                 let shadow = match a.position {
                     Some(p) => view.shadow_ray(x, &EndPoint { p, ng: Vec3::ZERO }),
@@ -529,7 +532,7 @@ impl LightDraw {
                 };
                 (LightEnd::Delta, a.wi, a.value, (1.0, 1.0), shadow)
             }
-            LightPick::Area => {
+            DirectPick::AreaGroup | DirectPick::Prim(_) => {
                 let (y, prim) = g
                     .light
                     .sample(&scene.mesh, &scene.emitters, [u0, u[1], u[2]]);

@@ -38,6 +38,16 @@ impl Environment {
         }
     }
 
+    /// The mean of the radiance's channels over the sphere of directions.
+    pub fn mean_radiance(&self) -> f64 {
+        let r = self.radiance.as_dvec3();
+        let mean = (r.x + r.y + r.z) / 3.0;
+        match &self.map {
+            None => mean,
+            Some(map) => mean * map.mean_radiance(),
+        }
+    }
+
     /// The radiance that a ray leaving the scene along unit `dir` gathers.
     pub fn eval(&self, dir: Vec3) -> Vec3 {
         match &self.map {

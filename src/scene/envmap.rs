@@ -206,6 +206,27 @@ impl EnvMap {
         })
     }
 
+    /// The mean of the map's channels over the sphere (texels weighted by the solid angle of
+    /// their row, `sin θ`): what emission sampling weighs the environment's power by.
+    pub fn mean_radiance(&self) -> f64 {
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for (row, texels) in self.texels.chunks(self.width).enumerate() {
+            let theta = PI * (row as f64 + 0.5) / self.height as f64;
+            let w = theta.sin();
+            let mean: f64 = texels
+                .iter()
+                .map(|t| f64::from(t.x + t.y + t.z) / 3.0)
+                .sum();
+            sum += w * mean / self.width as f64;
+            weight += w;
+        }
+        if weight > 0.0 {
+            sum / weight
+        } else {
+            0.0
+        }
+    }
+
     pub fn width(&self) -> usize {
         self.width
     }

@@ -11,6 +11,36 @@ pub struct SceneFile {
     pub camera: CameraFile,
     #[serde(default)]
     pub render: RenderDefaults,
+    /// Lights beside the mesh's emitting faces (`[[lights]]` tables).
+    #[serde(default)]
+    pub lights: Vec<LightFile>,
+}
+
+/// A light of the TOML scene, `type = "point" | "spot" | "directional"`, with Mitsuba 3's
+/// meanings (colours are linear RGB).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightFile {
+    /// Radiant `intensity` from `position`.
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    /// A `point` whose beam points at `target`: full `intensity` out to `beam_width`
+    /// degrees from the axis, falling linearly to nothing at `cutoff_angle` (default 20,
+    /// and ¾ of it).
+    Spot {
+        position: [f32; 3],
+        target: [f32; 3],
+        intensity: [f32; 3],
+        cutoff_angle: Option<f32>,
+        beam_width: Option<f32>,
+    },
+    /// `irradiance` arriving along `direction` (the way the light travels).
+    Directional {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
 }
 
 #[derive(Debug, Deserialize)]

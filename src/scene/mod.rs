@@ -5,7 +5,7 @@ mod camera;
 mod environment;
 pub mod envmap;
 mod file;
-mod lights;
+pub mod lights;
 pub mod material;
 pub mod normals;
 mod shading;
@@ -16,8 +16,11 @@ pub mod xml;
 
 pub use camera::Camera;
 pub use environment::Environment;
-pub use file::{CameraFile, RenderDefaults, SceneFile};
-pub use lights::{DeltaArrival, DeltaLight, LightPick};
+pub use file::{CameraFile, LightFile, RenderDefaults, SceneFile};
+pub use lights::emission::{EmissionPdf, EmissionSample, Emitter};
+pub use lights::{
+    bvh, emission, DeltaArrival, DeltaLight, DirectPick, LightPick, LightSampler, LightTables, Spot,
+};
 pub use material::{
     Dielectric, Glossy, Material, MaterialAt, MaterialTextures, Opacity, SmoothPlastic, BLACK,
 };
@@ -190,6 +193,73 @@ impl Emitters {
     }
 }
 
+impl Emitters {
+    /// A point on emitting primitive `prim` alone for next-event estimation at `x`, from two
+    /// uniform numbers: as [`Self::sample_seen_from`] places it (uniform by area, or in a
+    /// sphere's visible cone), with its area density within `prim`.
+    pub fn sample_prim_seen_from(
+        &self,
+        mesh: &TriangleMesh,
+        prim: u32,
+        x: Vec3,
+        (u1, u2): (f32, f32),
+    ) -> LightSample {
+        let Some(shape) = mesh.analytic(prim) else {
+            let [a, b, c] = mesh.vertices(prim);
+            let su = u1.sqrt();
+            let (b0, b1) = (1.0 - su, u2 * su);
+            return LightSample {
+                point: a * b0 + b * b1 + c * (1.0 - b0 - b1),
+                normal: mesh.normals[prim as usize],
+                prim,
+                pdf_area: 1.0 / mesh.area(prim),
+            };
+        };
+        let xd = x.as_dvec3();
+        let cone = shape.visible_cone(xd);
+        let y = match &cone {
+            Some(cone) => cone.sample(f64::from(u1), f64::from(u2)),
+            None => shape.sample_area(f64::from(u1), f64::from(u2)),
+        };
+        let y = y.as_vec3().as_dvec3();
+        let normal = shape.normal_at(y);
+        LightSample {
+            point: y.as_vec3(),
+            normal: normal.as_vec3(),
+            prim,
+            pdf_area: match &cone {
+                Some(cone) => cone_pdf_area(cone, normal, xd, y),
+                None => shape.area().recip(),
+            },
+        }
+    }
+
+    /// The area density of [`Self::sample_prim_seen_from`] at `x` for the point `y` on
+    /// emitting primitive `prim`.
+    pub fn pdf_prim_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
+        let x = x.as_dvec3();
+        match mesh.analytic(prim) {
+            None => 1.0 / mesh.area(prim),
+            Some(shape) => match shape.visible_cone(x) {
+                Some(cone) => {
+                    let y = y.as_dvec3();
+                    cone_pdf_area(&cone, shape.normal_at(y), x, y)
+                }
+                None => shape.area().recip(),
+            },
+        }
+    }
+}
+
+/// The area density at `y` (unit normal `normal_y`) of directions uniform in the `cone` a
+/// sphere subtends at `x`: `cos_y / (Ω·d²)`.
+fn cone_pdf_area(cone: &SphereCone, normal_y: DVec3, x: DVec3, y: DVec3) -> f64 {
+    let d = x - y;
+    let dist2 = d.length_squared();
+    let cos_y = normal_y.dot(d).abs() / dist2.sqrt();
+    cone.pdf_solid_angle() * cos_y / dist2
+}
+
 /// A loaded, validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -208,6 +278,8 @@ pub struct Scene {
     pub environment: Option<Environment>,
     /// Mitsuba's `point` and `directional` emitters, which only light sampling reaches.
     pub delta_lights: Vec<DeltaLight>,
+    /// What is built about the lights on first use (emission by power, the light tree).
+    pub lights: LightTables,
     /// Mitsuba's `hide_emitters`: camera rays that see an emitter, or escape to the
     /// environment, gather nothing (emitters seen after a scattering event still count).
     pub hide_emitters: bool,
@@ -221,8 +293,8 @@ pub struct Scene {
     pub files: Vec<PathBuf>,
 }
 
-/// What a scene contains, reported beside what the GA left out (docs/methods.md, "Leaving
-/// out what the scene does not need").
+/// What a scene contains, reported beside what the GA left out (docs/methods/ga.md,
+/// "Leaving out what the scene does not need").
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct SceneAnalysis {
     /// Primitives: triangles and analytic shapes (the counts below too).
@@ -387,7 +459,19 @@ impl Scene {
         let emitters = Emitters::new(&mesh, |prim| {
             materials[material_of[prim as usize] as usize].is_emitter()
         });
-        if emitters.prims.is_empty() || emitters.total_area <= 0.0 {
+        let delta_lights = file
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                toml_light(l).map_err(|message| SceneError::Field {
+                    path: path.to_path_buf(),
+                    field: "lights",
+                    message: format!("light {}: {message}", i + 1),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        if (emitters.prims.is_empty() || emitters.total_area <= 0.0) && delta_lights.is_empty() {
             return Err(SceneError::NoEmitter { path: obj_path });
         }
         let extent = mesh
@@ -403,7 +487,8 @@ impl Scene {
             material_of,
             emitters,
             environment: None,
-            delta_lights: Vec::new(),
+            delta_lights,
+            lights: LightTables::default(),
             hide_emitters: false,
             render: file.render,
             extent,
@@ -411,6 +496,64 @@ impl Scene {
             files,
         })
     }
+}
+
+/// A `[[lights]]` table as a delta light, or why it is refused.
+fn toml_light(light: &LightFile) -> Result<DeltaLight, String> {
+    let vec = |name: &str, v: [f32; 3]| {
+        let v = Vec3::from(v);
+        match v.is_finite() {
+            true => Ok(v),
+            false => Err(format!("`{name}` {v} is not finite")),
+        }
+    };
+    let color = |name: &str, v: [f32; 3]| {
+        let v = vec(name, v)?;
+        match v.min_element() >= 0.0 && v.max_element() <= 1e30 {
+            true => Ok(v),
+            false => Err(format!("`{name}` {v} is negative or beyond 1e30")),
+        }
+    };
+    let unit = |name: &str, v: Vec3| {
+        let length = v.length();
+        match length.is_finite() && length > 1e-12 {
+            true => Ok(v / length),
+            false => Err(format!("`{name}` gives no direction")),
+        }
+    };
+    Ok(match *light {
+        LightFile::Point {
+            position,
+            intensity,
+        } => DeltaLight::Point {
+            position: vec("position", position)?,
+            intensity: color("intensity", intensity)?,
+        },
+        LightFile::Spot {
+            position,
+            target,
+            intensity,
+            cutoff_angle,
+            beam_width,
+        } => {
+            let position = vec("position", position)?;
+            let axis = unit("target", vec("target", target)? - position)?;
+            let cutoff = cutoff_angle.unwrap_or(20.0);
+            let beam = beam_width.unwrap_or(0.75 * cutoff);
+            let spot = Spot::new(position, axis, color("intensity", intensity)?, cutoff, beam)
+                .ok_or_else(|| {
+                    format!("`beam_width` {beam} and `cutoff_angle` {cutoff} must satisfy 0 < beam_width <= cutoff_angle < 180 (degrees)")
+                })?;
+            DeltaLight::Spot(spot)
+        }
+        LightFile::Directional {
+            direction,
+            irradiance,
+        } => DeltaLight::Directional {
+            direction: unit("direction", vec("direction", direction)?)?,
+            irradiance: color("irradiance", irradiance)?,
+        },
+    })
 }
 
 /// Upper bound on `max_bounces`, far above anything useful, so that typos fail fast.

@@ -13,8 +13,8 @@ crate::settings_table! {
         heading: "Gate (--method ga, ga-pt)",
         settings: {
             /// A pilot of the GA predicts whether it pays, and each pixel renders with its
-            /// evolved mixture only where it is predicted to beat pt (see docs/methods.md, "the
-            /// gate"); `false` is the paper's method everywhere.
+            /// evolved mixture only where it is predicted to beat pt (see docs/methods/ga.md,
+            /// "The gate"); `false` is the paper's method everywhere.
             #[negation = "no_gate"]
             pub gate: bool = true,
         },
@@ -89,7 +89,7 @@ crate::settings_table! {
             #[range = 1..=64]
             pub guide_steps: usize = 1,
             // ga-pt's default is 0: the footprint let its guides through the pilot where they
-            // lose (docs/methods.md).
+            // lose (docs/methods/ga.md, "Footprint").
             /// A GA pixel's test paths start in the square of this many grid spacings
             /// (--ga-grid) centred on it: the pixels its mixture renders, not that pixel alone
             /// (0: the pixel, the paper's). Default: 1 for ga, 0 for ga-pt
@@ -114,7 +114,7 @@ impl PlanConfig {
     /// Distance between grid GA pixels in a plan for `plan_for`. `ga-pt`'s guides beside
     /// the spatial guide pay for fewer GA pixels: a coarser grid halves its GA phase on
     /// fig5 and lowers its error against `pg` there, and changes little elsewhere
-    /// (docs/methods.md, "The genetic algorithm (`--method ga`)", step 1, "Grid").
+    /// (docs/methods/ga.md, "Grid").
     pub fn grid(&self, plan_for: PlanFor) -> u32 {
         self.grid.unwrap_or(match plan_for {
             PlanFor::Mixture => 32,

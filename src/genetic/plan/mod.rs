@@ -46,9 +46,9 @@
 //!    individuals (with a fresh random stream). For a guide the other GA pixels then run
 //!    no trial and keep their guides: a guide keeps `pt`'s next-event estimation and BRDF
 //!    sampling, so it rarely loses much, and the trials cost a large share of the GA phase
-//!    for no better image (docs/methods.md, "The genetic algorithm (`--method ga`)", "The
-//!    gate"). A mixture's variance can exceed `pt`'s many times, so there every GA pixel
-//!    runs its trial. Low-variance cells (pruning) render with `pt` too.
+//!    for no better image (docs/methods/ga.md, "The gate"). A mixture's variance can
+//!    exceed `pt`'s many times, so there every GA pixel runs its trial. Low-variance cells
+//!    (pruning) render with `pt` too.
 //!
 //! The test paths, the GA and the gate draw from streams disjoint from the final render's, so
 //! the mixtures and choices do not depend on the samples they are used with.
@@ -85,8 +85,8 @@ use std::time::Duration;
 /// samples of variance `r σ²` beside `n` of variance `σ²` lower the variance of the mean
 /// while `r < 2 + b/n`: 2 is that bound at large `n`, not tuned on any scene. It keeps
 /// the baseline where `srt` is close to the evolved mixtures and drops it where they are
-/// far better (the medians of `V_srt / V_best` on the test scenes: docs/methods.md, "The
-/// genetic algorithm (`--method ga`)", step 2, "Baseline"; their seed in reports/README.md,
+/// far better (the medians of `V_srt / V_best` on the test scenes: docs/methods/ga.md,
+/// "Baseline"; their seed in reports/README.md,
 /// "`ga` keeps its baseline's samples (issue 23, 2026-12-04)").
 pub const BASELINE_KEEP_RATIO: f64 = 2.0;
 
@@ -170,7 +170,7 @@ impl Plan {
     /// itself. The choice depends on the test paths alone, drawn from their own streams, so
     /// the image stays unbiased. A guide's plan (`ga-pt`) keeps none: the test paths do not
     /// measure its guided path tracer, and `srt` samples beside its guided ones raise its
-    /// error (docs/methods.md, "The genetic algorithm (`--method ga`)", step 2, "Baseline").
+    /// error (docs/methods/ga.md, "Baseline").
     pub fn settle_baseline(&mut self, spp: u32, keep_ratio: f64) {
         let mut ratios: Vec<f64> = (self.pixels.iter())
             .filter(|p| p.v_best > 0.0)

@@ -36,10 +36,10 @@ pub const CONVEX_STEPS: fitness::Steps = fitness::Steps {
 /// [`crate::path::DENSITY_COST`] each), and the weight steps never drop one; this share
 /// leaves out most of them for little more error, where a larger one raised the error
 /// (reports/README.md, "Measurements formerly in code comments (2026-12-07)",
-/// `COMPONENT_TOLERANCE`; docs/methods.md, "The genetic algorithm (`--method ga`)", "Convex
-/// mixture weights"). `ga-pt`'s guides keep theirs (its images stay as they were), and so
-/// does the paper's end-only estimator (`--nee end`), whose rare large contributions the
-/// test paths' `V` sees too seldom to prune by (the same bullet of reports/README.md).
+/// `COMPONENT_TOLERANCE`; docs/methods/ga.md, "Convex mixture weights"). `ga-pt`'s guides
+/// keep theirs (its images stay as they were), and so does the paper's end-only estimator
+/// (`--nee end`), whose rare large contributions the test paths' `V` sees too seldom to
+/// prune by (the same bullet of reports/README.md).
 pub const COMPONENT_TOLERANCE: f64 = 0.02;
 
 /// With `GaConfig::held_out`, the placement paths stop at `max_light_paths /
@@ -47,7 +47,7 @@ pub const COMPONENT_TOLERANCE: f64 = 0.02;
 /// eq. 10's precision. With next-event estimation at every vertex most test paths carry
 /// light and this costs a few hundred paths; `ga-pt`'s end-only test paths seldom do, so
 /// that there a held-out set costs as much as the first (see `GaConfig::held_out`, and
-/// docs/methods.md, "The genetic algorithm (`--method ga`)", "Held-out placement").
+/// docs/methods/ga.md, "Held-out placement").
 pub const PLACEMENT_SHARE: usize = 4;
 
 /// What a pixel keeps of its GA: its best individual's mixture, or `srt` where that was

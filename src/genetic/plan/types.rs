@@ -162,8 +162,8 @@ impl Trial {
     /// A guide's pilot counts this against the winning margin. Its 2048-sample variances are
     /// heavy-tailed where rare paths carry the light, so the estimate alone lets a pilot
     /// pass on scenes where the GA then loses to `pg`; one standard error below stops those
-    /// pilots and keeps the ones that pay (docs/methods.md, "The genetic algorithm
-    /// (`--method ga`)", "The gate"; reports/README.md, "`ga-pt`'s cautious pilot
+    /// pilots and keeps the ones that pay (docs/methods/ga.md, "The gate";
+    /// reports/README.md, "`ga-pt`'s cautious pilot
     /// (2026-12-05)").
     pub fn cautious_gain(&self) -> f64 {
         let error = self.pt.variance_error.hypot(self.evolved.variance_error);

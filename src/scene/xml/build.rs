@@ -115,7 +115,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
     {
         return Err(doc.error(
             root.loc(),
-            "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant`, `envmap`, `point` or `directional` one)",
+            "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant`, `envmap`, `point`, `spot` or `directional` one)",
         ));
     }
     let extent = mesh.shapes.iter().fold(
@@ -137,6 +137,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         emitters,
         environment,
         delta_lights,
+        lights: Default::default(),
         hide_emitters,
         render: RenderDefaults { max_bounces, spp },
         extent,
@@ -148,10 +149,10 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
 fn emitter_refusal(p: &Props) -> SceneError {
     match p.object().plugin.as_str() {
         "constant" | "envmap" => p.error("an environment emitter belongs in the scene, not in a shape"),
-        "point" | "directional" => p.error("a delta light belongs in the scene, not in a shape"),
+        "point" | "spot" | "directional" => p.error("a delta light belongs in the scene, not in a shape"),
         "area" => p.error("an area emitter must be nested in a shape"),
         other => p.error(format!(
-            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape; constant, envmap, point, directional)"
+            "genpath does not implement the `{other}` emitter (supported: area, nested in a shape; constant, envmap, point, spot, directional)"
         )),
     }
 }

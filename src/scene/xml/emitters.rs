@@ -1,10 +1,10 @@
-//! Mitsuba's emitters beside the area emitter: the delta lights `point` and `directional`,
+//! Mitsuba's emitters beside the area emitter: the delta lights `point`, `spot` and `directional`,
 //! each a [`DeltaLight`], and the environment map `envmap`.
 
 use super::props::Props;
 use super::spectrum::ColorUse;
 use crate::scene::envmap::EnvMap;
-use crate::scene::{DeltaLight, Environment, SceneError};
+use crate::scene::{DeltaLight, Environment, SceneError, Spot};
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::path::PathBuf;
 
@@ -38,7 +38,7 @@ impl SceneLights {
                 self.environment = Some(envmap(p, files, warnings)?);
                 Ok(true)
             }
-            "point" | "directional" => {
+            "point" | "spot" | "directional" => {
                 self.delta_lights.push(delta_light(p, warnings)?);
                 Ok(true)
             }
@@ -81,8 +81,10 @@ fn to_world(p: &Props, alone: &str) -> Result<Option<DMat4>, SceneError> {
     }
 }
 
-/// Mitsuba's `point` (`position` or the translation of `to_world`; `intensity`) or
-/// `directional` (`direction`, or `to_world` applied to +z; `irradiance`).
+/// Mitsuba's `point` (`position` or the translation of `to_world`; `intensity`), `spot`
+/// (`to_world`, shining along its +z; `intensity`, `cutoff_angle` (20°) and `beam_width` (¾
+/// of the cutoff)) or `directional` (`direction`, or `to_world` applied to +z;
+/// `irradiance`).
 pub fn delta_light(p: &Props, warnings: &mut Vec<String>) -> Result<DeltaLight, SceneError> {
     let light = match p.object().plugin.as_str() {
         "point" => {
@@ -97,6 +99,29 @@ pub fn delta_light(p: &Props, warnings: &mut Vec<String>) -> Result<DeltaLight, 
                 position: position.as_vec3(),
                 intensity: emission(p, "intensity", warnings)?.as_vec3(),
             }
+        }
+        "spot" => {
+            let m = match given(p, "to_world") {
+                true => p.transform("to_world")?,
+                false => DMat4::IDENTITY,
+            };
+            let position = m.w_axis.truncate();
+            let axis = m.transform_vector3(DVec3::Z);
+            let length = axis.length();
+            if !(position.is_finite() && length.is_finite() && length > 1e-12) {
+                return Err(p.error("`to_world` places the spot nowhere or points it nowhere"));
+            }
+            let cutoff = p.float("cutoff_angle", 20.0)?;
+            let beam = p.float("beam_width", cutoff * 0.75)?;
+            let intensity = emission(p, "intensity", warnings)?.as_vec3();
+            let axis = (axis / length).as_vec3();
+            let spot = Spot::new(position.as_vec3(), axis, intensity, cutoff as f32, beam as f32)
+                .ok_or_else(|| {
+                    p.error(format!(
+                        "`beam_width` {beam} and `cutoff_angle` {cutoff} must satisfy 0 < beam_width <= cutoff_angle < 180 (degrees)"
+                    ))
+                })?;
+            DeltaLight::Spot(spot)
         }
         _ => {
             let direction = match to_world(p, "direction")? {
