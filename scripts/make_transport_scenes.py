@@ -287,7 +287,7 @@ def plate():
         <transform name="to_world">
             <lookat origin="{fmt(S)}" target="{fmt(P)}" up="0, 1, 0"/>
         </transform>
-        <rgb name="intensity" value="60, 55, 45"/>
+        <rgb name="intensity" value="2400, 2200, 1800"/>
         <float name="cutoff_angle" value="9"/>
         <float name="beam_width" value="6"/>
     </emitter>
@@ -318,20 +318,20 @@ def dark_window():
 
 def pinhole():
     out = header(
-        "A closed room (3 x 2.4 x 3) with a 0.1 x 0.1 hole in its front wall; outside, a bright\n"
+        "A closed room (3 x 2.4 x 2.4) with a 0.16 x 0.16 hole in its front wall; outside, a bright\n"
         "     constant sky, a green ground and a red tower. The hole projects them, upside down\n"
         "     (ground above the horizon line, sky below), onto the back wall the camera looks at;\n"
         "     the room is lit only through the hole. Issue 53 item 3(c): a pinhole projection.",
-        fov=60, origin="0.8, 1.0, 1.35", target="-0.1, 1.1, -1.5")
+        fov=60, origin="0.8, 1.0, 1.08", target="-0.1, 1.1, -1.2")
     cols = {k: (0.7, 0.7, 0.7) for k in ("x0", "x1", "y0", "y1", "z0", "z1")}
-    out += box_room(-1.5, 1.5, 0, 2.4, -1.5, 1.5, cols, skip=("z1",))
-    out += wall_with_hole_z(1.5, -1.5, 1.5, 0, 2.4, (-0.05, 0.05, 1.15, 1.25), "-z",
+    out += box_room(-1.5, 1.5, 0, 2.4, -1.2, 1.2, cols, skip=("z1",))
+    out += wall_with_hole_z(1.2, -1.5, 1.5, 0, 2.4, (-0.08, 0.08, 1.12, 1.28), "-z",
                             diffuse((0.7, 0.7, 0.7)))
     # outside: ground and a tower
-    out += rect(0, -0.001, 1.5, 5, 5, "+y", diffuse((0.2, 0.45, 0.15)))
-    out += cube((1.2, 1.5, 4.5), (0.4, 1.5, 0.4), diffuse((0.7, 0.15, 0.1)))
+    out += rect(0, -0.001, 1.2, 5, 5, "+y", diffuse((0.2, 0.45, 0.15)))
+    out += cube((1.2, 1.5, 4.0), (0.4, 1.5, 0.4), diffuse((0.7, 0.15, 0.1)))
     out += """    <emitter type="constant">
-        <rgb name="radiance" value="900, 1000, 1200"/>
+        <rgb name="radiance" value="300, 340, 400"/>
     </emitter>
 </scene>
 """

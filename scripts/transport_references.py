@@ -26,12 +26,12 @@ import numpy as np
 # name: (method, spp)
 PLAN = {
     "lamp_in_glass": ("ptracer", 4096),
-    "caustic": ("composite", 4096),
-    "frosted_window": ("ptracer", 4096),
-    "plate": ("path", 4096),
-    "dark_window": ("path", 4096),
-    "pinhole": ("path", 4096),
-    "mixed": ("path", 4096),
+    "caustic": ("composite", 6144),
+    "frosted_window": ("ptracer", 8192),
+    "plate": ("ptracer", 8192),
+    "dark_window": ("path", 8192),
+    "pinhole": ("path", 16384),
+    "mixed": ("path", 6144),
 }
 
 parser = argparse.ArgumentParser()
