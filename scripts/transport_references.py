@@ -25,13 +25,13 @@ import numpy as np
 
 # name: (method, spp)
 PLAN = {
-    "lamp_in_glass": ("ptracer", 4096),
-    "caustic": ("composite", 6144),
-    "frosted_window": ("ptracer", 8192),
-    "plate": ("ptracer", 8192),
+    "lamp_in_glass": ("ptracer", 12288),
+    "caustic": ("composite", 24576),
+    "frosted_window": ("ptracer", 24576),
+    "plate": ("ptracer", 24576),
     "dark_window": ("path", 8192),
-    "pinhole": ("path", 16384),
-    "mixed": ("path", 6144),
+    "pinhole": ("path", 49152),
+    "mixed": ("path", 16384),
 }
 
 parser = argparse.ArgumentParser()
