@@ -30,8 +30,8 @@ PLAN = {
     "frosted_window": ("ptracer", 24576),
     "plate": ("ptracer", 24576),
     "dark_window": ("path", 8192),
-    "pinhole": ("path", 49152),
-    "mixed": ("path", 16384),
+    "pinhole": ("path", 16384),
+    "mixed": ("path", 6144),
 }
 
 parser = argparse.ArgumentParser()
