@@ -31,7 +31,7 @@ use crate::scene::material::bsdf::{self, Frame};
 use crate::scene::material::specular;
 use crate::scene::material::BrdfSample;
 use crate::scene::{
-    DirectPick, Emitter, LightSampler, Material, MaterialAt, SurfacePoint, RR_START,
+    DirectPick, Emitter, LightSample, LightSampler, Material, MaterialAt, SurfacePoint, RR_START,
 };
 use glam::Vec3;
 
@@ -242,6 +242,11 @@ impl LightPoint {
             return None;
         }
         let ls = scene.emitters.sample_seen_from(&scene.mesh, x.p, u);
+        Self::seen_from(ls, (x, material, frame))
+    }
+
+    /// The emitter point `ls` as seen from `x`; `None` as for [`Self::from_uniforms`].
+    fn seen_from(ls: LightSample, (x, material, frame): Receiver) -> Option<Self> {
         let y = EndPoint {
             p: ls.point,
             ng: ls.normal,
@@ -274,24 +279,7 @@ impl LightPoint {
         let ls = scene
             .emitters
             .sample_prim_seen_from(&scene.mesh, prim, x.p, u);
-        let y = EndPoint {
-            p: ls.point,
-            ng: ls.normal,
-        };
-        let d = y.p - x.p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let cos_x = bsdf::cosine(material, frame, wi)?;
-        let cos_light = -y.ng.dot(wi);
-        (cos_light > 0.0 && dist2 > 0.0).then_some(Self {
-            y,
-            prim,
-            wi,
-            dist2,
-            cos_x,
-            cos_light,
-            pdf_area: ls.pdf_area,
-        })
+        Self::seen_from(ls, (x, material, frame))
     }
 
     /// The density of `y` in solid angle at `x`.

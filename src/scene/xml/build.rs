@@ -118,15 +118,7 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
             "the scene has no emitter (genpath needs an `area` emitter on some shape, or a `constant`, `envmap`, `point`, `spot` or `directional` one)",
         ));
     }
-    let extent = mesh.shapes.iter().fold(
-        mesh.positions
-            .iter()
-            .fold(0.0f32, |m, p| m.max(p.abs().max_element())),
-        |m, s| {
-            let (lo, hi) = s.bounds();
-            m.max(lo.abs().max(hi.abs()).max_element() as f32)
-        },
-    );
+    let extent = extent(&mesh);
     Ok(Scene {
         path: path.to_path_buf(),
         camera,
@@ -144,6 +136,19 @@ pub fn build(doc: &Doc, path: &Path) -> Result<Scene, SceneError> {
         warnings,
         files: doc.files.iter().cloned().chain(files).collect(),
     })
+}
+
+/// The largest absolute coordinate of the mesh's vertices and analytic shapes.
+fn extent(mesh: &TriangleMesh) -> f32 {
+    mesh.shapes.iter().fold(
+        mesh.positions
+            .iter()
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element())),
+        |m, s| {
+            let (lo, hi) = s.bounds();
+            m.max(lo.abs().max(hi.abs()).max_element() as f32)
+        },
+    )
 }
 
 fn emitter_refusal(p: &Props) -> SceneError {
