@@ -296,7 +296,7 @@ fn films_z(a: &Film, b: &Film) -> Vec<f64> {
 /// variance is below Mitsuba's.)
 #[test]
 fn pt_with_the_light_tree_agrees_with_uniform_picking_and_a_wrong_pick_probability_does_not() {
-    for (name, spp) in [("lights.xml", 256), ("spot.xml", 256), ("spheres.xml", 64)] {
+    for (name, spp) in [("lights.xml", 128), ("spot.xml", 128), ("spheres.xml", 64)] {
         let scene = Scene::load(&scene_path(name)).unwrap();
         let uniform = render(&scene, 2 * spp);
         let tree = render_with(&scene, spp, |v| v.with_light_sampler(LightSampler::Bvh));
