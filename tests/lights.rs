@@ -462,6 +462,7 @@ fn emitters_are_picked_by_power() {
         let u: [f64; 5] = std::array::from_fn(|_| rng.random());
         if let Some(s) = scene.sample_emission(u) {
             let i = emitters.iter().position(|&e| e == s.emitter).unwrap();
+            assert_eq!(scene.emitter_index(s.emitter), Some(i));
             let expected = power[i] / total;
             assert!(
                 (s.pick - expected).abs() <= 1e-12 * expected,

@@ -55,6 +55,14 @@ pub fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// A point uniform by area in the triangle `[a, b, c]` from two uniform numbers in [0, 1)
+/// (the square-root warp).
+pub fn uniform_in_triangle([a, b, c]: [DVec3; 3], u1: f64, u2: f64) -> DVec3 {
+    let su = u1.sqrt();
+    let (b1, b2) = (su * (1.0 - u2), su * u2);
+    a * (1.0 - su) + b * b1 + c * b2
+}
+
 /// The area of the triangle `[a, b, c]`, in `f64`.
 pub fn triangle_area([a, b, c]: [Vec3; 3]) -> f64 {
     let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());

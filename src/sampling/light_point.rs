@@ -17,6 +17,7 @@
 //! half the points land on the side the shading point does not see.
 
 use crate::accel::TriangleMesh;
+use crate::math::uniform_in_triangle;
 use crate::scene::Emitters;
 use glam::DVec3;
 
@@ -311,13 +312,6 @@ fn cells_at(level: u8) -> u64 {
 
 fn vertices(mesh: &TriangleMesh, prim: u32) -> [DVec3; 3] {
     mesh.vertices(prim).map(|v| v.as_dvec3())
-}
-
-/// Uniform point in a triangle (square-root warp).
-fn uniform_in_triangle([a, b, c]: [DVec3; 3], u1: f64, u2: f64) -> DVec3 {
-    let su = u1.sqrt();
-    let (b1, b2) = (su * (1.0 - u2), su * u2);
-    a * (1.0 - su) + b * b1 + c * b2
 }
 
 /// Barycentric coordinates `(b0, b1, b2)` of `p` with respect to `[a, b, c]`, of its

@@ -126,20 +126,58 @@ impl Emitters {
     /// uniform by area.
     pub fn sample_seen_from(&self, mesh: &TriangleMesh, x: Vec3, u: [f32; 3]) -> LightSample {
         let prim = self.pick(u[0] as f64);
+        self.place(mesh, prim, x, (u[1], u[2]), Within::Emitters)
+    }
+
+    /// The area density of [`Self::sample_seen_from`] at `x` for the point `y` on emitter
+    /// `prim`. On a sphere sampled by its cone it is `(area/total) · cos_y / (Ω·d²)`, valid
+    /// for the points `x` sees (the only ones a ray from `x` reaches first).
+    pub fn pdf_area_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
+        self.pdf_seen_from(mesh, x, y, prim, Within::Emitters)
+    }
+
+    /// A point on emitting primitive `prim` alone for next-event estimation at `x`, from two
+    /// uniform numbers: placed as [`Self::sample_seen_from`] places it, with its area
+    /// density within `prim`.
+    pub fn sample_prim_seen_from(
+        &self,
+        mesh: &TriangleMesh,
+        prim: u32,
+        x: Vec3,
+        u: (f32, f32),
+    ) -> LightSample {
+        self.place(mesh, prim, x, u, Within::Prim)
+    }
+
+    /// The area density of [`Self::sample_prim_seen_from`] at `x` for the point `y` on
+    /// emitting primitive `prim`.
+    pub fn pdf_prim_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
+        self.pdf_seen_from(mesh, x, y, prim, Within::Prim)
+    }
+
+    /// A point on emitter `prim` seen from `x`, from two uniform numbers: uniform by area on
+    /// a triangle (square-root warp) or a disk, in the visible cone of a sphere `x` lies
+    /// outside of, else uniform by area; its density is `within`'s.
+    fn place(
+        &self,
+        mesh: &TriangleMesh,
+        prim: u32,
+        x: Vec3,
+        (u1, u2): (f32, f32),
+        within: Within,
+    ) -> LightSample {
         let Some(shape) = mesh.analytic(prim) else {
             let [a, b, c] = mesh.vertices(prim);
-            // Uniform point in a triangle (square-root warp).
-            let su = u[1].sqrt();
-            let (b0, b1) = (1.0 - su, u[2] * su);
-            let point = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+            let su = u1.sqrt();
+            let (b0, b1) = (1.0 - su, u2 * su);
             return LightSample {
-                point,
+                point: a * b0 + b * b1 + c * (1.0 - b0 - b1),
                 normal: mesh.normals[prim as usize],
                 prim,
-                pdf_area: 1.0 / self.total_area,
+                pdf_area: 1.0 / self.area_within(mesh, prim, within),
             };
         };
-        let (u1, u2) = (f64::from(u[1]), f64::from(u[2]));
+        let (u1, u2) = (f64::from(u1), f64::from(u2));
         let xd = x.as_dvec3();
         let cone = shape.visible_cone(xd);
         let point = match &cone {
@@ -154,110 +192,67 @@ impl Emitters {
             normal: normal.as_vec3(),
             prim,
             pdf_area: match &cone {
-                Some(cone) => self.cone_pdf_area(shape, cone, normal, xd, y),
-                None => self.total_area.recip(),
+                Some(cone) => self.cone_pdf_area(shape, cone, (normal, x, y), within),
+                None => self.area_within(mesh, prim, within).recip(),
             },
         }
     }
 
-    /// The area density of [`Self::sample_seen_from`] at `x` for the point `y` on emitter
-    /// `prim`. On a sphere sampled by its cone it is `(area/total) · cos_y / (Ω·d²)`, valid
-    /// for the points `x` sees (the only ones a ray from `x` reaches first).
-    pub fn pdf_area_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
-        let x = x.as_dvec3();
+    /// [`Self::place`]'s area density at `x` for the point `y` on emitter `prim`.
+    fn pdf_seen_from(
+        &self,
+        mesh: &TriangleMesh,
+        x: Vec3,
+        y: Vec3,
+        prim: u32,
+        within: Within,
+    ) -> f64 {
         let Some((shape, cone)) = mesh
             .analytic(prim)
-            .and_then(|s| s.visible_cone(x).map(|c| (s, c)))
+            .and_then(|s| s.visible_cone(x.as_dvec3()).map(|c| (s, c)))
         else {
-            return self.total_area.recip();
+            return self.area_within(mesh, prim, within).recip();
         };
         let y = y.as_dvec3();
-        self.cone_pdf_area(shape, &cone, shape.normal_at(y), x, y)
+        self.cone_pdf_area(shape, &cone, (shape.normal_at(y), x, y), within)
     }
 
-    /// [`Self::pdf_area_seen_from`] on a sphere `shape` that `x` sees as `cone`, at `y`
-    /// with normal `normal_y`: shared by the sampler, which has the cone and the normal at
-    /// hand.
+    /// The area a point uniform by area is drawn over: every emitter's, or `prim`'s.
+    fn area_within(&self, mesh: &TriangleMesh, prim: u32, within: Within) -> f64 {
+        match within {
+            Within::Emitters => self.total_area,
+            Within::Prim => mesh.area(prim),
+        }
+    }
+
+    /// The area density at `y` (unit normal `normal_y`) of directions from `x` uniform in
+    /// the `cone` that sphere `shape` subtends there, `cos_y / (Ω·d²)`, times the sphere's
+    /// share of the area it is picked from: shared by the sampler, which has the cone and
+    /// the normal at hand.
     fn cone_pdf_area(
         &self,
         shape: &Analytic,
         cone: &SphereCone,
-        normal_y: DVec3,
-        x: DVec3,
-        y: DVec3,
+        (normal_y, x, y): (DVec3, Vec3, DVec3),
+        within: Within,
     ) -> f64 {
-        let d = x - y;
+        let d = x.as_dvec3() - y;
         let dist2 = d.length_squared();
         let cos_y = normal_y.dot(d).abs() / dist2.sqrt();
-        shape.area() / self.total_area * cone.pdf_solid_angle() * cos_y / dist2
+        let share = match within {
+            Within::Emitters => shape.area() / self.total_area,
+            Within::Prim => 1.0,
+        };
+        share * cone.pdf_solid_angle() * cos_y / dist2
     }
 }
 
-impl Emitters {
-    /// A point on emitting primitive `prim` alone for next-event estimation at `x`, from two
-    /// uniform numbers: as [`Self::sample_seen_from`] places it (uniform by area, or in a
-    /// sphere's visible cone), with its area density within `prim`.
-    pub fn sample_prim_seen_from(
-        &self,
-        mesh: &TriangleMesh,
-        prim: u32,
-        x: Vec3,
-        (u1, u2): (f32, f32),
-    ) -> LightSample {
-        let Some(shape) = mesh.analytic(prim) else {
-            let [a, b, c] = mesh.vertices(prim);
-            let su = u1.sqrt();
-            let (b0, b1) = (1.0 - su, u2 * su);
-            return LightSample {
-                point: a * b0 + b * b1 + c * (1.0 - b0 - b1),
-                normal: mesh.normals[prim as usize],
-                prim,
-                pdf_area: 1.0 / mesh.area(prim),
-            };
-        };
-        let xd = x.as_dvec3();
-        let cone = shape.visible_cone(xd);
-        let y = match &cone {
-            Some(cone) => cone.sample(f64::from(u1), f64::from(u2)),
-            None => shape.sample_area(f64::from(u1), f64::from(u2)),
-        };
-        let y = y.as_vec3().as_dvec3();
-        let normal = shape.normal_at(y);
-        LightSample {
-            point: y.as_vec3(),
-            normal: normal.as_vec3(),
-            prim,
-            pdf_area: match &cone {
-                Some(cone) => cone_pdf_area(cone, normal, xd, y),
-                None => shape.area().recip(),
-            },
-        }
-    }
-
-    /// The area density of [`Self::sample_prim_seen_from`] at `x` for the point `y` on
-    /// emitting primitive `prim`.
-    pub fn pdf_prim_seen_from(&self, mesh: &TriangleMesh, x: Vec3, y: Vec3, prim: u32) -> f64 {
-        let x = x.as_dvec3();
-        match mesh.analytic(prim) {
-            None => 1.0 / mesh.area(prim),
-            Some(shape) => match shape.visible_cone(x) {
-                Some(cone) => {
-                    let y = y.as_dvec3();
-                    cone_pdf_area(&cone, shape.normal_at(y), x, y)
-                }
-                None => shape.area().recip(),
-            },
-        }
-    }
-}
-
-/// The area density at `y` (unit normal `normal_y`) of directions uniform in the `cone` a
-/// sphere subtends at `x`: `cos_y / (Ω·d²)`.
-fn cone_pdf_area(cone: &SphereCone, normal_y: DVec3, x: DVec3, y: DVec3) -> f64 {
-    let d = x - y;
-    let dist2 = d.length_squared();
-    let cos_y = normal_y.dot(d).abs() / dist2.sqrt();
-    cone.pdf_solid_angle() * cos_y / dist2
+/// Which area a light point's density is per ([`Emitters::place`]): of every emitter (the
+/// emitter picked by area), or of its primitive alone (the primitive picked beforehand).
+#[derive(Clone, Copy, Debug)]
+enum Within {
+    Emitters,
+    Prim,
 }
 
 /// A loaded, validated scene.

@@ -20,7 +20,7 @@
 use super::DeltaLight;
 use crate::accel::concentric_disk;
 use crate::math::alias::AliasTable;
-use crate::math::basis;
+use crate::math::{basis, uniform_in_triangle};
 use crate::scene::Scene;
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
@@ -100,6 +100,18 @@ impl Scene {
         let delta = (0..self.delta_lights.len() as u32).map(Emitter::Delta);
         let area = self.emitters.prims.iter().map(|&p| Emitter::Area(p));
         env.chain(delta).chain(area).collect()
+    }
+
+    /// The place of `emitter` in [`Self::all_emitters`]' order; `None` for one the scene
+    /// lacks.
+    pub fn emitter_index(&self, emitter: Emitter) -> Option<usize> {
+        let env = usize::from(self.environment.is_some());
+        match emitter {
+            Emitter::Environment => (env == 1).then_some(0),
+            Emitter::Delta(i) => ((i as usize) < self.delta_lights.len()).then(|| env + i as usize),
+            Emitter::Area(prim) => (self.emitters.prims.binary_search(&prim).ok())
+                .map(|k| env + self.delta_lights.len() + k),
+        }
     }
 
     /// The sphere that bounds the scene's geometry: centre and radius (at least a tiny
@@ -274,8 +286,7 @@ impl Scene {
     /// point of the entry disk; unused for a point or spot).
     pub fn pdf_emission(&self, emitter: Emitter, origin: Vec3, dir: Vec3) -> Option<EmissionPdf> {
         let table = self.emission_table()?;
-        let index = table.emitters.iter().position(|&e| e == emitter)?;
-        let pick = table.table.pmf(index);
+        let pick = table.table.pmf(self.emitter_index(emitter)?);
         let radius = table.radius;
         let disk = 1.0 / (PI * radius * radius);
         let (pos, dir) = match emitter {
@@ -311,10 +322,8 @@ impl Scene {
                 (p, shape.normal_at(p))
             }
             None => {
-                let [a, b, c] = self.mesh.vertices(prim).map(|v| v.as_dvec3());
-                let su = u1.sqrt();
-                let (b1, b2) = (su * (1.0 - u2), su * u2);
-                let p = a * (1.0 - su) + b * b1 + c * b2;
+                let vertices = self.mesh.vertices(prim).map(|v| v.as_dvec3());
+                let p = uniform_in_triangle(vertices, u1, u2);
                 (p, self.mesh.normals[prim as usize].as_dvec3())
             }
         }
