@@ -33,10 +33,22 @@ pub struct LightBounds {
     /// The cosine of the angle beyond the normals over which light leaves (π/2 for a
     /// Lambertian surface: 0).
     pub cos_e: f32,
+    /// The largest radiance of a surface within (infinite for a point or spot light): no
+    /// point receives more irradiance from the node than `π · radiance_max` times the
+    /// share of its hemisphere that the bounds cover.
+    pub radiance_max: f32,
 }
 
 fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
+}
+
+/// `sin²θb` of the cone of half-angle `θb` the bounds subtend (1 from inside them).
+fn sin_b_cap(sin_b: f32, cos_b: f32) -> f32 {
+    match cos_b <= 0.0 {
+        true => 1.0,
+        false => sin_b * sin_b,
+    }
 }
 
 /// `cos(max(0, a − b))` from the angles' sines and cosines.
@@ -99,6 +111,7 @@ impl LightBounds {
             w,
             cos_o,
             cos_e: self.cos_e.min(other.cos_e),
+            radiance_max: self.radiance_max.max(other.radiance_max),
         }
     }
 
@@ -135,7 +148,11 @@ impl LightBounds {
         if cos_p <= self.cos_e {
             return 0.0;
         }
-        let mut importance = self.phi * cos_p / d2;
+        // Power over squared distance overstates what a large emitter sends to a point near
+        // or inside it (a dome over the scene): no surface of radiance `L` seen in a cone of
+        // half-angle `θb` gives more irradiance than `π · L · sin²θb`.
+        let cap = PI * self.radiance_max * sin_b_cap(sin_b, cos_b);
+        let mut importance = (self.phi * cos_p / d2).min(cap);
         if n != Vec3::ZERO {
             let cos_i = wi.dot(n).abs();
             let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
@@ -464,9 +481,12 @@ fn split(bounds: &[LightBounds], order: &mut [u32], median: bool) -> usize {
             Some((s, a.cost(axis) + b.cost(axis)))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1));
-    let Some((s, _)) = best else {
+    let Some((s, bucket_cost)) = best else {
         return at_median(order);
     };
+    if let Some(mid) = split_by_size(bounds, order, axis, bucket_cost) {
+        return mid;
+    }
     let mut mid = 0;
     for k in 0..order.len() {
         if bucket_of(&order[k]) < s {
@@ -478,6 +498,42 @@ fn split(bounds: &[LightBounds], order: &mut [u32], median: bool) -> usize {
         true => at_median(order),
         false => mid,
     }
+}
+
+/// The split that sets the largest lights apart from the rest, where it costs less than
+/// `than` (the best split by position): a light whose bounds hold the others (a dome over
+/// the scene) has its centroid among theirs, so no split by position can set it apart, and
+/// the small lights grouped with it would share its importance. Sorts `order` largest
+/// first and returns where the rest starts.
+fn split_by_size(
+    bounds: &[LightBounds],
+    order: &mut [u32],
+    axis: usize,
+    than: f32,
+) -> Option<usize> {
+    let size = |i: &u32| {
+        let b = &bounds[*i as usize];
+        (b.hi - b.lo).length()
+    };
+    let mut sorted = order.to_vec();
+    sorted.sort_by(|a, b| size(b).total_cmp(&size(a)).then(a.cmp(b)));
+    let n = sorted.len();
+    let mut suffix = vec![bounds[sorted[n - 1] as usize]; n];
+    for k in (0..n - 1).rev() {
+        suffix[k] = bounds[sorted[k] as usize].union(&suffix[k + 1]);
+    }
+    let mut prefix = bounds[sorted[0] as usize];
+    let mut best: Option<(usize, f32)> = None;
+    for k in 1..n {
+        let cost = prefix.cost(axis) + suffix[k].cost(axis);
+        if cost < than && best.is_none_or(|(_, c)| cost < c) {
+            best = Some((k, cost));
+        }
+        prefix = prefix.union(&bounds[sorted[k] as usize]);
+    }
+    let (k, _) = best?;
+    order.copy_from_slice(&sorted);
+    Some(k)
 }
 
 /// The bounds of emitting primitive `prim` (one-sided: it emits on its normal's side);
@@ -520,6 +576,7 @@ fn area_bounds(scene: &Scene, prim: u32) -> Option<LightBounds> {
         w,
         cos_o,
         cos_e: 0.0,
+        radiance_max: radiance,
     })
 }
 
@@ -537,6 +594,7 @@ fn delta_bounds(light: &DeltaLight) -> Option<LightBounds> {
             w: Vec3::Z,
             cos_o: -1.0,
             cos_e: 0.0,
+            radiance_max: f32::INFINITY,
         }),
         DeltaLight::Spot(s) => Some(LightBounds {
             lo: s.position,
@@ -545,6 +603,7 @@ fn delta_bounds(light: &DeltaLight) -> Option<LightBounds> {
             w: s.axis,
             cos_o: s.cos_beam,
             cos_e: (s.cutoff_angle - s.beam_width).cos(),
+            radiance_max: f32::INFINITY,
         }),
         DeltaLight::Directional { .. } => None,
     }

@@ -339,7 +339,9 @@ fn in_frame(frame: Frame, wo: Vec3, wi: Vec3, f: impl FnOnce() -> Vec3) -> Vec3 
 /// BSDF, 0 for the others. A function of the direction the path arrives from, either of the
 /// two: a camera path arrives from `wo`, a path started at a light from the direction a
 /// camera path would leave along, so the two techniques' densities of one vertex differ by
-/// it (for every other material it is the same for both).
+/// it (for every other material it is the same for both). A `mask` makes no choice here:
+/// the ray passes through it with probability `1 − opacity` at the hit's texture
+/// coordinates ([`super::Opacity::at`]), whichever way it travels, before any BSDF is met.
 pub fn delta_choice(m: &Material, ns: Vec3, w: Vec3) -> f64 {
     match &m.glossy {
         _ if m.mirror => 1.0,
