@@ -678,3 +678,39 @@ fn a_dim_dome_does_not_starve_small_bright_lamps() {
         }
     }
 }
+
+/// A point behind the plane of a one-sided emitting quad gets none of the tree's picks for
+/// it, even beside it where its bounds subtend a wide cone (a point on the ceiling next to
+/// a ceiling lamp): all goes to a point light there; in front of the quad both share.
+#[test]
+fn the_light_tree_never_picks_a_surface_a_point_is_behind() {
+    let text = r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 1, 5" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate y="1.99"/></transform><emitter type="area"><rgb name="radiance" value="5, 5, 5"/></emitter></shape>
+    <emitter type="point"><point name="position" value="1, 1, 0"/><rgb name="intensity" value="0.2, 0.2, 0.2"/></emitter>
+</scene>
+"#;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ceiling.xml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.emitters.prims.len(), 2, "the quad's two triangles");
+    let quad = |p: Vec3, n: Vec3| -> f64 {
+        let prims = &scene.emitters.prims;
+        prims
+            .iter()
+            .map(|&t| scene.pmf_direct(LightSampler::Bvh, p, n, Emitter::Area(t)))
+            .sum()
+    };
+    let point = |p: Vec3, n: Vec3| scene.pmf_direct(LightSampler::Bvh, p, n, Emitter::Delta(0));
+    let (beside, down) = (Vec3::new(0.4, 2.0, 0.0), -Vec3::Y);
+    assert_eq!(quad(beside, down), 0.0);
+    assert_eq!(point(beside, down), 1.0);
+    let (below, up) = (Vec3::new(0.2, 0.5, 0.1), Vec3::Y);
+    let (q, l) = (quad(below, up), point(below, up));
+    println!("below the quad: quad {q:.3}, point light {l:.3}");
+    assert!(q > 0.5 && l > 0.0 && (q + l - 1.0).abs() < 1e-12, "{q} {l}");
+}

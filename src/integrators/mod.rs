@@ -159,11 +159,11 @@ pub(crate) fn lit(
     config: &Settings,
     prepare: impl FnOnce(&SceneView) -> Result<Box<dyn Integrator>, PrepareError>,
 ) -> Result<Box<dyn Integrator>, PrepareError> {
-    let sampler = config.lights.light_sampler;
+    let sampler = config.lights.light_sampler.resolve(view.scene);
     let inner = prepare(&view.with_light_sampler(sampler))?;
-    Ok(match sampler {
-        crate::scene::LightSampler::Uniform => inner,
-        _ => Box::new(Lit { inner, sampler }),
+    Ok(match sampler == view.light_sampler {
+        true => inner,
+        false => Box::new(Lit { inner, sampler }),
     })
 }
 

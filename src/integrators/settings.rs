@@ -95,11 +95,13 @@ crate::settings_table! {
         table: "lights",
         heading: "Light sampling (--method pt, pg, ga-pt)",
         settings: {
-            /// How next-event estimation picks the light it samples: `uniform`, Mitsuba 3's
-            /// uniform pick among the environment, each delta light and the area emitters
-            /// taken as one (their points by area); `bvh`, a light tree that picks each light
-            /// by an estimate of what it sends to the point (pbrt-v4's BVH light sampler).
-            /// The mixtures of srt, mixture and ga keep the paper's light-point sampler.
+            /// How next-event estimation picks the light it samples: `bvh`, a light tree that
+            /// picks each light by an estimate of what it sends to the point (after pbrt-v4's
+            /// BVH light sampler); `uniform`, Mitsuba 3's uniform pick among the environment,
+            /// each delta light and the area emitters taken as one (their points by area);
+            /// `auto`, the tree where the scene has more than one light (each connected
+            /// emitting surface counted as one), else `uniform`. The mixtures of srt,
+            /// mixture and ga keep the paper's light-point sampler.
             pub light_sampler: LightSampler = LightSampler::default(),
         },
     }

@@ -38,7 +38,8 @@ pub struct SceneView<'a> {
     /// Whether some material chooses its lobe where a ray meets it (a smooth plastic):
     /// [`SceneView::trace_through`] then draws the choice's uniform number at such a hit.
     choices: bool,
-    /// How next-event estimation picks its light (`pt`, `pg`, `ga-pt`).
+    /// How next-event estimation picks its light (`pt`, `pg`, `ga-pt`): never
+    /// [`LightSampler::Auto`], which the view resolves for its scene.
     pub light_sampler: LightSampler,
     /// Fault injection (feature `testing`): shadow rays stop at every masked surface, as
     /// if it were opaque, while the directions that find light pass through it.
@@ -93,7 +94,7 @@ impl<'a> SceneView<'a> {
             epsilon: 1e-5 * scene.extent.max(f32::MIN_POSITIVE),
             masks: scene.materials.iter().any(|m| m.opacity().is_some()),
             choices: scene.materials.iter().any(Material::chooses_lobe),
-            light_sampler: LightSampler::default(),
+            light_sampler: LightSampler::default().resolve(scene),
             #[cfg(feature = "testing")]
             fault_masks_block_shadows: false,
             #[cfg(feature = "testing")]
@@ -103,7 +104,7 @@ impl<'a> SceneView<'a> {
 
     /// This view with next-event estimation picking lights by `sampler`.
     pub fn with_light_sampler(mut self, sampler: LightSampler) -> Self {
-        self.light_sampler = sampler;
+        self.light_sampler = sampler.resolve(self.scene);
         self
     }
 

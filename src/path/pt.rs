@@ -491,7 +491,7 @@ fn emission_weight(
                         .emitters
                         .pdf_area_seen_from(&scene.mesh, x.p, y.p, y.prim)
                 }
-                LightSampler::Bvh => {
+                LightSampler::Bvh | LightSampler::Auto => {
                     scene
                         .emitters
                         .pdf_prim_seen_from(&scene.mesh, x.p, y.p, y.prim)

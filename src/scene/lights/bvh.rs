@@ -124,6 +124,9 @@ impl LightBounds {
     /// between `p` and the emitting normals the bounds allow, times the receiver's cosine
     /// bound; 0 only where no light within can reach `p`.
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        if self.behind_every_emitter(p) {
+            return 0.0;
+        }
         let pc = self.centroid();
         let diag = self.hi - self.lo;
         let d2 = p
@@ -160,6 +163,19 @@ impl LightBounds {
         }
         // Finite, so that two children's sum is (in f64, [`LightBvh::sample`]).
         importance.clamp(0.0, f32::MAX)
+    }
+
+    /// Whether `p` lies behind (or in) the plane of every surface within, where all of them
+    /// face one way and emit only in front (one emitting triangle or disk, or coplanar
+    /// ones): then none sends it anything. The cone bound alone misses it near the bounds,
+    /// where they subtend a wide cone (a point on the ceiling beside a ceiling lamp).
+    fn behind_every_emitter(&self, p: Vec3) -> bool {
+        if self.cos_o < 1.0 || self.cos_e > 0.0 {
+            return false;
+        }
+        // The least `x · w` over the box: the plane through the box's rearmost corner.
+        let least = (self.lo * self.w).min(self.hi * self.w).element_sum();
+        p.dot(self.w) <= least
     }
 
     /// pbrt-v4's cost of a node for the build: power × the solid angle its normal and

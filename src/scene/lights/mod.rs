@@ -2,12 +2,14 @@
 //! `spot`, `directional`); every emitter's emission sampling for light-started paths
 //! ([`emission`]), and the light sampler of next-event estimation ([`bvh`]).
 //!
-//! Light sampling (`pt`'s next-event estimation, and the light-point technique of the
-//! path-level mixtures) first picks one emitter uniformly, as Mitsuba 3's scene does
-//! (`m_emitter_pmf = 1 / n` when no emitter has a `sampling_weight`): the environment (a
-//! `constant` or `envmap` emitter), each delta light, and the area emitters, which genpath
-//! takes as one emitter whose points are then drawn by area (Mitsuba counts each emitting
-//! shape as one; both choices are unbiased, and they agree where the area light is one shape).
+//! Next-event estimation picks a light by the light tree ([`bvh`], the default
+//! [`LightSampler::Bvh`]): each light by an estimate of what it sends to the point. The
+//! other picker, [`LightSampler::Uniform`], and the light-point technique of the path-level
+//! mixtures, pick one emitter uniformly, as Mitsuba 3's scene does (`m_emitter_pmf = 1 / n`
+//! when no emitter has a `sampling_weight`): the environment (a `constant` or `envmap`
+//! emitter), each delta light, and the area emitters, which genpath takes as one emitter
+//! whose points are then drawn by area (Mitsuba counts each emitting shape as one; both
+//! choices are unbiased, and they agree where the area light is one shape).
 
 pub mod bvh;
 pub mod emission;
@@ -162,12 +164,27 @@ impl Spot {
 )]
 #[serde(rename_all = "lowercase")]
 pub enum LightSampler {
+    /// The light tree where the scene has more than one light (each connected emitting
+    /// surface counted as one, [`super::Scene::light_shapes`]), else uniform picking, which
+    /// for a single light is its points by area, what picking per shape gives too.
+    #[default]
+    Auto,
     /// Mitsuba 3's uniform pick among the environment, each delta light and the area
     /// emitters taken as one, whose points are then drawn by area ([`super::Scene::pick_light`]).
-    #[default]
     Uniform,
     /// The light tree ([`bvh::LightBvh`]): each light by what it may send to the point.
     Bvh,
+}
+
+impl LightSampler {
+    /// The picker this one is in `scene`: [`Self::Auto`] resolved, the others as they are.
+    pub fn resolve(self, scene: &super::Scene) -> Self {
+        match self {
+            Self::Auto if scene.light_shapes() > 1 => Self::Bvh,
+            Self::Auto => Self::Uniform,
+            other => other,
+        }
+    }
 }
 
 /// The emitter next-event estimation picked ([`super::Scene::pick_direct`]).
@@ -187,6 +204,7 @@ pub enum DirectPick {
 pub struct LightTables {
     pub(super) emission: std::sync::OnceLock<Option<emission::EmissionTable>>,
     bvh: std::sync::OnceLock<bvh::LightBvh>,
+    shapes: std::sync::OnceLock<usize>,
 }
 
 impl super::Scene {
@@ -246,6 +264,17 @@ impl super::Scene {
 }
 
 impl super::Scene {
+    /// How many lights the scene has, counting each connected emitting surface as one (an
+    /// analytic shape, or triangles that share a vertex position: a quad, a mesh lamp), as
+    /// Mitsuba counts its emitting shapes; the environment and each delta light one each.
+    pub fn light_shapes(&self) -> usize {
+        *self.lights.shapes.get_or_init(|| {
+            usize::from(self.environment.is_some())
+                + self.delta_lights.len()
+                + emitting_surfaces(&self.mesh, &self.emitters.prims)
+        })
+    }
+
     /// The light tree over the scene's lights (built once, on first use).
     pub fn light_bvh(&self) -> &bvh::LightBvh {
         self.lights.bvh.get_or_init(|| bvh::LightBvh::new(self))
@@ -261,7 +290,7 @@ impl super::Scene {
         n: Vec3,
         u: f64,
     ) -> Option<(DirectPick, f64, f64)> {
-        match sampler {
+        match sampler.resolve(self) {
             LightSampler::Uniform => {
                 let (pick, rescaled) = self.pick_light(u)?;
                 let pick = match pick {
@@ -271,7 +300,7 @@ impl super::Scene {
                 };
                 Some((pick, self.light_pmf(), rescaled))
             }
-            LightSampler::Bvh => {
+            LightSampler::Bvh | LightSampler::Auto => {
                 let (emitter, pmf, rescaled) = self.light_bvh().sample(p, n, u)?;
                 let pick = match emitter {
                     emission::Emitter::Environment => DirectPick::Environment,
@@ -292,15 +321,43 @@ impl super::Scene {
         n: Vec3,
         emitter: emission::Emitter,
     ) -> f64 {
-        match sampler {
+        match sampler.resolve(self) {
             LightSampler::Uniform => match emitter {
                 emission::Emitter::Environment => self.environment_share(),
                 emission::Emitter::Delta(_) => self.light_pmf(),
                 emission::Emitter::Area(_) => self.area_light_pmf(),
             },
-            LightSampler::Bvh => self.light_bvh().pmf(self, p, n, emitter),
+            LightSampler::Bvh | LightSampler::Auto => self.light_bvh().pmf(self, p, n, emitter),
         }
     }
+}
+
+/// The connected surfaces the emitting primitives `prims` of `mesh` form: each analytic
+/// shape alone, triangles joined where they share a vertex position (union-find).
+fn emitting_surfaces(mesh: &crate::accel::TriangleMesh, prims: &[u32]) -> usize {
+    let mut parent: Vec<usize> = (0..prims.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut first_at: std::collections::HashMap<[u32; 3], usize> = Default::default();
+    for (k, &prim) in prims.iter().enumerate() {
+        if mesh.analytic(prim).is_some() {
+            continue;
+        }
+        for v in mesh.vertices(prim) {
+            let key = v.to_array().map(f32::to_bits);
+            let other = *first_at.entry(key).or_insert(k);
+            let (a, b) = (root(&mut parent, k), root(&mut parent, other));
+            parent[a] = b;
+        }
+    }
+    (0..prims.len())
+        .filter(|&k| root(&mut parent, k) == k)
+        .count()
 }
 
 #[cfg(test)]
