@@ -40,6 +40,7 @@ use genpath::integrators::ga_pt::{GaPt, GuidesTrialPolicy};
 use genpath::integrators::mixture::MixtureIntegrator;
 use genpath::integrators::pg::{train_spatial, Beside, SpatialIntegrator, TrainingSchedule};
 use genpath::integrators::pt::PathTracing;
+use genpath::guiding::selection::Selection;
 use genpath::integrators::settings::SpatialConfig;
 use genpath::integrators::{Integrator, Method, RenderSettings};
 use genpath::path::generator::{Nee, PathGenerator};
@@ -114,6 +115,11 @@ enum Which {
     /// dark (next-event estimation at the dark share everywhere, lit cells included).
     Pg {
         every_cell_dark: bool,
+    },
+    /// `pg` with the share of guided sampling learned per region, optionally with the
+    /// densities computed with the fixed share (a deliberately wrong estimator).
+    PgLearned {
+        fixed_share_density: bool,
     },
 }
 
@@ -237,19 +243,20 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
         learning: None,
     };
     // The guide trains on half the samples (the default), which stay in the image.
-    let train = |plan: Option<&Plan>| {
+    let train_with = |plan: Option<&Plan>, selection| {
         let schedule = TrainingSchedule::new(&SpatialConfig::default(), spp);
         let beside = plan.map(|plan| Beside {
             plan,
             trial: &GuidesTrialPolicy,
         });
-        let t = train_spatial(&view, &settings, schedule, beside).unwrap();
+        let t = train_spatial(&view, &settings, (schedule, selection), beside).unwrap();
         assert!(
             t.guide.stats.trained_cells > 0 && t.samples.spp > 1,
             "{name}: the spatial guide did not train"
         );
         Some(t)
     };
+    let train = |plan| train_with(plan, Selection::Fixed);
     let mixture = match which {
         Which::Pt => None,
         Which::Pg { every_cell_dark } => {
@@ -262,6 +269,19 @@ fn render_with(name: &str, which: Which, max_bounces: u32, spp: u32, seed: u64) 
             );
             if every_cell_dark {
                 t.guide = Arc::new(Arc::unwrap_or_clone(t.guide).with_every_cell_dark());
+            }
+            spatial = Some(t);
+            None
+        }
+        Which::PgLearned {
+            fixed_share_density,
+        } => {
+            let mut t = train_with(None, Selection::Learned).unwrap();
+            let stats = t.guide.stats.selection.clone().expect("shares learned");
+            eprintln!("{name}: learned shares {stats:?}");
+            assert!(stats.fitted > 0, "{name}: no region learned its share");
+            if fixed_share_density {
+                t.guide = Arc::new(Arc::unwrap_or_clone(t.guide).with_fixed_share_density());
             }
             spatial = Some(t);
             None
@@ -952,4 +972,20 @@ fn plastic_methods_agree_and_a_counted_choice_does_not() {
         &wrong,
         &pt,
     );
+}
+
+/// `pg` with the share of guided sampling learned per region estimates what `pt` does on
+/// fig5 (light only through the walls, where the guide finds what the BSDF does not), and
+/// the same guide sampling with its learned shares but weighing with the fixed one is told
+/// apart.
+#[test]
+fn fig5_learned_guide_shares_agree_and_fixed_share_densities_do_not() {
+    let pt = render_with("fig5", Which::Pt, 5, SPP, 11);
+    let learned = |fixed_share_density| Which::PgLearned {
+        fixed_share_density,
+    };
+    let film = render_with("fig5", learned(false), 5, SPP / 2, 23);
+    assert_agrees("fig5: pg, learned shares", &film, &pt);
+    let wrong = render_with("fig5", learned(true), 5, SPP / 2, 23);
+    assert_rejected("fig5: pg, learned shares weighed as 1/2", &wrong, &pt);
 }

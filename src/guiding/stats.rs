@@ -26,6 +26,9 @@ pub struct FieldStats {
     /// Lattice cells (per facing) where next-event estimation runs at
     /// [`DARK_LIGHT_SHARE`](super::field::DARK_LIGHT_SHARE).
     pub dark_cells: usize,
+    /// Where the last guide learned its share of guided sampling per region
+    /// (`--guide-selection learned`): what it learned.
+    pub selection: Option<super::selection::SelectionStats>,
     /// Wall-clock seconds of the training passes.
     pub seconds: f64,
     /// With a GA plan's per-pixel guides: the last training pass's trial of them against

@@ -13,6 +13,7 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
+use crate::guiding::selection::Selection;
 use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
 use crate::scene::LightSampler;
@@ -122,6 +123,23 @@ impl Kind for LightSampler {
     }
 }
 
+/// `--guide-selection fixed|learned`, its values named as [`Selection`]'s
+/// `clap::ValueEnum` names them.
+impl Kind for Selection {
+    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
+        clap::builder::EnumValueParser::<Selection>::new().into()
+    }
+    fn default_text(&self) -> Option<String> {
+        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
+    }
+    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
+        matches
+            .get_one::<Selection>(id)
+            .copied()
+            .expect("a flag given on the command line has its parsed value")
+    }
+}
+
 crate::settings_table! {
     /// `mixture`: a mixture of path generators from a file, table `[mixture]`.
     #[derive(Clone, Debug, PartialEq)]
@@ -156,6 +174,11 @@ crate::settings_table! {
             /// and stay in the image. Default: as many as fit in half of --spp.
             #[range = 1..=i64::from(MAX_SPATIAL_PASSES)]
             pub spatial_passes: Option<u32> = None,
+            /// pg, and ga-pt with the spatial guide: the probability with which a guided
+            /// vertex samples its region's guide rather than the BSDF. `fixed`: 1/2 in every
+            /// region; `learned`: per region, fitted to the training records by the
+            /// Kullback-Leibler divergence, within [0.1, 0.9] (docs/methods/pg.md).
+            pub guide_selection: Selection = Selection::default(),
         },
         internal: {
             /// Seconds the spatial guide's training may take (see `spatial_passes`; set by the

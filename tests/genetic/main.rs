@@ -16,6 +16,7 @@ use genpath::genetic::plan::{
     GateConfig, Plan, PlanConfig, PlanFor, PlanInputs, COMPONENT_TOLERANCE, PILOT_PIXELS,
 };
 use genpath::genetic::population::evolve;
+use genpath::guiding::selection::Selection;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
 use genpath::integrators::ga_pt::{GuidesTrialPolicy, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO};
