@@ -52,7 +52,11 @@ impl<'a> GuidedBsdf<'a> {
     /// The density of the mixture at `wi` where the BSDF's own is `bsdf_pdf`.
     fn mixed(&self, wi: Vec3, bsdf_pdf: f64) -> f64 {
         match &self.guide {
-            Some(v) => v.pdf_with(wi.as_dvec3(), bsdf_pdf, v.density_share(&self.bsdf.material)),
+            Some(v) => v.pdf_with(
+                wi.as_dvec3(),
+                bsdf_pdf,
+                v.density_share(&self.bsdf.material),
+            ),
             None => bsdf_pdf,
         }
     }

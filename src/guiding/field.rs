@@ -198,7 +198,8 @@ impl SpatialField {
             return Err(GuideStateError::Nodes { nodes });
         }
         let shares = self.shares.len();
-        if !(shares == 0 || shares == cells) || !self.shares.iter().all(|s| (0.0..=1.0).contains(s)) {
+        if !(shares == 0 || shares == cells) || !self.shares.iter().all(|s| (0.0..=1.0).contains(s))
+        {
             return Err(GuideStateError::Shares { shares, cells });
         }
         Ok(())

@@ -147,7 +147,10 @@ impl Guide {
         let (spatial, found) = match self.spatial.as_deref() {
             Some(s) => {
                 let found = s.lookup(x, frame.n);
-                (found.region.filter(|_| !last).map(|cell| (s, cell)), Some(found))
+                (
+                    found.region.filter(|_| !last).map(|cell| (s, cell)),
+                    Some(found),
+                )
             }
             None => (None, None),
         };

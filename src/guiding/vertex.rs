@@ -4,11 +4,11 @@
 //! with the BRDF (see [`super::guide`]).
 
 use super::field::{guide_share, SpatialField};
-use crate::scene::Material;
 use super::level::Level;
 #[cfg(doc)]
 use super::Guide;
 use crate::scene::material::bsdf::{self, Frame};
+use crate::scene::Material;
 use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 
@@ -80,7 +80,10 @@ impl Vertex<'_> {
     /// The share of guided sampling at this vertex of `m`, and the share its densities are
     /// computed with ([`guide_share`] of the region's).
     fn shares(&self, m: &Material) -> (f64, f64) {
-        (guide_share(m, self.share), guide_share(m, self.density_share))
+        (
+            guide_share(m, self.share),
+            guide_share(m, self.density_share),
+        )
     }
 
     /// The share of the spatial guide's density in this vertex's density for `m` (see

@@ -473,8 +473,8 @@ pub fn train_spatial(
     let camera = &view.scene.camera;
     let tiles = film::tiles(camera.width, camera.height);
     let pixels = (camera.width * camera.height) as usize;
-    let mut records = SampleStorage::around(&view.scene.mesh)
-        .learning_selection(selection == Selection::Learned);
+    let mut records =
+        SampleStorage::around(&view.scene.mesh).learning_selection(selection == Selection::Learned);
     let open_plan = plan.filter(|p| !p.is_closed());
     let store = settings.learning.as_deref();
     let mut at = Between::start(store, &mut records, pixels, open_plan.is_some())?;
