@@ -981,7 +981,7 @@ fn plastic_methods_agree_and_a_counted_choice_does_not() {
 #[test]
 fn fig5_learned_guide_shares_agree_and_fixed_share_densities_do_not() {
     // Three bounces and a quarter of the samples of the tests above keep it to seconds; the
-    // worst block is still known to 2 % and the wrong one lies far outside (|z| ≈ 30).
+    // worst block is still known to 2.2 % and the wrong one lies far outside (|z| ≈ 29).
     let pt = render_with("fig5", Which::Pt, 3, SPP / 2, 11);
     let learned = |fixed_share_density| Which::PgLearned {
         fixed_share_density,
