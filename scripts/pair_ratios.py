@@ -3,7 +3,7 @@
 
     python3 scripts/pair_ratios.py METHOD BASE CSV...
 
-For each CSV (one scene's sweep with several paired seeds), the mean relMSE of METHOD and of
+For each CSV (one scene's sweep with several paired seeds, named after the scene), the mean relMSE of METHOD and of
 BASE over the seeds, and the geometric mean of the per-seed ratios METHOD / BASE with its
 bootstrap 95 % upper bound (as scripts/ratios.py computes them: 10 000 resamples of the
 seeds, fixed random seed). Pairs with a NaN, infinite or negative pixel are left out and
@@ -26,7 +26,7 @@ def main(method, base, paths):
         for m in (base, method):
             values = [float(r["relmse"]) for r in rows(path) if r["method"] == m]
             mean[m] = sum(values) / len(values) if values else float("nan")
-        scene = rows(path)[0]["scene"]
+        scene = os.path.basename(path).removesuffix(".csv")
         fmt = lambda x: "–" if x is None else f"{x:.3f}"
         print(f"| {scene} | {mean[base]:.4g} | {mean[method]:.4g} | {fmt(g)} | {fmt(ub)} | {len(logs)} |")
 
