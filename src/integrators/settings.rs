@@ -177,7 +177,7 @@ crate::settings_table! {
             /// pg, and ga-pt with the spatial guide: the probability with which a guided
             /// vertex samples its region's guide rather than the BSDF. `fixed`: 1/2 in every
             /// region; `learned`: per region, fitted to the training records by the
-            /// Kullback-Leibler divergence, within [0.1, 0.9] (docs/methods/pg.md).
+            /// Kullback-Leibler divergence, within [0.1, 1/2] (docs/methods/pg.md).
             pub guide_selection: Selection = Selection::default(),
         },
         internal: {
