@@ -77,9 +77,10 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF (on a
 /// rough dielectric, none: see [`guide_share`]).
 ///
-/// A share learned per region by the second moment did not pay (the share learned by the
-/// KL divergence, [`super::selection`], is measured in reports/pg-selection.md). Each
-/// region chose, from a grid over [0.1, 0.9],
+/// A share learned per region by the second moment did not pay; the one learned by the
+/// Kullback–Leibler divergence (`--guide-selection learned`, [`super::selection`]) pays on
+/// some scenes and not on others (reports/pg-selection.md). Each region chose, from a grid
+/// over [0.1, 0.9],
 /// the share of least estimated second moment of its one-sample direction estimate
 /// (`Σ (f |cos| L_i / q)² q / (α p_guide + (1 − α) p_bsdf)` over its records, drawn with
 /// density `q`), and `pg`'s error at equal time rose on every scene tried, with the

@@ -31,10 +31,11 @@
 //! fixed share does. The fixed share bounds a BSDF-sampled direction's weight
 //! `f |cos| / p_α` to twice the BSDF's own, wherever the guide has no density; a guide
 //! learned from one pass's records misses rare paths that carry much light, which the
-//! records, and so the fit, seldom hold. Fitted up to 0.9, the shares of fig5, gap, shelf
-//! and corridor rose to the bound nearly everywhere (on fig5, 274 of 328 regions), and
-//! `pg`'s error at equal time rose by 1.01–1.40 × (reports/pg-selection.md). The guide
-//! keeps a tenth at least, so that the next pass still draws records from it.
+//! records, and so the fit, seldom hold. Fitted up to 0.9, the shares rose to the bound
+//! nearly everywhere on diffuse surfaces (fig5 at 64², 1024 spp: 274 of 328 regions), and
+//! `pg`'s error at equal time rose 1.40 × on fig5, 1.15 × on gap and 1.09 × on shelf
+//! (reports/pg-selection.md). The guide keeps a tenth at least, so that the next pass still
+//! draws records from it.
 //!
 //! Unbiasedness does not depend on the share: sampling and every density (the sampled
 //! direction's, the one multiple importance sampling weighs next-event estimation against,
