@@ -181,6 +181,19 @@ pub struct Sampled {
     pub densities: Option<(f64, f64)>,
 }
 
+impl Sampled {
+    /// The direction `bs` sampled with `bsdf` at a vertex of normal `n`, with its densities
+    /// when `densities`.
+    fn of(bs: &BrdfSample, n: Vec3, bsdf: &impl VertexBsdf, densities: bool) -> Self {
+        Self {
+            wi: bs.wi,
+            cos_over_pdf: (n.dot(bs.wi).abs() as f64 / bs.pdf) as f32,
+            weight: bs.weight,
+            densities: densities.then(|| bsdf.selection_densities(bs.wi)).flatten(),
+        }
+    }
+}
+
 /// The recorder of paths that record nothing: there is none (`Option<&mut NoRecorder>` is
 /// always `None`).
 #[derive(Debug)]
@@ -647,16 +660,7 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             unscale /= specular::radiance_scale(&material, x.ns, wo, wi);
         }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
-            let sampled = Sampled {
-                wi,
-                cos_over_pdf: (n.dot(wi).abs() as f64 / bs.pdf) as f32,
-                weight: bs.weight,
-                densities: if r.records_densities() {
-                    bsdf.selection_densities(wi)
-                } else {
-                    None
-                },
-            };
+            let sampled = Sampled::of(&bs, n, &bsdf, r.records_densities());
             r.sampled(x.p, n, sampled, beta, radiance);
         }
         let next_ray = view.spawn(&x, wi);
