@@ -43,6 +43,7 @@
 //! ([`super::Vertex`]), looked up once per vertex.
 
 use super::field::{SpatialField, DARK, GUIDE_SHARE};
+use super::stats::SelectionStats;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -86,22 +87,6 @@ pub struct SelectionRecord {
     pub product: f32,
     pub guide_pdf: f32,
     pub bsdf_pdf: f32,
-}
-
-/// What a field learned of its shares: how many regions fitted theirs, how many of those
-/// sit at each bound, and a histogram of the fitted shares in eight equal bins over
-/// [`MIN_SHARE`]`..=`[`MAX_SHARE`] (regions and their records).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SelectionStats {
-    pub regions: usize,
-    pub fitted: usize,
-    pub at_min: usize,
-    pub at_max: usize,
-    /// The fitted shares' mean, over regions and over records.
-    pub mean: f64,
-    pub mean_per_record: f64,
-    pub histogram: [usize; 8],
-    pub histogram_records: [usize; 8],
 }
 
 /// The share of least Kullback–Leibler divergence (see the module documentation) for
