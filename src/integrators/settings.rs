@@ -73,22 +73,6 @@ impl SrtConfig {
     }
 }
 
-/// `--nee every|end`, its values named as [`Nee`]'s `clap::ValueEnum` names them.
-impl Kind for Nee {
-    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
-        clap::builder::EnumValueParser::<Nee>::new().into()
-    }
-    fn default_text(&self) -> Option<String> {
-        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
-    }
-    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
-        matches
-            .get_one::<Nee>(id)
-            .copied()
-            .expect("a flag given on the command line has its parsed value")
-    }
-}
-
 crate::settings_table! {
     /// How path tracing's next-event estimation picks a light, table `[lights]`.
     #[derive(Clone, Debug, PartialEq)]
@@ -106,39 +90,29 @@ crate::settings_table! {
     }
 }
 
-/// `--light-sampler uniform|bvh`, its values named as [`LightSampler`]'s `clap::ValueEnum`
-/// names them.
-impl Kind for LightSampler {
-    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
-        clap::builder::EnumValueParser::<LightSampler>::new().into()
-    }
-    fn default_text(&self) -> Option<String> {
-        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
-    }
-    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
-        matches
-            .get_one::<LightSampler>(id)
-            .copied()
-            .expect("a flag given on the command line has its parsed value")
-    }
+/// A setting whose values are those of a `clap::ValueEnum` (`--nee every|end`,
+/// `--light-sampler uniform|bvh`, `--guide-selection fixed|learned`), named as its
+/// `clap::ValueEnum` names them.
+macro_rules! value_enum_kind {
+    ($($t:ty),*) => {$(
+        impl Kind for $t {
+            fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
+                clap::builder::EnumValueParser::<$t>::new().into()
+            }
+            fn default_text(&self) -> Option<String> {
+                clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
+            }
+            fn from_matches(matches: &ArgMatches, id: &str) -> Self {
+                matches
+                    .get_one::<$t>(id)
+                    .copied()
+                    .expect("a flag given on the command line has its parsed value")
+            }
+        }
+    )*};
 }
 
-/// `--guide-selection fixed|learned`, its values named as [`Selection`]'s
-/// `clap::ValueEnum` names them.
-impl Kind for Selection {
-    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
-        clap::builder::EnumValueParser::<Selection>::new().into()
-    }
-    fn default_text(&self) -> Option<String> {
-        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
-    }
-    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
-        matches
-            .get_one::<Selection>(id)
-            .copied()
-            .expect("a flag given on the command line has its parsed value")
-    }
-}
+value_enum_kind!(Nee, LightSampler, Selection);
 
 crate::settings_table! {
     /// `mixture`: a mixture of path generators from a file, table `[mixture]`.
