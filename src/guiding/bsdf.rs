@@ -3,7 +3,7 @@
 //! the path tracer's loop evaluates, weighs and samples at every vertex of a guided path
 //! ([`crate::path::pt`]); and [`Guide`] as a [`PathGuide`], which makes it.
 
-use super::field::guide_share;
+use super::field::takes_guide;
 use super::guide::Guide;
 use super::vertex::Vertex;
 use crate::path::pt::{Bsdf, GuidedVertex, PathGuide, VertexBsdf};
@@ -17,7 +17,7 @@ use glam::Vec3;
 ///   directions are drawn, never what they carry;
 /// * [`pdf`](VertexBsdf::pdf) is the density of the mixture that `sample` draws from, the
 ///   guide's samplers and the BSDF each with its selection probability (`p_k` of
-///   [`super::guide`]: the level's weights, and the material's [`guide_share`] of the
+///   [`super::guide`]: the level's weights, and the material's [`guide_share`](super::field::guide_share) of the
 ///   spatial field's region against the BSDF), the density multiple importance sampling
 ///   weighs next-event estimation against;
 /// * [`sample`](VertexBsdf::sample) draws from that mixture with four uniform numbers,
@@ -35,9 +35,9 @@ pub struct GuidedBsdf<'a> {
 impl<'a> GuidedBsdf<'a> {
     /// `bsdf` guided by `guide`, where it guides (see the type's documentation): not at
     /// all at a delta vertex, and without the spatial field where the material's
-    /// [`guide_share`] is 0 (a rough dielectric, which the BSDF alone samples).
+    /// [`guide_share`](super::field::guide_share) is 0 (a rough dielectric, which the BSDF alone samples).
     pub fn new(bsdf: Bsdf<'a>, guide: Option<Vertex<'a>>) -> Self {
-        let unshared = guide_share(&bsdf.material) <= 0.0;
+        let unshared = !takes_guide(&bsdf.material);
         let guide = guide
             .map(|v| if unshared { v.without_spatial() } else { v })
             .filter(|v| !bsdf.material.mirror && v.guides());
@@ -52,7 +52,11 @@ impl<'a> GuidedBsdf<'a> {
     /// The density of the mixture at `wi` where the BSDF's own is `bsdf_pdf`.
     fn mixed(&self, wi: Vec3, bsdf_pdf: f64) -> f64 {
         match &self.guide {
-            Some(v) => v.pdf_with(wi.as_dvec3(), bsdf_pdf, guide_share(&self.bsdf.material)),
+            Some(v) => v.pdf_with(
+                wi.as_dvec3(),
+                bsdf_pdf,
+                v.density_share(&self.bsdf.material),
+            ),
             None => bsdf_pdf,
         }
     }
@@ -91,6 +95,13 @@ impl VertexBsdf for GuidedBsdf<'_> {
             weight: s.weight,
             delta: false,
         })
+    }
+
+    /// The spatial region's density and the BSDF's, where the region samples beside the
+    /// BSDF (the material [`takes_guide`]; see [`super::selection`]).
+    fn selection_densities(&self, wi: Vec3) -> Option<(f64, f64)> {
+        let guide_pdf = self.guide.as_ref()?.spatial_pdf(wi)?;
+        Some((guide_pdf, self.bsdf.pdf(wi)))
     }
 
     /// The guide's cones, patches and spatial regions (see [`Vertex::samplers`]).

@@ -36,9 +36,10 @@
 //! carrying light are untrained: path tracing samples the BSDF there.
 //!
 //! A guided vertex draws its direction from `s · p_guide + (1 − s) · p_bsdf`, `s` the
-//! material's [`guide_share`] (`GUIDE_SHARE`, or 0 on a rough dielectric), and multiple
-//! importance sampling weighs next-event estimation against that density, so the
-//! estimator stays unbiased whatever was learned.
+//! material's [`guide_share`] of its region's share (`GUIDE_SHARE`, or the share learned
+//! for the region with `--guide-selection learned`, see [`super::selection`]; 0 on a rough
+//! dielectric), and multiple importance sampling weighs next-event estimation against that
+//! density, so the estimator stays unbiased whatever was learned.
 //!
 //! The training also learns where light sampling is wasted: per facing and lattice cell, a
 //! cell is *dark* once [`DARK_AFTER_TRIES`] light samples in one pass reached no light
@@ -76,7 +77,10 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 /// Share of guided direction sampling at a trained vertex; the rest samples the BSDF (on a
 /// rough dielectric, none: see [`guide_share`]).
 ///
-/// A share learned per region did not pay. Each region chose, from a grid over [0.1, 0.9],
+/// A share learned per region by the second moment did not pay; the one learned by the
+/// Kullback–Leibler divergence (`--guide-selection learned`, [`super::selection`]) pays on
+/// some scenes and not on others (reports/pg-selection.md). Each region chose, from a grid
+/// over [0.1, 0.9],
 /// the share of least estimated second moment of its one-sample direction estimate
 /// (`Σ (f |cos| L_i / q)² q / (α p_guide + (1 − α) p_bsdf)` over its records, drawn with
 /// density `q`), and `pg`'s error at equal time rose on every scene tried, with the
@@ -86,21 +90,44 @@ pub const UNIFORM_SHARE: f64 = 0.1;
 /// light the direction finds, and the later vertices of the path.
 pub const GUIDE_SHARE: f64 = 0.5;
 
-/// The share of guided direction sampling at a spatially guided vertex of `m`:
-/// [`GUIDE_SHARE`] on every non-delta lobe but a rough dielectric's, where it is 0 whatever
-/// its roughness: the BSDF alone samples there (the guide still says how often next-event
+/// The share of guided direction sampling at a spatially guided vertex of `m` in a region
+/// whose share is `region` ([`GUIDE_SHARE`], or the region's learned share): `region` on
+/// every non-delta lobe but a rough dielectric's, where it is 0 whatever its roughness
+/// ([`takes_guide`]): the BSDF alone samples there (the guide still says how often next-event
 /// estimation runs). A radiance-only guide does not know the rough dielectric's lobes (the
 /// reflection, and `1 − F` of the time the refraction, as narrow as its roughness, on
 /// either side of the surface), so its samples mostly land where the BSDF sends little: on
 /// `scenes/mitsuba/roughglass.xml` `pg`'s error falls monotonically as the share does, to
 /// about `pt`'s at 0, at every roughness tried (docs/methods/pg.md, "`pg`'s guide-vs-BSDF
 /// fraction").
-pub fn guide_share(m: &Material) -> f64 {
-    if m.transmits() {
-        0.0
+pub fn guide_share(m: &Material, region: f64) -> f64 {
+    if takes_guide(m) {
+        region
     } else {
-        GUIDE_SHARE
+        0.0
     }
+}
+
+/// Whether the spatial guide samples directions at a vertex of `m` at all: not on a rough
+/// dielectric (see [`guide_share`]).
+pub fn takes_guide(m: &Material) -> bool {
+    !m.transmits()
+}
+
+/// What a lookup of the spatial field finds at a point ([`SpatialField::lookup`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lookup {
+    /// The trained region there, if any (its directional quadtree's root).
+    pub region: Option<usize>,
+    /// The probability of next-event estimation there: 1, or [`DARK_LIGHT_SHARE`] in a
+    /// dark cell.
+    pub light_share: f64,
+    /// The region's share of guided sampling (before the material's rule, [`guide_share`]):
+    /// [`GUIDE_SHARE`], or the share learned for it.
+    pub share: f64,
+    /// The share the densities are computed with: `share`, but [`GUIDE_SHARE`] in a field
+    /// with the fault [`SpatialField::with_fixed_share_density`] (a test's wrong input).
+    pub density_share: f64,
 }
 
 /// Probability of next-event estimation in a dark lattice cell: one where the training's
@@ -132,6 +159,13 @@ pub struct SpatialField {
     pub(super) regions: Vec<u32>,
     /// Every leaf's quadtree nodes; node 0 is unused, so that child 0 can mean "none".
     pub(super) quads: Vec<QuadNode>,
+    /// Per facing and lattice cell (as `regions`), the learned share of guided sampling of
+    /// the region holding the cell ([`super::selection`]); empty: [`GUIDE_SHARE`] everywhere.
+    pub(super) shares: Vec<f32>,
+    /// The fault of [`SpatialField::with_fixed_share_density`]: densities with
+    /// [`GUIDE_SHARE`] whatever the share that samples.
+    #[serde(skip)]
+    pub(super) fixed_share_density: bool,
 }
 
 /// Why a spatial guide (or its training's dark cells) read from a file cannot be used.
@@ -143,6 +177,8 @@ pub enum GuideStateError {
     Nodes { nodes: usize },
     #[error("{flags} dark-cell flags for a lattice of {cells} cells")]
     DarkFlags { flags: usize, cells: usize },
+    #[error("{shares} learned guide shares for {cells} lattice cells, or one outside [0, 1]")]
+    Shares { shares: usize, cells: usize },
 }
 
 impl SpatialField {
@@ -162,7 +198,26 @@ impl SpatialField {
         if roots.chain(children).any(|i| i >= nodes) {
             return Err(GuideStateError::Nodes { nodes });
         }
+        let shares = self.shares.len();
+        if !(shares == 0 || shares == cells) || !self.shares.iter().all(|s| (0.0..=1.0).contains(s))
+        {
+            return Err(GuideStateError::Shares { shares, cells });
+        }
         Ok(())
+    }
+
+    #[cfg(any(test, feature = "testing"))]
+    /// This guide with a deliberate fault: its regions sample with their learned shares, but
+    /// every density is computed with [`GUIDE_SHARE`] (a test's wrong input, which must bias
+    /// the estimate wherever a learned share is not 1/2).
+    pub fn with_fixed_share_density(mut self) -> Self {
+        self.fixed_share_density = true;
+        self
+    }
+
+    /// Whether this guide has learned a share of guided sampling per region.
+    pub fn learned_shares(&self) -> bool {
+        !self.shares.is_empty()
     }
 
     #[cfg(any(test, feature = "testing"))]
@@ -178,17 +233,33 @@ impl SpatialField {
     /// quadtree's root), and the probability of next-event estimation there: 1, or
     /// [`DARK_LIGHT_SHARE`] in a dark cell.
     pub fn at(&self, p: Vec3, n: Vec3) -> (Option<usize>, f64) {
-        let region = self.regions[self.lattice.index_facing(p, n)];
-        let cell = match region & !DARK {
-            0 => None,
-            root => Some(root as usize),
-        };
-        let light_share = if region & DARK != 0 {
-            DARK_LIGHT_SHARE
-        } else {
-            1.0
-        };
-        (cell, light_share)
+        let found = self.lookup(p, n);
+        (found.region, found.light_share)
+    }
+
+    /// What the field holds at `p` on a surface of normal `n`: the trained region, the
+    /// probability of next-event estimation and the region's share of guided sampling.
+    pub fn lookup(&self, p: Vec3, n: Vec3) -> Lookup {
+        let i = self.lattice.index_facing(p, n);
+        let region = self.regions[i];
+        let share = self.shares.get(i).map_or(GUIDE_SHARE, |&s| f64::from(s));
+        Lookup {
+            region: match region & !DARK {
+                0 => None,
+                root => Some(root as usize),
+            },
+            light_share: if region & DARK != 0 {
+                DARK_LIGHT_SHARE
+            } else {
+                1.0
+            },
+            share,
+            density_share: if self.fixed_share_density {
+                GUIDE_SHARE
+            } else {
+                share
+            },
+        }
     }
 
     /// The solid-angle density of region `cell`'s guide for unit `wi`.

@@ -148,6 +148,8 @@ impl SpatialField {
             lattice,
             regions: Vec::new(),
             quads: vec![QuadNode::default()],
+            shares: Vec::new(),
+            fixed_share_density: false,
         };
         for (part, regions) in parts {
             // Node indices move past the nodes before; 0 stays "none".

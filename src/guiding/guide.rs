@@ -22,7 +22,7 @@
 //! used: path length is path tracing's (Russian roulette), light points are sampled by
 //! area.
 
-use super::field::SpatialField;
+use super::field::{SpatialField, GUIDE_SHARE};
 use super::level::Level;
 use super::vertex::{GuideSample, Vertex, VertexSampler};
 use crate::path::generator::DirectionSampler;
@@ -144,13 +144,19 @@ impl Guide {
     /// emission, which next-event estimation finds better, and the quadtree's descents
     /// would cost for nothing.
     pub fn at(&self, k: usize, x: Vec3, frame: Frame, last: bool) -> Vertex<'_> {
-        let (spatial, light_share) = match self.spatial.as_deref() {
+        let (spatial, found) = match self.spatial.as_deref() {
             Some(s) => {
-                let (cell, light_share) = s.at(x, frame.n);
-                (cell.filter(|_| !last).map(|cell| (s, cell)), light_share)
+                let found = s.lookup(x, frame.n);
+                (
+                    found.region.filter(|_| !last).map(|cell| (s, cell)),
+                    Some(found),
+                )
             }
-            None => (None, 1.0),
+            None => (None, None),
         };
+        let light_share = found.map_or(1.0, |f| f.light_share);
+        let share = found.map_or(GUIDE_SHARE, |f| f.share);
+        let density_share = found.map_or(GUIDE_SHARE, |f| f.density_share);
         let sampler = match (self.level(k), spatial) {
             (Some(level), spatial) => VertexSampler::Level(level, spatial),
             (None, Some((s, cell))) => VertexSampler::Spatial(s, cell),
@@ -160,6 +166,8 @@ impl Guide {
             sampler,
             light_share,
             scale: self.pdf_error.unwrap_or(1.0),
+            share,
+            density_share,
             x: x.as_dvec3(),
             frame,
         }

@@ -69,7 +69,12 @@ impl Lattice {
     /// The index of the cell of `p` on a surface of normal `n` in a table of all facings'
     /// cells, facing after facing.
     pub(super) fn index_facing(&self, p: Vec3, n: Vec3) -> usize {
-        facing(n) * self.cells() + self.index(p)
+        self.index_in(p, facing(n))
+    }
+
+    /// The index of the cell of `p` on a surface facing `facing` (see [`facing`]).
+    pub(super) fn index_in(&self, p: Vec3, facing: usize) -> usize {
+        facing * self.cells() + self.index(p)
     }
 
     /// The cell of `p` (points outside the box go to the nearest cell).

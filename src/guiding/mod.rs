@@ -8,7 +8,8 @@
 //! * [`SpatialField`] (`field.rs`, built in `field_build.rs`): Open PGL's `Field`, the
 //!   kd-tree of regions whose leaves hold directional quadtrees over a square map of the
 //!   sphere (`square.rs`), looked up through a lattice per facing (`lattice.rs`); what its
-//!   training did is in [`FieldStats`] (`stats.rs`).
+//!   training did is in [`FieldStats`] (`stats.rs`); per region, the share of guided
+//!   sampling against the BSDF, fixed or learned from the records (`selection.rs`).
 //! * [`SampleStorage`] (`storage.rs`): the training records a field is built from, which a
 //!   [`PathSegmentStorage`] (`recorder.rs`) fills along each training path.
 //! * [`GuidedBsdf`] (`bsdf.rs`): the material's BSDF at a vertex with the guide's samplers
@@ -42,6 +43,7 @@ pub mod guide;
 pub mod lattice;
 mod level;
 pub mod recorder;
+pub mod selection;
 pub mod square;
 pub mod stats;
 pub mod storage;

@@ -6,9 +6,10 @@
 //! [`SpatialField`]: super::SpatialField
 
 use super::lattice::{facing, Lattice};
+use super::selection::SelectionRecord;
 use super::square::to_square;
 use super::storage::{Record, SampleStorage, REACHED};
-use crate::path::pt::PathRecorder;
+use crate::path::pt::{PathRecorder, Sampled};
 use glam::Vec3;
 
 /// Records collected along paths: the sampled directions' records wait for the radiance
@@ -22,6 +23,10 @@ pub struct PathSegmentStorage {
     /// [`SpatialField`](super::SpatialField) index them), with the bit `REACHED` set where
     /// it reached a light.
     pub light_tries: Vec<u32>,
+    /// Whether it records what the share of guided sampling is learned from, and those
+    /// records ([`super::selection`]).
+    learns_selection: bool,
+    pub selection: Vec<SelectionRecord>,
 }
 
 #[derive(Debug)]
@@ -34,6 +39,10 @@ struct Pending {
     /// before the sampled ray was traced.
     beta: Vec3,
     before: Vec3,
+    /// `f · |cos| / pdf` of the sampled direction, and the guide's and the BSDF's densities
+    /// along it where the share of guided sampling is learned from it.
+    weight: Vec3,
+    densities: Option<(f64, f64)>,
 }
 
 fn luminance(c: Vec3) -> f32 {
@@ -48,6 +57,8 @@ impl PathSegmentStorage {
             records: Vec::new(),
             lattice: records.lattice().clone(),
             light_tries: Vec::new(),
+            learns_selection: records.learns_selection,
+            selection: Vec::new(),
         }
     }
 }
@@ -58,6 +69,7 @@ impl SampleStorage {
     pub fn add_recorded(&mut self, recorder: PathSegmentStorage) {
         self.records.extend(recorder.records);
         self.light_tries.extend(recorder.light_tries);
+        self.selection.extend(recorder.selection);
     }
 }
 
@@ -83,19 +95,25 @@ impl PathRecorder for PathSegmentStorage {
         }
     }
 
-    /// The direction sampled at vertex `x` (normal `n`), with `|cos| / pdf`, the throughput
-    /// after the sample and the radiance collected so far.
-    fn sampled(&mut self, x: Vec3, n: Vec3, wi: Vec3, cos_over_pdf: f32, beta: Vec3, before: Vec3) {
+    fn records_densities(&self) -> bool {
+        self.learns_selection
+    }
+
+    /// The direction sampled at vertex `x` (normal `n`), the throughput after the sample
+    /// and the radiance collected so far.
+    fn sampled(&mut self, x: Vec3, n: Vec3, sampled: Sampled, beta: Vec3, before: Vec3) {
         self.pending.push(Pending {
             record: Record {
                 p: x,
                 facing: facing(n) as u8,
-                dir: to_square(wi),
+                dir: to_square(sampled.wi),
                 value: 0.0,
             },
-            cos_over_pdf,
+            cos_over_pdf: sampled.cos_over_pdf,
             beta,
             before,
+            weight: sampled.weight,
+            densities: sampled.densities,
         });
     }
 
@@ -117,6 +135,20 @@ impl PathRecorder for PathSegmentStorage {
             let value = luminance(li) * p.cos_over_pdf;
             if value > 0.0 && value.is_finite() {
                 self.records.push(Record { value, ..p.record });
+            }
+            if let Some((guide_pdf, bsdf_pdf)) = p.densities {
+                // `f L_i |cos| / pdf`: the one-sample estimate of the light the vertex
+                // reflects, which the share is fitted to.
+                let product = luminance(li * p.weight);
+                if product > 0.0 && product.is_finite() {
+                    self.selection.push(SelectionRecord {
+                        p: p.record.p,
+                        facing: p.record.facing,
+                        product,
+                        guide_pdf: guide_pdf as f32,
+                        bsdf_pdf: bsdf_pdf as f32,
+                    });
+                }
             }
         }
     }

@@ -26,6 +26,9 @@ pub struct FieldStats {
     /// Lattice cells (per facing) where next-event estimation runs at
     /// [`DARK_LIGHT_SHARE`](super::field::DARK_LIGHT_SHARE).
     pub dark_cells: usize,
+    /// Where the last guide learned its share of guided sampling per region
+    /// (`--guide-selection learned`): what it learned.
+    pub selection: Option<SelectionStats>,
     /// Wall-clock seconds of the training passes.
     pub seconds: f64,
     /// With a GA plan's per-pixel guides: the last training pass's trial of them against
@@ -50,4 +53,20 @@ pub struct GuidesTrial {
     pub ratio: f64,
     /// Whether the plan's guides stayed (for the later passes and the render).
     pub kept: bool,
+}
+
+/// What a field learned of its shares of guided sampling (`super::selection`): how many
+/// regions fitted theirs, how many of those sit at each bound, and a histogram of the
+/// fitted shares in eight equal bins between the bounds (regions, and their records).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SelectionStats {
+    pub regions: usize,
+    pub fitted: usize,
+    pub at_min: usize,
+    pub at_max: usize,
+    /// The fitted shares' mean, over regions and over records.
+    pub mean: f64,
+    pub mean_per_record: f64,
+    pub histogram: [usize; 8],
+    pub histogram_records: [usize; 8],
 }

@@ -4,6 +4,7 @@
 
 use super::field::{GuideStateError, SpatialField};
 use super::lattice::{Lattice, FACINGS};
+use super::selection::SelectionRecord;
 use crate::accel::TriangleMesh;
 use glam::Vec3;
 
@@ -41,6 +42,10 @@ pub struct SampleStorage {
     pub(super) light_tries: Vec<u32>,
     /// Per facing and lattice cell, whether it is dark: kept from guide to guide.
     dark: Vec<bool>,
+    /// Whether the guides learn their share of guided sampling per region
+    /// ([`super::selection`]), and the records they learn it from (added as `records`).
+    pub(super) learns_selection: bool,
+    pub(super) selection: Vec<SelectionRecord>,
 }
 
 impl SampleStorage {
@@ -54,6 +59,17 @@ impl SampleStorage {
             lattice,
             records: Vec::new(),
             light_tries: Vec::new(),
+            learns_selection: false,
+            selection: Vec::new(),
+        }
+    }
+
+    /// These records, to learn a share of guided sampling per region with each field
+    /// ([`SampleStorage::field`]) when `learn` (`--guide-selection learned`).
+    pub fn learning_selection(self, learn: bool) -> Self {
+        Self {
+            learns_selection: learn,
+            ..self
         }
     }
 
@@ -102,6 +118,7 @@ impl SampleStorage {
     pub fn clear(&mut self) {
         self.records.clear();
         self.light_tries.clear();
+        self.selection.clear();
     }
 
     /// Updates which cells are dark from the light tries added: a cell where a try reached
@@ -122,16 +139,21 @@ impl SampleStorage {
         }
     }
 
-    /// The field of the records added so far (see [`super::field`]). Builds reorder the
+    /// The field of the records added so far (see [`super::field`]), with the shares of
+    /// guided sampling learned per region where the storage learns them. Builds reorder the
     /// records, deterministically.
     pub fn field(&mut self) -> SpatialField {
         self.update_dark();
-        SpatialField::build(
+        let mut field = SpatialField::build(
             &self.lattice,
             (self.lo, self.hi),
             &mut self.records,
             &self.dark,
-        )
+        );
+        if self.learns_selection {
+            field.learn_shares(&self.selection);
+        }
+        field
     }
 
     /// The lattice that records and light tries are kept on.

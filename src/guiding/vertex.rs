@@ -8,6 +8,7 @@ use super::level::Level;
 #[cfg(doc)]
 use super::Guide;
 use crate::scene::material::bsdf::{self, Frame};
+use crate::scene::Material;
 use crate::scene::MaterialAt;
 use glam::{DVec3, Vec3};
 
@@ -42,6 +43,11 @@ pub struct Vertex<'a> {
     pub(super) light_share: f64,
     /// The guide's fault injection (1 without).
     pub(super) scale: f64,
+    /// The spatial region's share of guided sampling, and the share its densities are
+    /// computed with (the same but in a test's wrong input): see
+    /// [`Lookup`](super::field::Lookup).
+    pub(super) share: f64,
+    pub(super) density_share: f64,
     pub(super) x: DVec3,
     pub(super) frame: Frame,
 }
@@ -69,6 +75,32 @@ impl Vertex<'_> {
             VertexSampler::Brdf => VertexSampler::Brdf,
         };
         Self { sampler, ..self }
+    }
+
+    /// The share of guided sampling at this vertex of `m`, and the share its densities are
+    /// computed with ([`guide_share`] of the region's).
+    fn shares(&self, m: &Material) -> (f64, f64) {
+        (
+            guide_share(m, self.share),
+            guide_share(m, self.density_share),
+        )
+    }
+
+    /// The share of the spatial guide's density in this vertex's density for `m` (see
+    /// [`guide_share`]).
+    pub(super) fn density_share(&self, m: &Material) -> f64 {
+        self.shares(m).1
+    }
+
+    /// The density of the spatial field's region here at unit `wi`, where a region
+    /// guides this vertex.
+    pub fn spatial_pdf(&self, wi: Vec3) -> Option<f64> {
+        match self.sampler {
+            VertexSampler::Spatial(s, cell) | VertexSampler::Level(_, Some((s, cell))) => {
+                Some(s.pdf(cell, wi))
+            }
+            _ => None,
+        }
     }
 
     /// Cones, patches or spatial regions: the densities one evaluation of `pdf` costs.
@@ -108,7 +140,7 @@ impl Vertex<'_> {
     pub fn pdf<'m>(&self, material: impl Into<MaterialAt<'m>>, wo: Vec3, wi: Vec3) -> f64 {
         let material = material.into();
         let brdf_pdf = bsdf::pdf(material, self.frame, wo, wi);
-        self.pdf_with(wi.as_dvec3(), brdf_pdf, guide_share(&material))
+        self.pdf_with(wi.as_dvec3(), brdf_pdf, self.density_share(&material))
     }
 
     /// A direction out of this vertex of `material` seen from `wo`, from four uniform
@@ -123,7 +155,7 @@ impl Vertex<'_> {
         let material = material.into();
         let rest = [u[1], u[2], u[3]];
         let n = self.frame;
-        let share = guide_share(&material);
+        let (share, density_share) = self.shares(&material);
         let wi = match self.sampler {
             VertexSampler::Brdf => {
                 let s = bsdf::sample(material, n, wo, rest)?;
@@ -142,7 +174,8 @@ impl Vertex<'_> {
                     (bsdf::sample_direction(material, n, wo, rest)?, None)
                 };
                 return self.finish_sample(material, wo, wi, |brdf_pdf| {
-                    self.spatial_mix(share, guided.unwrap_or_else(|| s.pdf(cell, wi)), brdf_pdf)
+                    let guide_pdf = guided.unwrap_or_else(|| s.pdf(cell, wi));
+                    self.spatial_mix(density_share, guide_pdf, brdf_pdf)
                 });
             }
             VertexSampler::Level(level, spatial) => {
@@ -156,7 +189,7 @@ impl Vertex<'_> {
             }
         };
         self.finish_sample(material, wo, wi, |brdf_pdf| {
-            self.pdf_with(wi.as_dvec3(), brdf_pdf, share)
+            self.pdf_with(wi.as_dvec3(), brdf_pdf, density_share)
         })
     }
 

@@ -15,6 +15,7 @@ use super::{
 use crate::accel::Ray;
 use crate::film::{self, render_tile, Pass, PixelEstimator, PixelResult, PixelSums, Splats};
 use crate::genetic::plan::{LearnStore, Plan};
+use crate::guiding::selection::Selection;
 use crate::guiding::{Guide, GuidesTrial, PathSegmentStorage, SampleStorage, SpatialField};
 use crate::image::Image;
 use crate::path::mixture::Mixture;
@@ -70,7 +71,13 @@ pub fn train(
         plan,
         trial: *trial,
     });
-    let training = train_spatial(context.view, context.settings, schedule, trained_beside)?;
+    let selection = context.config.spatial.guide_selection;
+    let training = train_spatial(
+        context.view,
+        context.settings,
+        (schedule, selection),
+        trained_beside,
+    )?;
     let plan = beside.map(|(plan, _)| plan);
     Ok(SpatialIntegrator {
         method: context.settings.method,
@@ -458,7 +465,7 @@ pub trait TrialArms {
 pub fn train_spatial(
     view: &SceneView,
     settings: &RenderSettings,
-    schedule: TrainingSchedule,
+    (schedule, selection): (TrainingSchedule, Selection),
     beside: Option<Beside>,
 ) -> Result<SpatialTraining, PrepareError> {
     let plan = beside.map(|b| b.plan);
@@ -466,7 +473,8 @@ pub fn train_spatial(
     let camera = &view.scene.camera;
     let tiles = film::tiles(camera.width, camera.height);
     let pixels = (camera.width * camera.height) as usize;
-    let mut records = SampleStorage::around(&view.scene.mesh);
+    let mut records =
+        SampleStorage::around(&view.scene.mesh).learning_selection(selection == Selection::Learned);
     let open_plan = plan.filter(|p| !p.is_closed());
     let store = settings.learning.as_deref();
     let mut at = Between::start(store, &mut records, pixels, open_plan.is_some())?;

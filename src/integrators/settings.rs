@@ -13,6 +13,7 @@
 
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::{GaConfig, GaConfigError};
+use crate::guiding::selection::Selection;
 use crate::path::generator::{Nee, SrtAbsorption, ABSORPTION_MAX, ABSORPTION_MIN};
 use crate::path::mixture::Mixture;
 use crate::scene::LightSampler;
@@ -72,22 +73,6 @@ impl SrtConfig {
     }
 }
 
-/// `--nee every|end`, its values named as [`Nee`]'s `clap::ValueEnum` names them.
-impl Kind for Nee {
-    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
-        clap::builder::EnumValueParser::<Nee>::new().into()
-    }
-    fn default_text(&self) -> Option<String> {
-        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
-    }
-    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
-        matches
-            .get_one::<Nee>(id)
-            .copied()
-            .expect("a flag given on the command line has its parsed value")
-    }
-}
-
 crate::settings_table! {
     /// How path tracing's next-event estimation picks a light, table `[lights]`.
     #[derive(Clone, Debug, PartialEq)]
@@ -107,22 +92,29 @@ crate::settings_table! {
     }
 }
 
-/// `--light-sampler uniform|bvh`, its values named as [`LightSampler`]'s `clap::ValueEnum`
-/// names them.
-impl Kind for LightSampler {
-    fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
-        clap::builder::EnumValueParser::<LightSampler>::new().into()
-    }
-    fn default_text(&self) -> Option<String> {
-        clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
-    }
-    fn from_matches(matches: &ArgMatches, id: &str) -> Self {
-        matches
-            .get_one::<LightSampler>(id)
-            .copied()
-            .expect("a flag given on the command line has its parsed value")
-    }
+/// A setting whose values are those of a `clap::ValueEnum` (`--nee every|end`,
+/// `--light-sampler auto|uniform|bvh`, `--guide-selection fixed|learned`), named as its
+/// `clap::ValueEnum` names them.
+macro_rules! value_enum_kind {
+    ($($t:ty),*) => {$(
+        impl Kind for $t {
+            fn parser(_: &'static str, _: Option<Interval>) -> ValueParser {
+                clap::builder::EnumValueParser::<$t>::new().into()
+            }
+            fn default_text(&self) -> Option<String> {
+                clap::ValueEnum::to_possible_value(self).map(|v| v.get_name().to_string())
+            }
+            fn from_matches(matches: &ArgMatches, id: &str) -> Self {
+                matches
+                    .get_one::<$t>(id)
+                    .copied()
+                    .expect("a flag given on the command line has its parsed value")
+            }
+        }
+    )*};
 }
+
+value_enum_kind!(Nee, LightSampler, Selection);
 
 crate::settings_table! {
     /// `mixture`: a mixture of path generators from a file, table `[mixture]`.
@@ -158,6 +150,11 @@ crate::settings_table! {
             /// and stay in the image. Default: as many as fit in half of --spp.
             #[range = 1..=i64::from(MAX_SPATIAL_PASSES)]
             pub spatial_passes: Option<u32> = None,
+            /// pg, and ga-pt with the spatial guide: the probability with which a guided
+            /// vertex samples its region's guide rather than the BSDF. `fixed`: 1/2 in every
+            /// region; `learned`: per region, fitted to the training records by the
+            /// Kullback-Leibler divergence, within [0.1, 1/2] (docs/methods/pg.md).
+            pub guide_selection: Selection = Selection::default(),
         },
         internal: {
             /// Seconds the spatial guide's training may take (see `spatial_passes`; set by the

@@ -56,6 +56,11 @@ pub trait VertexBsdf {
     fn samplers(&self) -> usize {
         0
     }
+    /// Where a guide samples beside the BSDF with a share that can be learned: its density
+    /// and the BSDF's own at unit `wi` (what the share is fitted to; `None` elsewhere).
+    fn selection_densities(&self, _wi: Vec3) -> Option<(f64, f64)> {
+        None
+    }
 }
 
 /// The BSDF of `material` at a vertex whose shading frame faces `wo` ([`Frame::facing`]):
@@ -148,14 +153,45 @@ pub trait PathRecorder {
     /// A light sample that reached a light along `wi`: `value` is its MIS-weighted
     /// `L_e |cos| / pdf` (throughput excluded).
     fn light(&mut self, x: Vec3, n: Vec3, wi: Vec3, value: Vec3);
-    /// The direction `wi` sampled at `x`, with `|cos| / pdf`, the throughput after the
-    /// sample and the radiance collected so far.
-    fn sampled(&mut self, x: Vec3, n: Vec3, wi: Vec3, cos_over_pdf: f32, beta: Vec3, before: Vec3);
+    /// Whether it records [`Sampled::densities`] (which cost a density evaluation each).
+    fn records_densities(&self) -> bool {
+        false
+    }
+    /// The direction `sampled` at `x`, the throughput after the sample and the radiance
+    /// collected so far.
+    fn sampled(&mut self, x: Vec3, n: Vec3, sampled: Sampled, beta: Vec3, before: Vec3);
     /// The last sampled direction found emission at once, which brought the estimate to
     /// `radiance`.
     fn emission_seen(&mut self, radiance: Vec3);
     /// The path ended with the estimate `radiance`.
     fn finish(&mut self, radiance: Vec3);
+}
+
+/// A direction sampled at a vertex, as a [`PathRecorder`] is told of it.
+pub struct Sampled {
+    /// The unit direction.
+    pub wi: Vec3,
+    /// `|cos| / pdf`.
+    pub cos_over_pdf: f32,
+    /// `f · |cos| / pdf`, what the throughput was multiplied by.
+    pub weight: Vec3,
+    /// The guide's and the BSDF's densities at `wi`, where the recorder asks for them
+    /// ([`PathRecorder::records_densities`]) and the vertex has them
+    /// ([`VertexBsdf::selection_densities`]).
+    pub densities: Option<(f64, f64)>,
+}
+
+impl Sampled {
+    /// The direction `bs` sampled with `bsdf` at a vertex of normal `n`, with its densities
+    /// when `densities`.
+    fn of(bs: &BrdfSample, n: Vec3, bsdf: &impl VertexBsdf, densities: bool) -> Self {
+        Self {
+            wi: bs.wi,
+            cos_over_pdf: (n.dot(bs.wi).abs() as f64 / bs.pdf) as f32,
+            weight: bs.weight,
+            densities: densities.then(|| bsdf.selection_densities(bs.wi)).flatten(),
+        }
+    }
 }
 
 /// The recorder of paths that record nothing: there is none (`Option<&mut NoRecorder>` is
@@ -173,7 +209,7 @@ impl PathRecorder for NoRecorder {
     fn light(&mut self, _: Vec3, _: Vec3, _: Vec3, _: Vec3) {
         match *self {}
     }
-    fn sampled(&mut self, _: Vec3, _: Vec3, _: Vec3, _: f32, _: Vec3, _: Vec3) {
+    fn sampled(&mut self, _: Vec3, _: Vec3, _: Sampled, _: Vec3, _: Vec3) {
         match *self {}
     }
     fn emission_seen(&mut self, _: Vec3) {
@@ -624,8 +660,8 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
             unscale /= specular::radiance_scale(&material, x.ns, wo, wi);
         }
         if let Some(r) = recorder.as_deref_mut().filter(|_| !bs.delta) {
-            let cos_over_pdf = (n.dot(wi).abs() as f64 / bs.pdf) as f32;
-            r.sampled(x.p, n, wi, cos_over_pdf, beta, radiance);
+            let sampled = Sampled::of(&bs, n, &bsdf, r.records_densities());
+            r.sampled(x.p, n, sampled, beta, radiance);
         }
         let next_ray = view.spawn(&x, wi);
         let Some(y) = view.trace_through(&next_ray, rng, counts) else {

@@ -24,7 +24,7 @@ use bincode::Options;
 use std::path::{Path, PathBuf};
 
 /// The format version this genpath writes and reads.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The mark every plan file starts with.
 pub const MAGIC: &[u8; 8] = b"GPPLAN\0\0";
 /// The longest header read.

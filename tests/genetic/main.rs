@@ -18,6 +18,7 @@ use genpath::genetic::plan::{
 use genpath::genetic::population::evolve;
 use genpath::genetic::test_paths::TestPaths;
 use genpath::genetic::{ChannelWeights, GaConfig};
+use genpath::guiding::selection::Selection;
 use genpath::integrators::ga_pt::{GuidesTrialPolicy, FIRST_TRIAL_PASS, LEVELS_KEEP_RATIO};
 use genpath::integrators::pg::{train_spatial, Beside, PlanGuides, TrainingSchedule};
 use genpath::integrators::RenderSettings;

@@ -221,7 +221,8 @@ fn training_passes_keep_the_plans_guides_only_where_they_help() {
             plan,
             trial: &GuidesTrialPolicy,
         };
-        let training = train_spatial(&view, &settings, schedule, Some(beside)).unwrap();
+        let training =
+            train_spatial(&view, &settings, (schedule, Selection::Fixed), Some(beside)).unwrap();
         let trial = training.guide.stats.guides_trial.expect("a trial ran");
         eprintln!("{trial:?}");
         assert_eq!(
