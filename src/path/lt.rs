@@ -135,7 +135,10 @@ impl LightTracer {
             let Some(bs) = bsdf.sample(rng) else {
                 return bounce;
             };
-            beta *= bs.weight;
+            beta *= match x.np != Vec3::ZERO && !bs.delta && mode == TransportMode::Importance {
+                true => mapped_adjoint(view, &x, wo, bs.wi) / bs.pdf as f32,
+                false => bs.weight,
+            };
             if bounce >= RR_START {
                 let q = (1.0 - beta.max_element()).max(0.05);
                 if uniform(rng) < q {
@@ -160,9 +163,14 @@ impl LightTracer {
         counts: &mut RayCounts,
     ) -> Option<(u32, Vec3)> {
         let camera = view.scene.camera.connect(x.p)?;
-        let cos_x = bsdf::cosine(&material, frame, camera.wi)?;
-        let f = bsdf::eval(material, frame, wo, camera.wi);
-        if f.max_element() <= 0.0 {
+        let f_cos = match x.np != Vec3::ZERO && frame.mode == TransportMode::Importance {
+            true => mapped_adjoint(view, x, wo, camera.wi),
+            false => {
+                let cos_x = bsdf::cosine(&material, frame, camera.wi)?;
+                bsdf::eval(material, frame, wo, camera.wi) * cos_x
+            }
+        };
+        if f_cos.max_element() <= 0.0 {
             return None;
         }
         let end = EndPoint {
@@ -176,9 +184,28 @@ impl LightTracer {
         if self.faulty(Fault::NoCos4) {
             importance *= camera.cos.powi(4);
         }
-        let scale = f64::from(cos_x) * importance / camera.pdf;
-        Some((camera.index, f * scale as f32))
+        Some((camera.index, f_cos * (importance / camera.pdf) as f32))
     }
+}
+
+/// The adjoint BSDF times its cosine, `f*(wo, wi) |cos θ_i|`, at a point `x` whose normal
+/// or bump map perturbs its shading normal by the direction it is seen from
+/// ([`crate::scene::normals::resolve`]). The adjoint of the kernel `pt` uses,
+/// `K(wo, wi) = f(wo, wi) |wi · n(wo)|` (`n(wo)`: the perturbed normal seen from `wo`),
+/// is `K*(wo, wi) = K(wi, wo) |wi · ng| / |wo · ng|`: the map's frame and its shadowing
+/// term as seen from `wi`, where [`TransportMode::Importance`]'s correction, made for one
+/// fixed shading normal, would take them from `wo`.
+fn mapped_adjoint(view: &SceneView, x: &SurfacePoint, wo: Vec3, wi: Vec3) -> Vec3 {
+    let material = view.scattering_material(x, wi);
+    let frame = Frame::facing(x, wi);
+    let Some(cos_o) = bsdf::cosine(&material, frame, wo) else {
+        return Vec3::ZERO;
+    };
+    let (wi_ng, wo_ng) = (wi.dot(x.ng).abs(), wo.dot(x.ng).abs());
+    if wo_ng <= 0.0 {
+        return Vec3::ZERO;
+    }
+    bsdf::eval(material, frame, wi, wo) * (cos_o * wi_ng / wo_ng)
 }
 
 /// The pick probability of the emitter after `emitter` in the power table (the twin of
