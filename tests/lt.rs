@@ -11,8 +11,9 @@
 //! refracted light scaled by `1/η²`), and each emitter's pick taken as another emitter's.
 //!
 //! And `lt` agrees with Mitsuba 3's light tracer (`ptracer`) on `box.xml` and `lights.xml`
-//! (references `scenes/mitsuba/NAME.ptracer.exr` at 64 × the test's samples, made by
-//! `scripts/mitsuba_ptracer_references.py`), with the same twins.
+//! (references `scenes/mitsuba/NAME.ptracer.exr` at 64 × the test's samples with their
+//! blocks' variance in `NAME.ptracer.json`, made by `scripts/mitsuba_ptracer_references.py`),
+//! with the same twins.
 //!
 //! The default run covers one TOML scene and six Mitsuba scenes with the twins; every
 //! other TOML and Mitsuba test scene runs in CI's lane of ignored tests (`.ci/run`:
@@ -246,8 +247,8 @@ fn every_mitsuba_scene_agrees() {
 }
 
 /// `lt` (with `fault`) against Mitsuba's `ptracer` on `scenes/mitsuba/NAME.xml`: the largest
-/// |z| over blocks and channels, the reference's own variance taken as `lt`'s over 64 (it
-/// has 64 × the samples), and the critical |z|.
+/// |z| over blocks and channels, with the reference's own variance (`NAME.ptracer.json`,
+/// from its passes' spread), and the critical |z|.
 fn against_ptracer(name: &str, fault: Option<Fault>) -> (f64, f64) {
     let (scene, bounces) = load(&format!("mitsuba/{name}.xml"));
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/mitsuba/{name}.ptracer.exr"));
@@ -255,9 +256,15 @@ fn against_ptracer(name: &str, fault: Option<Fault>) -> (f64, f64) {
     assert_eq!((reference.width, reference.height), (SIZE, SIZE));
     let theirs = block_sums(|x, y, c| f64::from(reference.get(x, y)[c]));
     let ours = lt_blocks(&scene, bounces, 256, fault);
+    let json = std::fs::read_to_string(file.with_extension("json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let their_var: Vec<f64> = (json["block_variance"].as_array().unwrap().iter())
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(their_var.len(), theirs.len());
     let mut z = 0.0f64;
-    for ((mean, var), r) in ours.iter().zip(&theirs) {
-        let se = (var * (1.0 + 1.0 / 64.0)).sqrt();
+    for (((mean, var), r), r_var) in ours.iter().zip(&theirs).zip(&their_var) {
+        let se = (var + r_var).sqrt();
         z = z.max(if se > 0.0 { (mean - r).abs() / se } else { f64::from(u8::from(mean != r)) * f64::INFINITY });
     }
     (z, z_critical(ours.len()))
