@@ -225,12 +225,21 @@ fn plastic_agrees() {
     agrees("mitsuba/plastic.xml", 256, 256);
 }
 
-/// Every other TOML test scene (CI's lane of ignored tests).
+/// Every other TOML test scene (CI's lane of ignored tests), at samples that judge each to
+/// a few per cent.
 #[test]
 #[ignore = "slow: CI runs it with --ignored"]
 fn every_toml_scene_agrees() {
-    for name in ["fig1", "fig5", "glossy", "gap", "shelf", "window", "corridor"] {
-        agrees(name, 256, 256);
+    for (name, spp) in [
+        ("fig1", 256),
+        ("fig5", 8192),
+        ("glossy", 1024),
+        ("gap", 8192),
+        ("shelf", 2048),
+        ("window", 1024),
+        ("corridor", 1024),
+    ] {
+        agrees(name, spp, spp);
     }
 }
 
@@ -238,11 +247,19 @@ fn every_toml_scene_agrees() {
 #[test]
 #[ignore = "slow: CI runs it with --ignored"]
 fn every_mitsuba_scene_agrees() {
-    for name in [
-        "box", "env", "glass", "legacy", "mask", "params", "rough", "spheres", "spot",
-        "textures",
+    for (name, spp) in [
+        ("box", 256),
+        ("env", 8192),
+        ("glass", 1024),
+        ("legacy", 1024),
+        ("mask", 1024),
+        ("params", 1024),
+        ("rough", 1024),
+        ("spheres", 1024),
+        ("spot", 1024),
+        ("textures", 1024),
     ] {
-        agrees(&format!("mitsuba/{name}.xml"), 256, 256);
+        agrees(&format!("mitsuba/{name}.xml"), spp, spp);
     }
 }
 
@@ -293,3 +310,4 @@ fn lights_agree_with_mitsuba_ptracer_and_a_wrong_pick_does_not() {
     eprintln!("lights.xml: lt with WrongEmitterPick vs Mitsuba ptracer: max |z| {z:.2}");
     assert!(z > critical, "lights.xml: a wrong pick went unnoticed against ptracer ({z:.2})");
 }
+
