@@ -268,7 +268,13 @@ fn render_every_method(
                     max_bounces: config.max_bounces,
                 };
                 let view = view.with_light_sampler(methods.lights.light_sampler);
-                let film = pt.render(&view, &RenderSettings { method: Method::Pt, ..settings.clone() });
+                let film = pt.render(
+                    &view,
+                    &RenderSettings {
+                        method: Method::Pt,
+                        ..settings.clone()
+                    },
+                );
                 films.push((PT_NO_DELTA_FIRST.into(), film, None));
                 films.len() - 1
             }),
@@ -309,7 +315,8 @@ fn judge_films(films: &LabelledFilms, failures: &mut Vec<String>) -> (Vec<Method
         let (mean, se) = image_mean(film);
         let mut z: f64 = 0.0;
         if let Some(reference) = *reference {
-            let (reference, (pt_mean, pt_se)) = (&films[reference].0, image_mean(&films[reference].1));
+            let (reference, (pt_mean, pt_se)) =
+                (&films[reference].0, image_mean(&films[reference].1));
             for c in 0..3 {
                 let s = (se[c] * se[c] + pt_se[c] * pt_se[c]).sqrt();
                 if s > 0.0 {

@@ -165,8 +165,14 @@ fn agrees(name: &str, pt_spp: u32, lt_passes: u32) -> (Scene, u32, Blocks) {
     let lt = lt_blocks(&scene, bounces, lt_passes, None);
     let (z, critical, rel) = compare(&lt, &pt);
     eprintln!("{name}: lt vs pt (no delta first): max |z| {z:.2} (critical {critical:.2}), worst relative se {rel:.4}");
-    assert!(z <= critical, "{name}: lt vs pt: max |z| {z:.2} > {critical:.2}");
-    assert!(rel < 0.08, "{name}: relative standard error {rel:.4} too wide to judge");
+    assert!(
+        z <= critical,
+        "{name}: lt vs pt: max |z| {z:.2} > {critical:.2}"
+    );
+    assert!(
+        rel < 0.08,
+        "{name}: relative standard error {rel:.4} too wide to judge"
+    );
     (scene, bounces, pt)
 }
 
@@ -175,7 +181,10 @@ fn rejects(name: &str, (scene, bounces, pt): &(Scene, u32, Blocks), passes: u32,
     let wrong = lt_blocks(scene, *bounces, passes, Some(fault));
     let (z, critical, _) = compare(&wrong, pt);
     eprintln!("{name}: lt with {fault:?}: max |z| {z:.2} (critical {critical:.2})");
-    assert!(z > critical, "{name}: lt with {fault:?} went unnoticed (max |z| {z:.2})");
+    assert!(
+        z > critical,
+        "{name}: lt with {fault:?} went unnoticed (max |z| {z:.2})"
+    );
 }
 
 /// cbox (area light, diffuse walls): `lt` agrees, and the importance without its `cos⁴`
@@ -268,7 +277,8 @@ fn every_mitsuba_scene_agrees() {
 /// from its passes' spread), and the critical |z|.
 fn against_ptracer(name: &str, fault: Option<Fault>) -> (f64, f64) {
     let (scene, bounces) = load(&format!("mitsuba/{name}.xml"));
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/mitsuba/{name}.ptracer.exr"));
+    let file =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/mitsuba/{name}.ptracer.exr"));
     let reference = genpath::image::read(&file).unwrap();
     assert_eq!((reference.width, reference.height), (SIZE, SIZE));
     let theirs = block_sums(|x, y, c| f64::from(reference.get(x, y)[c]));
@@ -282,7 +292,11 @@ fn against_ptracer(name: &str, fault: Option<Fault>) -> (f64, f64) {
     let mut z = 0.0f64;
     for (((mean, var), r), r_var) in ours.iter().zip(&theirs).zip(&their_var) {
         let se = (var + r_var).sqrt();
-        z = z.max(if se > 0.0 { (mean - r).abs() / se } else { f64::from(u8::from(mean != r)) * f64::INFINITY });
+        z = z.max(if se > 0.0 {
+            (mean - r).abs() / se
+        } else {
+            f64::from(u8::from(mean != r)) * f64::INFINITY
+        });
     }
     (z, z_critical(ours.len()))
 }
@@ -293,10 +307,16 @@ fn against_ptracer(name: &str, fault: Option<Fault>) -> (f64, f64) {
 fn box_agrees_with_mitsuba_ptracer_and_no_cos4_does_not() {
     let (z, critical) = against_ptracer("box", None);
     eprintln!("box.xml: lt vs Mitsuba ptracer: max |z| {z:.2} (critical {critical:.2})");
-    assert!(z <= critical, "box.xml: lt vs ptracer: max |z| {z:.2} > {critical:.2}");
+    assert!(
+        z <= critical,
+        "box.xml: lt vs ptracer: max |z| {z:.2} > {critical:.2}"
+    );
     let (z, critical) = against_ptracer("box", Some(Fault::NoCos4));
     eprintln!("box.xml: lt with NoCos4 vs Mitsuba ptracer: max |z| {z:.2}");
-    assert!(z > critical, "box.xml: NoCos4 went unnoticed against ptracer ({z:.2})");
+    assert!(
+        z > critical,
+        "box.xml: NoCos4 went unnoticed against ptracer ({z:.2})"
+    );
 }
 
 /// `lt` agrees with Mitsuba's light tracer on `lights.xml` (an environment map, a point, a
@@ -305,9 +325,14 @@ fn box_agrees_with_mitsuba_ptracer_and_no_cos4_does_not() {
 fn lights_agree_with_mitsuba_ptracer_and_a_wrong_pick_does_not() {
     let (z, critical) = against_ptracer("lights", None);
     eprintln!("lights.xml: lt vs Mitsuba ptracer: max |z| {z:.2} (critical {critical:.2})");
-    assert!(z <= critical, "lights.xml: lt vs ptracer: max |z| {z:.2} > {critical:.2}");
+    assert!(
+        z <= critical,
+        "lights.xml: lt vs ptracer: max |z| {z:.2} > {critical:.2}"
+    );
     let (z, critical) = against_ptracer("lights", Some(Fault::WrongEmitterPick));
     eprintln!("lights.xml: lt with WrongEmitterPick vs Mitsuba ptracer: max |z| {z:.2}");
-    assert!(z > critical, "lights.xml: a wrong pick went unnoticed against ptracer ({z:.2})");
+    assert!(
+        z > critical,
+        "lights.xml: a wrong pick went unnoticed against ptracer ({z:.2})"
+    );
 }
-

@@ -175,7 +175,10 @@ impl SplatLayer {
         // One pass's light paths: each pass's light is its sum over them.
         let per_pass = self.light_paths as f64 / self.passes as f64;
         let n = self.passes as f64;
-        let (sum, sum_sq) = (self.sum[i] / per_pass, self.sum_sq[i] / (per_pass * per_pass));
+        let (sum, sum_sq) = (
+            self.sum[i] / per_pass,
+            self.sum_sq[i] / (per_pass * per_pass),
+        );
         (sample_variance(sum, sum_sq, n) / n).max(DVec3::ZERO)
     }
 

@@ -55,8 +55,9 @@ impl PixelEstimator for LightTracing {
         splats: &mut Splats,
     ) -> DVec3 {
         let direct = self.tracer.seen_directly(view, ray, rng, counts);
-        self.tracer
-            .trace(view, rng, counts, &mut |index, value| splats.add(index, value));
+        self.tracer.trace(view, rng, counts, &mut |index, value| {
+            splats.add(index, value)
+        });
         splats.count_light_paths(1);
         direct.as_dvec3()
     }

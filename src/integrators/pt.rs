@@ -71,7 +71,15 @@ impl PixelEstimator for NoDeltaFirst {
         _splats: &mut Splats,
     ) -> DVec3 {
         let guide = pt::NoDeltaFirst;
-        pt::radiance_guided(view, ray, self.max_bounces, rng, counts, &guide, pt::NO_RECORDER)
-            .as_dvec3()
+        pt::radiance_guided(
+            view,
+            ray,
+            self.max_bounces,
+            rng,
+            counts,
+            &guide,
+            pt::NO_RECORDER,
+        )
+        .as_dvec3()
     }
 }

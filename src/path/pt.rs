@@ -152,7 +152,13 @@ pub struct NoDeltaFirst;
 
 impl PathGuide for NoDeltaFirst {
     type Bsdf<'a> = Bsdf<'a>;
-    fn vertex<'a>(&'a self, k: usize, x: Vec3, bsdf: Bsdf<'a>, last: bool) -> GuidedVertex<Bsdf<'a>> {
+    fn vertex<'a>(
+        &'a self,
+        k: usize,
+        x: Vec3,
+        bsdf: Bsdf<'a>,
+        last: bool,
+    ) -> GuidedVertex<Bsdf<'a>> {
         Unguided.vertex(k, x, bsdf, last)
     }
     fn ends_at_delta(&self, bounce: u32) -> bool {

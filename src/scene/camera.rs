@@ -265,7 +265,10 @@ mod tests {
         }
         assert!((with / 48.0 - 1.0).abs() < 0.01, "{with}");
         assert!((without / 48.0 - 1.0).abs() > 0.1, "{without}");
-        let worst = per_pixel.iter().map(|v| (v - 1.0f64).abs()).fold(0.0, f64::max);
+        let worst = per_pixel
+            .iter()
+            .map(|v| (v - 1.0f64).abs())
+            .fold(0.0, f64::max);
         assert!(worst < 0.08, "{per_pixel:?}");
         for (px, py) in [(0.3, 0.2), (7.9, 5.9), (4.5, 3.1)] {
             let dir = camera.ray(px, py).dir;

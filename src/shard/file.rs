@@ -136,7 +136,8 @@ pub fn read(path: &Path) -> Result<(Header, Vec<LayerSums>), ShardError> {
         let sum = take_vectors(body, &mut at, pixels);
         let sum_sq = take_vectors(body, &mut at, pixels);
         let splats = if header.splats {
-            let count = |at: usize| u64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
+            let count =
+                |at: usize| u64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
             let (light_paths, passes) = (count(at), count(at + 8));
             at += 16;
             Some(SplatLayer {

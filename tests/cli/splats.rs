@@ -197,7 +197,11 @@ fn lt_is_one_image_for_any_threads_shards_and_resume() {
     }
     let one = pixel_bits(&at("one.exr"));
     assert_eq!(one, pixel_bits(&at("two.exr")), "one thread and two differ");
-    assert_ne!(one, pixel_bits(&at("seed2.exr")), "another seed's image matched");
+    assert_ne!(
+        one,
+        pixel_bits(&at("seed2.exr")),
+        "another seed's image matched"
+    );
     let shards = [0, 1].map(|k| shard_file(&at(&format!("s{k}.exr"))));
     let merged = at("merged.exr");
     let output = genpath(&[
@@ -209,7 +213,11 @@ fn lt_is_one_image_for_any_threads_shards_and_resume() {
         "--complete",
     ]);
     assert!(output.status.success(), "{}", stderr(&output));
-    assert_eq!(pixel_bits(&merged), one, "merged shards differ from the whole render");
+    assert_eq!(
+        pixel_bits(&merged),
+        one,
+        "merged shards differ from the whole render"
+    );
 
     let stopped_at = at("stopped.exr");
     let args = render(
