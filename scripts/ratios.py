@@ -55,7 +55,7 @@ def main(scenes, pairs=(("ga-pt", "pg"), ("pt", "pg")), folder="reports"):
             g, ub = geo_and_bound(list(reps.values()))
             single = paired(f"{folder}/{scene}.csv", method, base)
             at = {b: math.exp(v) for (_, b), v in single.items()}
-            fmt = lambda x: "–" if x is None else f"{x:.2f}"
+            fmt = lambda x: "–" if x is None else f"{x:.2f}" if x >= 0.1 else f"{x:.2g}"
             print(
                 f"| {scene} | `{method}` | `{base}` | {fmt(g)} | {fmt(ub)} | "
                 f"{fmt(at.get('8'))} | {fmt(at.get('30'))} |"

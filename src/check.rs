@@ -110,14 +110,28 @@ impl CheckReport {
     }
 }
 
-fn image_mean(film: &Film) -> ([f64; 3], [f64; 3]) {
+/// The image's mean per channel and its standard error. A light path splats onto up to
+/// `max_bounces` pixels, so the splat layer's pixels are not independent: the variance of
+/// their mean is at most `max_bounces` times the sum of theirs (Cauchy–Schwarz over each
+/// path's splats), which is what is taken for it.
+fn image_mean(film: &Film, max_bounces: u32) -> ([f64; 3], [f64; 3]) {
     let n = film.image.pixels.len().max(1) as f64;
     let mut mean = [0.0; 3];
     let mut var = [0.0; 3];
-    for (p, v) in film.image.pixels.iter().zip(&film.variance_of_mean) {
+    let splats = film.sums.splats.as_ref();
+    for (i, (p, v)) in film
+        .image
+        .pixels
+        .iter()
+        .zip(&film.variance_of_mean)
+        .enumerate()
+    {
+        let more = splats.map_or(glam::DVec3::ZERO, |s| {
+            s.variance(i) * f64::from(max_bounces.max(1) - 1)
+        });
         for c in 0..3 {
             mean[c] += p[c] as f64 / n;
-            var[c] += v[c] / (n * n);
+            var[c] += (v[c] + more[c]) / (n * n);
         }
     }
     (mean, var.map(f64::sqrt))
@@ -293,7 +307,11 @@ fn render_every_method(
 
 /// Each film's bad pixels and its image mean against the first film's (`pt`'s), with the
 /// Šidák-corrected critical |z|; failures are added to `failures`.
-fn judge_films(films: &LabelledFilms, failures: &mut Vec<String>) -> (Vec<MethodCheck>, f64) {
+fn judge_films(
+    films: &LabelledFilms,
+    max_bounces: u32,
+    failures: &mut Vec<String>,
+) -> (Vec<MethodCheck>, f64) {
     let comparisons = 3 * films.iter().filter(|f| f.2.is_some()).count().max(1);
     let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
     let z_critical = Normal::new(0.0, 1.0)
@@ -312,11 +330,13 @@ fn judge_films(films: &LabelledFilms, failures: &mut Vec<String>) -> (Vec<Method
                 "{method}: {bad_pixels} NaN, infinite or negative pixels"
             ));
         }
-        let (mean, se) = image_mean(film);
+        let (mean, se) = image_mean(film, max_bounces);
         let mut z: f64 = 0.0;
         if let Some(reference) = *reference {
-            let (reference, (pt_mean, pt_se)) =
-                (&films[reference].0, image_mean(&films[reference].1));
+            let (reference, (pt_mean, pt_se)) = (
+                &films[reference].0,
+                image_mean(&films[reference].1, max_bounces),
+            );
             for c in 0..3 {
                 let s = (se[c] * se[c] + pt_se[c] * pt_se[c]).sqrt();
                 if s > 0.0 {
@@ -393,7 +413,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
     let mut survey = survey_srt(view, config);
     let mut values = Vec::new();
     let films = render_every_method(view, config, (&mut survey, &mut values))?;
-    let (methods, z_critical) = judge_films(&films, &mut failures);
+    let (methods, z_critical) = judge_films(&films, config.max_bounces, &mut failures);
     if survey.bad > 0 {
         failures.push(format!(
             "{} of {} sampled densities are not finite and positive",

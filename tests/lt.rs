@@ -15,9 +15,10 @@
 //! blocks' variance in `NAME.ptracer.json`, made by `scripts/mitsuba_ptracer_references.py`),
 //! with the same twins.
 //!
-//! The default run covers one TOML scene and six Mitsuba scenes with the twins; every
-//! other TOML and Mitsuba test scene runs in CI's lane of ignored tests (`.ci/run`:
-//! `cargo test … --test lt -- --ignored`), for time.
+//! The default run (the README's test command) covers the twins' scenes: cbox, `lights.xml`,
+//! `maps.xml`, and `box.xml` and `lights.xml` against `ptracer`; every other TOML and
+//! Mitsuba test scene runs in CI's lane of ignored tests (`.ci/run`: `cargo test … --test lt
+//! -- --ignored`), for time.
 
 #![cfg(feature = "testing")]
 
@@ -208,6 +209,7 @@ fn lights_agree_and_a_wrong_emitter_pick_does_not() {
 /// (Radiance mode is no twin here: its `1/η²` into the glass and `η²` out of it cancel on
 /// the paths this scene's camera sees; `maps.xml` is the adjoint's twin.)
 #[test]
+#[ignore = "slow: CI runs it with --ignored"]
 fn roughglass_agrees() {
     agrees("mitsuba/roughglass.xml", 1024, 1024);
 }
@@ -223,6 +225,7 @@ fn maps_agree_and_no_shading_normal_correction_does_not() {
 /// Smooth shading normals (`smooth.xml`): `lt` agrees with the shading-normal correction
 /// (on these meshes it changes the image too little for a twin at this size).
 #[test]
+#[ignore = "slow: CI runs it with --ignored"]
 fn smooth_agrees() {
     agrees("mitsuba/smooth.xml", 256, 256);
 }
@@ -230,6 +233,7 @@ fn smooth_agrees() {
 /// Smooth plastics, whose vertices choose between the coat (delta) and the diffuse lobe,
 /// and smooth glass (`plastic.xml`; `pt` leaves the coat seen directly out).
 #[test]
+#[ignore = "slow: CI runs it with --ignored"]
 fn plastic_agrees() {
     agrees("mitsuba/plastic.xml", 256, 256);
 }
