@@ -2,6 +2,7 @@
 """Ratios of relMSE at equal time, from the CSVs `genpath sweep --time` writes.
 
     python3 scripts/ratios.py SCENE...            # reads reports/SCENE-2s-reps.csv and reports/SCENE.csv
+    python3 scripts/ratios.py --dir reports/lt --pairs lt:pt,lt:pg SCENE...
 
 For each scene, `ga-pt`'s and `pt`'s relMSE over `pg`'s: at 2 s the
 geometric mean of the per-seed ratios over the paired seeds of SCENE-2s-reps.csv, with a
@@ -45,16 +46,16 @@ def geo_and_bound(logs):
     return math.exp(mean), math.exp(means[int(0.975 * len(means))])
 
 
-def main(scenes):
+def main(scenes, pairs=(("ga-pt", "pg"), ("pt", "pg")), folder="reports"):
     print("| scene | method | over | 2 s (six seeds) | 95 % bound | 8 s | 30 s |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for scene in scenes:
-        for method, base in [("ga-pt", "pg"), ("pt", "pg")]:
-            reps = paired(f"reports/{scene}-2s-reps.csv", method, base)
+        for method, base in pairs:
+            reps = paired(f"{folder}/{scene}-2s-reps.csv", method, base)
             g, ub = geo_and_bound(list(reps.values()))
-            single = paired(f"reports/{scene}.csv", method, base)
+            single = paired(f"{folder}/{scene}.csv", method, base)
             at = {b: math.exp(v) for (_, b), v in single.items()}
-            fmt = lambda x: "–" if x is None else f"{x:.2f}"
+            fmt = lambda x: "–" if x is None else f"{x:.2f}" if x >= 0.1 else f"{x:.2g}"
             print(
                 f"| {scene} | `{method}` | `{base}` | {fmt(g)} | {fmt(ub)} | "
                 f"{fmt(at.get('8'))} | {fmt(at.get('30'))} |"
@@ -62,4 +63,10 @@ def main(scenes):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or ["gap", "shelf", "window", "corridor"])
+    import argparse
+    parser = argparse.ArgumentParser()
+    parser.add_argument("scenes", nargs="*", default=["gap", "shelf", "window", "corridor"])
+    parser.add_argument("--pairs", default="ga-pt:pg,pt:pg", help="method:over, comma-separated")
+    parser.add_argument("--dir", default="reports")
+    a = parser.parse_args()
+    main(a.scenes, [tuple(p.split(":")) for p in a.pairs.split(",")], a.dir)

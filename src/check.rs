@@ -11,13 +11,16 @@
 //! * Every fitness value (eq. 10) the GA computed is finite.
 //! * The image means of the other methods agree with `pt`'s per channel, inside a
 //!   99.9 % interval Šidák-corrected over the comparisons (unbiasedness, as far as the sample
-//!   count can tell).
+//!   count can tell); a method that cannot see through a delta lobe at the camera ray's hit
+//!   (`lt`, [`crate::integrators::MethodInfo::sees_through_delta`]) agrees with `pt`
+//!   restricted likewise ([`crate::integrators::pt::NoDeltaFirst`]).
 
 use crate::film::sample_pixel;
 use crate::film::Film;
 use crate::genetic::plan::{GateConfig, PlanConfig};
 use crate::genetic::GaConfig;
-use crate::integrators::{prepare, Method, PrepareError, RenderSettings, Settings};
+use crate::integrators::pt::NoDeltaFirst;
+use crate::integrators::{prepare, Integrator, Method, PrepareError, RenderSettings, Settings};
 use crate::path::generator::{Contribution, Nee, PathGenerator, PathVertices};
 use crate::path::mixture::Mixture;
 use crate::path::{mixture_file, RayCounts, SceneView};
@@ -75,7 +78,9 @@ pub struct MethodCheck {
     /// Image mean per channel and its standard error.
     pub mean: [f64; 3],
     pub standard_error: [f64; 3],
-    /// Largest |z| of the mean against `pt`'s, over the channels (0 for `pt`).
+    /// Largest |z| of the mean against `pt`'s (or restricted `pt`'s, for a method that does
+    /// not see through a delta lobe at the camera ray's hit), over the channels (0 for
+    /// either `pt`).
     pub z_vs_pt: f64,
     pub seconds: f64,
 }
@@ -105,14 +110,28 @@ impl CheckReport {
     }
 }
 
-fn image_mean(film: &Film) -> ([f64; 3], [f64; 3]) {
+/// The image's mean per channel and its standard error. A light path splats onto up to
+/// `max_bounces` pixels, so the splat layer's pixels are not independent: the variance of
+/// their mean is at most `max_bounces` times the sum of theirs (Cauchy–Schwarz over each
+/// path's splats), which is what is taken for it.
+fn image_mean(film: &Film, max_bounces: u32) -> ([f64; 3], [f64; 3]) {
     let n = film.image.pixels.len().max(1) as f64;
     let mut mean = [0.0; 3];
     let mut var = [0.0; 3];
-    for (p, v) in film.image.pixels.iter().zip(&film.variance_of_mean) {
+    let splats = film.sums.splats.as_ref();
+    for (i, (p, v)) in film
+        .image
+        .pixels
+        .iter()
+        .zip(&film.variance_of_mean)
+        .enumerate()
+    {
+        let more = splats.map_or(glam::DVec3::ZERO, |s| {
+            s.variance(i) * f64::from(max_bounces.max(1) - 1)
+        });
         for c in 0..3 {
             mean[c] += p[c] as f64 / n;
-            var[c] += v[c] / (n * n);
+            var[c] += (v[c] + more[c]) / (n * n);
         }
     }
     (mean, var.map(f64::sqrt))
@@ -227,8 +246,13 @@ fn variants(config: &Settings) -> Vec<(String, Method, Settings)> {
     out
 }
 
-/// Films with their methods' labels.
-type LabelledFilms = Vec<(String, Film)>;
+/// Films with their methods' labels and the film each is compared with (none for `pt` and
+/// its restriction, the references).
+type LabelledFilms = Vec<(String, Film, Option<usize>)>;
+
+/// The label of `pt` restricted to the paths that do not go on through a delta lobe at the
+/// camera ray's hit.
+const PT_NO_DELTA_FIRST: &str = "pt:no-delta-first";
 
 /// Renders every method of [`variants`] as `genpath render` would; the films, labelled; the
 /// densities of the mixtures they chose are surveyed into `survey` and the numbers they
@@ -238,7 +262,8 @@ fn render_every_method(
     config: &CheckConfig,
     (survey, numbers): (&mut PdfSurvey, &mut Vec<f64>),
 ) -> Result<LabelledFilms, PrepareError> {
-    let mut films = Vec::new();
+    let mut films: LabelledFilms = Vec::new();
+    let mut restricted = None;
     for (label, method, methods) in variants(&config.methods) {
         let settings = RenderSettings {
             method,
@@ -250,8 +275,27 @@ fn render_every_method(
             control: Default::default(),
             learning: None,
         };
+        let reference = match method.info().sees_through_delta {
+            true => 0,
+            false => *restricted.get_or_insert_with(|| {
+                let pt = NoDeltaFirst {
+                    max_bounces: config.max_bounces,
+                };
+                let view = view.with_light_sampler(methods.lights.light_sampler);
+                let film = pt.render(
+                    &view,
+                    &RenderSettings {
+                        method: Method::Pt,
+                        ..settings.clone()
+                    },
+                );
+                films.push((PT_NO_DELTA_FIRST.into(), film, None));
+                films.len() - 1
+            }),
+        };
         let integrator = prepare(view, &methods, &settings)?;
-        films.push((label, integrator.render(view, &settings)));
+        let film = integrator.render(view, &settings);
+        films.push((label, film, (!films.is_empty()).then_some(reference)));
         let checked = integrator.self_check();
         for &(at, mixture) in &checked.mixtures {
             survey_mixture(survey, view, config, (at, mixture));
@@ -263,15 +307,18 @@ fn render_every_method(
 
 /// Each film's bad pixels and its image mean against the first film's (`pt`'s), with the
 /// Šidák-corrected critical |z|; failures are added to `failures`.
-fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<MethodCheck>, f64) {
-    let comparisons = 3 * (films.len() - 1);
+fn judge_films(
+    films: &LabelledFilms,
+    max_bounces: u32,
+    failures: &mut Vec<String>,
+) -> (Vec<MethodCheck>, f64) {
+    let comparisons = 3 * films.iter().filter(|f| f.2.is_some()).count().max(1);
     let alpha = 1.0 - 0.999f64.powf(1.0 / comparisons as f64);
     let z_critical = Normal::new(0.0, 1.0)
         .map(|n| n.inverse_cdf(1.0 - alpha / 2.0))
         .unwrap_or(4.0);
-    let (pt_mean, pt_se) = image_mean(&films[0].1);
     let mut methods = Vec::new();
-    for (method, film) in films {
+    for (method, film, reference) in films {
         let bad_pixels = film
             .image
             .pixels
@@ -283,9 +330,13 @@ fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<Met
                 "{method}: {bad_pixels} NaN, infinite or negative pixels"
             ));
         }
-        let (mean, se) = image_mean(film);
+        let (mean, se) = image_mean(film, max_bounces);
         let mut z: f64 = 0.0;
-        if method != "pt" {
+        if let Some(reference) = *reference {
+            let (reference, (pt_mean, pt_se)) = (
+                &films[reference].0,
+                image_mean(&films[reference].1, max_bounces),
+            );
             for c in 0..3 {
                 let s = (se[c] * se[c] + pt_se[c] * pt_se[c]).sqrt();
                 if s > 0.0 {
@@ -296,7 +347,7 @@ fn judge_films(films: &[(String, Film)], failures: &mut Vec<String>) -> (Vec<Met
             }
             if z.is_nan() || z > z_critical {
                 failures.push(format!(
-                    "{method}: image mean differs from pt's by |z| = {z:.2} > {z_critical:.2}"
+                    "{method}: image mean differs from {reference}'s by |z| = {z:.2} > {z_critical:.2}"
                 ));
             }
         }
@@ -362,7 +413,7 @@ pub fn check(view: &SceneView, config: &CheckConfig) -> Result<CheckReport, Prep
     let mut survey = survey_srt(view, config);
     let mut values = Vec::new();
     let films = render_every_method(view, config, (&mut survey, &mut values))?;
-    let (methods, z_critical) = judge_films(&films, &mut failures);
+    let (methods, z_critical) = judge_films(&films, config.max_bounces, &mut failures);
     if survey.bad > 0 {
         failures.push(format!(
             "{} of {} sampled densities are not finite and positive",

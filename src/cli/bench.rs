@@ -198,7 +198,8 @@ fn ga_throughput(view: &SceneView, config: &Settings, passes: usize) -> serde_js
 }
 
 /// Render time of `args.method` against the number of threads (prepared once, on every
-/// core, untimed); printed, and as JSON.
+/// core, untimed), with its rays per second (for `lt`, its light paths' and camera
+/// connections' rays); printed, and as JSON.
 fn thread_scaling(
     view: &SceneView,
     args: &BenchArgs,
@@ -227,8 +228,8 @@ fn thread_scaling(
     };
     let integrator = prepare(view, config, &settings)?;
     println!(
-        "\n{:>7} {:>9} {:>8} {:>10}",
-        "threads", "seconds", "speedup", "efficiency"
+        "\n{:>7} {:>9} {:>8} {:>10} {:>8}",
+        "threads", "seconds", "speedup", "efficiency", "Mrays/s"
     );
     let mut scaling = Vec::new();
     let mut base = None;
@@ -237,7 +238,7 @@ fn thread_scaling(
             .num_threads(t as usize)
             .build()
             .context("cannot start the worker threads")?;
-        let (elapsed, _) = best(passes, || {
+        let (elapsed, rays) = best(passes, || {
             pool.install(|| integrator.render(view, &settings))
                 .rays
                 .total() as usize
@@ -245,11 +246,13 @@ fn thread_scaling(
         let seconds = elapsed.as_secs_f64();
         let base = *base.get_or_insert(seconds * f64::from(threads[0]));
         let speedup = base / seconds;
+        let rays_per_s = rays as f64 / seconds;
         println!(
-            "{t:>7} {seconds:>9.3} {speedup:>8.2} {:>10.2}",
-            speedup / f64::from(t)
+            "{t:>7} {seconds:>9.3} {speedup:>8.2} {:>10.2} {:>8.3}",
+            speedup / f64::from(t),
+            rays_per_s / 1e6
         );
-        scaling.push(serde_json::json!({ "threads": t, "seconds": seconds, "speedup": speedup }));
+        scaling.push(serde_json::json!({ "threads": t, "seconds": seconds, "speedup": speedup, "rays_per_s": rays_per_s }));
     }
     Ok(
         serde_json::json!({ "method": settings.method, "spp": args.spp, "width": scene.camera.width, "height": scene.camera.height, "runs": scaling }),

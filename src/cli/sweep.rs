@@ -17,7 +17,7 @@ pub struct SweepArgs {
     /// The reference (EXR), e.g. from `genpath reference`, of the size rendered.
     #[arg(long = "ref", value_name = "REF.exr")]
     pub reference: PathBuf,
-    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, pg, or
+    /// Methods, comma-separated: pt, srt, mixture (with --generators), ga, ga-pt, pg, lt, or
     /// ga:key=value:… (ga-pt:…, pg:sp=N) with keys m, l, pop, gen, s, e, grid, extra,
     /// neighbours, cw, gate, warm, da, pa, gs, spatial, sp (e.g. ga:m=10000:grid=32,
     /// ga-pt:gate=0, ga-pt:spatial=1; an unknown key lists them).

@@ -60,8 +60,9 @@ pub trait PixelEstimator {
 pub struct Film {
     /// Per-pixel mean of the samples, plus the splat layer's light where there is one.
     pub image: Image,
-    /// Per-pixel, per-channel estimated variance of the mean of the pixel's own samples
-    /// (sample variance / spp); the splat layer's variance is not estimated.
+    /// Per-pixel, per-channel estimated variance of the pixel's value: of the mean of its own
+    /// samples (sample variance / spp), plus the splat layer's (from its passes'
+    /// spread, [`SplatLayer::variance`]).
     pub variance_of_mean: Vec<[f64; 3]>,
     /// Samples per pixel in the image, those its integrator took while preparing included.
     pub spp: u32,
@@ -115,7 +116,8 @@ impl LayerSums {
             Some(splats) if splats.light_paths > 0 => {
                 let (_, variance) = pixel_estimate(sum, sum_sq, count);
                 let mean = sum / f64::from(count.max(1)) + splats.light(i);
-                (mean.as_vec3().to_array(), variance)
+                let variance = DVec3::from_array(variance) + splats.variance(i);
+                (mean.as_vec3().to_array(), variance.to_array())
             }
             _ => pixel_estimate(sum, sum_sq, count),
         }
@@ -134,11 +136,17 @@ impl LayerSums {
 }
 
 /// The light that samples splatted onto each pixel, and the number of light paths that
-/// carried it: pixel `i`'s share of the image is `sum[i] / light_paths`.
+/// carried it: pixel `i`'s share of the image is `sum[i] / light_paths`. The light comes
+/// in passes of equally many light paths (one per pixel sample of the pass); the sums of
+/// squares of each pass's light per pixel give its variance.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SplatLayer {
     pub light_paths: u64,
+    /// Passes summed, each of `light_paths / passes` light paths.
+    pub passes: u64,
     pub sum: Vec<DVec3>,
+    /// Per pixel, the sum over passes of the square of the pass's light there.
+    pub sum_sq: Vec<DVec3>,
 }
 
 impl SplatLayer {
@@ -146,7 +154,9 @@ impl SplatLayer {
     pub fn zero(pixels: usize) -> Self {
         Self {
             light_paths: 0,
+            passes: 0,
             sum: vec![DVec3::ZERO; pixels],
+            sum_sq: vec![DVec3::ZERO; pixels],
         }
     }
 
@@ -155,18 +165,48 @@ impl SplatLayer {
         self.sum[i] / self.light_paths as f64
     }
 
-    /// Adds one tile's splats, in the order they were made.
-    pub fn add(&mut self, splats: &Splats) {
-        self.light_paths += splats.light_paths;
-        for &(i, value) in &splats.list {
-            self.sum[i as usize] += value;
+    /// The estimated variance of [`Self::light`] at pixel `i`: the passes' light there,
+    /// each the mean of its light paths', is a sample of independent values whose mean
+    /// the pixel's share is; zero with fewer than two passes.
+    pub fn variance(&self, i: usize) -> DVec3 {
+        if self.passes < 2 || self.light_paths == 0 {
+            return DVec3::ZERO;
+        }
+        // One pass's light paths: each pass's light is its sum over them.
+        let per_pass = self.light_paths as f64 / self.passes as f64;
+        let n = self.passes as f64;
+        let (sum, sum_sq) = (
+            self.sum[i] / per_pass,
+            self.sum_sq[i] / (per_pass * per_pass),
+        );
+        (sample_variance(sum, sum_sq, n) / n).max(DVec3::ZERO)
+    }
+
+    /// Adds one pass: its tiles' splats, in tile order.
+    pub fn add_pass(&mut self, tiles: &[&Splats], scratch: &mut Vec<DVec3>) {
+        scratch.clear();
+        scratch.resize(self.sum.len(), DVec3::ZERO);
+        for splats in tiles {
+            self.light_paths += splats.light_paths;
+            for &(i, value) in &splats.list {
+                scratch[i as usize] += value;
+            }
+        }
+        self.passes += 1;
+        for ((sum, sum_sq), pass) in self.sum.iter_mut().zip(&mut self.sum_sq).zip(&*scratch) {
+            *sum += *pass;
+            *sum_sq += *pass * *pass;
         }
     }
 
     /// Adds another layer of the same image (a shard's).
     pub fn add_layer(&mut self, other: &SplatLayer) {
         self.light_paths += other.light_paths;
+        self.passes += other.passes;
         for (a, b) in self.sum.iter_mut().zip(&other.sum) {
+            *a += *b;
+        }
+        for (a, b) in self.sum_sq.iter_mut().zip(&other.sum_sq) {
             *a += *b;
         }
     }

@@ -233,6 +233,7 @@ fn render_splatting<E: PixelEstimator>(
     let bar = progress_bar(u64::from(passes - done), "render", pass.progress);
     let mut rays = RayCounts::default();
     let mut last_checkpoint = Instant::now();
+    let mut scratch = Vec::new();
     for k in done..passes {
         if pass.control.stop.requested().is_some() {
             break;
@@ -255,9 +256,10 @@ fn render_splatting<E: PixelEstimator>(
             for p in &result.sums {
                 sums.set(p);
             }
-            splat_layer.add(&result.splats);
             rays.add(result.rays);
         }
+        let pass_splats: Vec<&Splats> = results.iter().map(|r| &r.splats).collect();
+        splat_layer.add_pass(&pass_splats, &mut scratch);
         bar.inc(1);
         if let Some(checkpoint) = &pass.control.checkpoint {
             if last_checkpoint.elapsed() >= checkpoint.every {

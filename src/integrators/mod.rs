@@ -15,6 +15,7 @@
 pub mod ga;
 pub mod ga_pt;
 pub mod learned;
+pub mod lt;
 pub mod mixture;
 pub mod pg;
 pub mod pt;
@@ -80,6 +81,10 @@ methods! {
     /// training passes whose samples stay in the image (`guiding::field`), without the GA:
     /// the baseline that shows what the GA adds.
     Pg => pg::METHOD,
+    /// Beyond the paper: light tracing, paths from the lights (picked by power) splatted
+    /// through the camera at every non-delta vertex; the camera's direct view of the lights
+    /// from its own rays. It cannot see mirrors or smooth glass directly.
+    Lt => lt::METHOD,
     /// Test-only (feature `testing`): path tracing with next-event estimation alone (no
     /// MIS); shows that a method is one file and one line.
     #[cfg(feature = "testing")]
@@ -109,6 +114,10 @@ pub struct MethodInfo {
     pub explains: bool,
     /// Whether its image is the scene's, so that `check` compares it with `pt`'s.
     pub renders_the_scene: bool,
+    /// Whether its image holds the light the camera sees through a delta lobe at a camera
+    /// ray's hit (a mirror or smooth glass seen directly); a light tracer's does not, and
+    /// `check` compares it with `pt` restricted likewise ([`pt::NoDeltaFirst`]).
+    pub sees_through_delta: bool,
     /// The tables of [`Settings`] it reads (`["srt", "ga", …]`; none for one that has no
     /// settings of its own), which docs/settings.md lists beside each table.
     pub settings: &'static [&'static str],
@@ -128,6 +137,7 @@ impl MethodInfo {
             splits_learning: false,
             explains: false,
             renders_the_scene: true,
+            sees_through_delta: true,
             settings: &[],
         }
     }

@@ -44,3 +44,42 @@ impl PixelEstimator for PathTracing {
         pt::radiance(view, ray, self.max_bounces, rng, counts).as_dvec3()
     }
 }
+
+/// `pt` without the paths that go on through a delta lobe at the camera ray's hit
+/// ([`pt::NoDeltaFirst`]): what a light tracer (`lt`) estimates, for `check` and the tests
+/// to compare it with.
+#[derive(Clone, Copy, Debug)]
+pub struct NoDeltaFirst {
+    pub max_bounces: u32,
+}
+
+impl PixelIntegrator for NoDeltaFirst {
+    type Estimator<'a> = NoDeltaFirst;
+    fn estimator(&self) -> NoDeltaFirst {
+        *self
+    }
+}
+
+impl PixelEstimator for NoDeltaFirst {
+    fn start(&mut self, _x: u32, _y: u32) {}
+    fn sample(
+        &mut self,
+        view: &SceneView,
+        ray: &Ray,
+        rng: &mut Rng,
+        counts: &mut RayCounts,
+        _splats: &mut Splats,
+    ) -> DVec3 {
+        let guide = pt::NoDeltaFirst;
+        pt::radiance_guided(
+            view,
+            ray,
+            self.max_bounces,
+            rng,
+            counts,
+            &guide,
+            pt::NO_RECORDER,
+        )
+        .as_dvec3()
+    }
+}

@@ -2,6 +2,7 @@
 //! path tracer (the methods built on them are in `integrators`).
 
 pub mod generator;
+pub mod lt;
 pub mod mixture;
 pub mod mixture_file;
 pub mod pt;

@@ -128,6 +128,11 @@ pub trait PathGuide {
         bsdf: Bsdf<'a>,
         last: bool,
     ) -> GuidedVertex<Self::Bsdf<'a>>;
+    /// Whether a path ends where the direction sampled at its `bounce`-th vertex (1: the
+    /// camera ray's hit) is a delta lobe's; never, but for [`NoDeltaFirst`].
+    fn ends_at_delta(&self, _bounce: u32) -> bool {
+        false
+    }
 }
 
 /// No guide: next-event estimation at every vertex, and the material's own BSDF.
@@ -141,6 +146,28 @@ impl PathGuide for Unguided {
             light_share: 1.0,
             bsdf,
         }
+    }
+}
+
+/// No guide, and no path on through a delta lobe at the camera ray's hit (a mirror or
+/// smooth glass seen directly, a smooth plastic's coat): the paths a light tracer reaches
+/// ([`super::lt`]), for comparing the two.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoDeltaFirst;
+
+impl PathGuide for NoDeltaFirst {
+    type Bsdf<'a> = Bsdf<'a>;
+    fn vertex<'a>(
+        &'a self,
+        k: usize,
+        x: Vec3,
+        bsdf: Bsdf<'a>,
+        last: bool,
+    ) -> GuidedVertex<Bsdf<'a>> {
+        Unguided.vertex(k, x, bsdf, last)
+    }
+    fn ends_at_delta(&self, bounce: u32) -> bool {
+        bounce == 1
     }
 }
 
@@ -651,6 +678,9 @@ pub fn radiance_guided<G: PathGuide, R: PathRecorder>(
         let Some(bs) = bsdf.sample(rng) else {
             break;
         };
+        if bs.delta && guide.ends_at_delta(bounce) {
+            break;
+        }
         if !material.mirror {
             k += 1;
         }

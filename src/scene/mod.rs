@@ -14,7 +14,7 @@ pub mod texture;
 mod validate;
 pub mod xml;
 
-pub use camera::Camera;
+pub use camera::{Camera, CameraConnection};
 pub use environment::Environment;
 pub use file::{CameraFile, LightFile, RenderDefaults, SceneFile};
 pub use lights::emission::{EmissionPdf, EmissionSample, Emitter};

@@ -7,7 +7,7 @@
 //! | 4 | header length `H`, `u32` (at most [`MAX_HEADER`]) |
 //! | H | the [`Header`] as JSON (UTF-8) |
 //! | per layer | `P` sample counts `u32`, then `3P` sums `f64` (r, g, b per pixel), then `3P` sums of squares `f64` |
-//! | after each layer, if the header's `splats` | the splat layer: its light paths `u64`, then `3P` sums `f64` |
+//! | after each layer, if the header's `splats` | the splat layer: its light paths `u64`, its passes `u64`, then `3P` sums `f64`, then `3P` sums of squares `f64` (per pass) |
 //! | 4 | CRC-32 (IEEE) of every byte before it |
 //!
 //! with `P` = width × height pixels, pixels row by row. The length follows from the header,
@@ -20,7 +20,7 @@ use std::io::Read;
 use std::path::Path;
 
 /// The format version this genpath writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The mark every shard file starts with.
 pub const MAGIC: &[u8; 8] = b"GPSHARD\0";
 /// The longest header read, so that a corrupted length does not allocate gigabytes.
@@ -47,7 +47,9 @@ pub fn encode(header: &Header, layers: &[LayerSums]) -> Vec<u8> {
                 let zero = SplatLayer::zero(layer.counts.len());
                 let splats = layer.splats.as_ref().unwrap_or(&zero);
                 out.extend_from_slice(&splats.light_paths.to_le_bytes());
+                out.extend_from_slice(&splats.passes.to_le_bytes());
                 put_vectors(out, &splats.sum);
+                put_vectors(out, &splats.sum_sq);
             }
         }
     })
@@ -63,7 +65,7 @@ fn put_vectors(out: &mut Vec<u8>, values: &[DVec3]) {
 /// Bytes of one layer (with its splat layer, if the header has them).
 fn layer_bytes(header: &Header) -> u64 {
     let pixels = header.pixels();
-    let splats = if header.splats { 8 + 24 * pixels } else { 0 };
+    let splats = if header.splats { 16 + 48 * pixels } else { 0 };
     pixels * PIXEL_BYTES + splats
 }
 
@@ -134,11 +136,15 @@ pub fn read(path: &Path) -> Result<(Header, Vec<LayerSums>), ShardError> {
         let sum = take_vectors(body, &mut at, pixels);
         let sum_sq = take_vectors(body, &mut at, pixels);
         let splats = if header.splats {
-            let light_paths = u64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
-            at += 8;
+            let count =
+                |at: usize| u64::from_le_bytes(body[at..at + 8].try_into().expect("8 bytes"));
+            let (light_paths, passes) = (count(at), count(at + 8));
+            at += 16;
             Some(SplatLayer {
                 light_paths,
+                passes,
                 sum: take_vectors(body, &mut at, pixels),
+                sum_sq: take_vectors(body, &mut at, pixels),
             })
         } else {
             None

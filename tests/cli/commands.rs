@@ -292,9 +292,10 @@ fn check_passes_on_fig5() {
     assert!(stdout.contains("check passed"), "{stdout}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
-    // Every method that renders the scene's image (pt, srt, ga, ga-pt, pg, and the
-    // test-only ones where they are built; mixture needs a file), ga-pt without the spatial
-    // guide, and srt and ga with the end-only estimator.
+    // Every method that renders the scene's image (pt, srt, ga, ga-pt, pg, lt, and the
+    // test-only ones where they are built; mixture needs a file), `pt` restricted to what
+    // `lt` reaches (its reference) before the first method that cannot see through a delta
+    // lobe, ga-pt without the spatial guide, and srt and ga with the end-only estimator.
     let names: Vec<&str> = report["methods"]
         .as_array()
         .unwrap()
@@ -303,10 +304,14 @@ fn check_passes_on_fig5() {
         .collect();
     use clap::ValueEnum;
     let methods = genpath::integrators::Method::value_variants().iter();
-    let mut expected: Vec<String> = methods
-        .filter(|m| m.info().renders_the_scene && m.name() != "mixture")
-        .map(|m| m.name())
-        .collect();
+    let mut expected: Vec<String> = Vec::new();
+    for m in methods.filter(|m| m.info().renders_the_scene && m.name() != "mixture") {
+        let restricted = "pt:no-delta-first".to_string();
+        if !m.info().sees_through_delta && !expected.contains(&restricted) {
+            expected.push(restricted);
+        }
+        expected.push(m.name());
+    }
     assert!(expected.len() >= 5, "{expected:?}");
     expected.extend(["ga-pt:spatial=0", "srt:nee=end", "ga:nee=end"].map(String::from));
     assert_eq!(names, expected);

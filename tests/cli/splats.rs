@@ -177,3 +177,75 @@ fn the_splat_layer_is_pts_image_mirrored_for_any_threads_shards_and_resume() {
         "the resumed render differs"
     );
 }
+
+/// `lt`, light tracing, whose light paths are drawn from the streams of the pixel samples
+/// that own them: the same image for one thread or two, from two shards merged, and
+/// stopped and resumed; another seed's image differs (the twin).
+#[test]
+fn lt_is_one_image_for_any_threads_shards_and_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name);
+    let lt = ["--method", "lt"];
+    for (name, extra) in [
+        ("one.exr", vec!["--threads", "1"]),
+        ("two.exr", vec!["--threads", "2"]),
+        ("seed2.exr", vec!["--seed", "2"]),
+        ("s0.exr", vec!["--shard", "0/2"]),
+        ("s1.exr", vec!["--shard", "1/2"]),
+    ] {
+        run_ok(&render(&at(name), 16, &[&lt[..], &extra].concat()));
+    }
+    let one = pixel_bits(&at("one.exr"));
+    assert_eq!(one, pixel_bits(&at("two.exr")), "one thread and two differ");
+    assert_ne!(
+        one,
+        pixel_bits(&at("seed2.exr")),
+        "another seed's image matched"
+    );
+    let shards = [0, 1].map(|k| shard_file(&at(&format!("s{k}.exr"))));
+    let merged = at("merged.exr");
+    let output = genpath(&[
+        "merge",
+        shards[0].to_str().unwrap(),
+        shards[1].to_str().unwrap(),
+        "-o",
+        merged.to_str().unwrap(),
+        "--complete",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(
+        pixel_bits(&merged),
+        one,
+        "merged shards differ from the whole render"
+    );
+
+    let stopped_at = at("stopped.exr");
+    let args = render(
+        &stopped_at,
+        1024,
+        &[&lt[..], &["--threads", "1", "--checkpoint", "0"]].concat(),
+    );
+    let child = Command::new(env!("CARGO_BIN_EXE_genpath"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run genpath");
+    let file = shard_file(&stopped_at);
+    let stopped = signal_when(child, || file.exists(), "TERM", "first checkpoint");
+    assert_eq!(stopped.status.code(), Some(143), "{}", stderr(&stopped));
+    let (_, layers) = genpath::shard::file::read(&file).unwrap();
+    assert!(layers[0].counts[0] < 1024, "the render was not stopped");
+    run_ok(&render(
+        &stopped_at,
+        1024,
+        &[&lt[..], &["--resume", file.to_str().unwrap()]].concat(),
+    ));
+    run_ok(&render(&at("whole.exr"), 1024, &lt));
+    assert_eq!(
+        pixel_bits(&stopped_at),
+        pixel_bits(&at("whole.exr")),
+        "the resumed render differs"
+    );
+}
